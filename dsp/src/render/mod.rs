@@ -1,0 +1,127 @@
+//! Offline render of a scene description, shared by `cargo xtask render`, the test harness and
+//! (later) the plugin's MIDI renderer.
+//!
+//! [`parse_scene`] turns a scene file into a validated [`SceneDescription`]; [`render`] runs it in
+//! calls of the sizes a chunk iterator gives (the frames are bit-identical for any chunking) and
+//! returns every sample's [`Frame`] with a [`Summary`].
+
+mod file;
+mod summary;
+
+pub use file::{
+    Common, FORMAT_VERSION, MAX_DURATION, MAX_SAMPLES, MAX_SEGMENTS, MassBarrierDescription, OutputOptions,
+    SceneDescription, parse_scene,
+};
+pub use summary::{Summary, contact_intervals};
+
+use std::time::Instant;
+
+use crate::contact::{ContactError, ContactSolver, WithSolver};
+use crate::scene::{Frame, MassBarrier, Scene};
+
+/// A scene file that cannot be rendered.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SceneError {
+    /// Not valid TOML, a key of the wrong type, or a key the format does not have.
+    #[error("{0}")]
+    Syntax(String),
+    /// A value out of its domain.
+    #[error("{key}: {reason}")]
+    Invalid {
+        /// Dotted key path, e.g. `mass.mass`.
+        key: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+impl SceneError {
+    pub(crate) fn invalid(key: &str, reason: impl Into<String>) -> Self {
+        Self::Invalid { key: key.to_owned(), reason: reason.into() }
+    }
+
+    /// Map a contact-parameter error to the scene key it came from (`table.key`).
+    pub(crate) fn contact(table: &str, error: ContactError) -> Self {
+        match error {
+            ContactError::Invalid { key, reason, value } => {
+                let key = match key {
+                    "segments" | "v_ref" => format!("solver.{key}"),
+                    _ => format!("{table}.{key}"),
+                };
+                Self::Invalid { key, reason: format!("{reason} (got {value})") }
+            }
+            e @ ContactError::NotConvex { .. } => Self::invalid("solver.segments", e.to_string()),
+        }
+    }
+}
+
+/// A finished render.
+#[derive(Debug, Clone)]
+pub struct Rendered {
+    /// One frame per sample.
+    pub frames: Vec<Frame>,
+    /// What the render measured.
+    pub summary: Summary,
+}
+
+/// Render `scene`, advancing in calls of the sizes `chunks` yields (sizes of 0 are skipped;
+/// when the iterator ends, the rest is rendered in one call).
+pub fn render(scene: &SceneDescription, chunks: impl Iterator<Item = usize>) -> Result<Rendered, SceneError> {
+    let common = scene.common();
+    let run = match scene {
+        SceneDescription::MassBarrier(d) => common
+            .solver
+            .build(common.law, d.default_v_ref(), RenderMassBarrier { scene: d, chunks })
+            .map_err(|e| SceneError::contact("contact", e))?,
+    };
+    let summary = Summary::measure(scene, &run);
+    Ok(Rendered { frames: run.frames, summary })
+}
+
+/// The raw result of driving a scene.
+#[derive(Debug, Clone)]
+pub struct Run {
+    /// One frame per sample.
+    pub frames: Vec<Frame>,
+    /// `H^{−1/2}` (J).
+    pub initial_energy: f64,
+    /// Wall-clock time spent in [`Scene::process`] (s).
+    pub wall_seconds: f64,
+    /// QSA segment count (0 for the other methods).
+    pub segments: usize,
+}
+
+/// Drive `scene` for `samples` samples in calls of the sizes `chunks` yields.
+pub fn drive(mut scene: impl Scene, samples: usize, mut chunks: impl Iterator<Item = usize>) -> (Vec<Frame>, f64) {
+    let mut frames = vec![Frame::default(); samples];
+    let start = Instant::now();
+    let mut done = 0;
+    while done < samples {
+        let n = match chunks.next() {
+            Some(0) => continue,
+            Some(n) => n.min(samples - done),
+            None => samples - done,
+        };
+        scene.process(&mut frames[done..done + n]);
+        done += n;
+    }
+    (frames, start.elapsed().as_secs_f64())
+}
+
+struct RenderMassBarrier<'a, I> {
+    scene: &'a MassBarrierDescription,
+    chunks: I,
+}
+
+impl<I: Iterator<Item = usize>> WithSolver for RenderMassBarrier<'_, I> {
+    type Output = Run;
+
+    fn run<S: ContactSolver>(self, solver: S) -> Run {
+        let common = &self.scene.common;
+        let segments = solver.segments();
+        let scene = MassBarrier::new(self.scene.params, common.sample_rate as f64, solver);
+        let initial_energy = scene.initial_energy();
+        let (frames, wall_seconds) = drive(scene, common.samples, self.chunks);
+        Run { frames, initial_energy, wall_seconds, segments }
+    }
+}
