@@ -1,1 +1,43 @@
+//! Project tasks for QSA Strings, run as `cargo xtask <task>`.
+//!
+//! - `render`: render a scene file offline to a WAV (and a CSV of per-sample signals) and print a
+//!   one-line JSON summary. See [`render`].
+//!
+//! The tasks are a library so the test harness can run them in-process.
 
+pub mod render;
+
+use std::ffi::OsString;
+use std::io::Write;
+
+use clap::Parser;
+
+/// The command line.
+#[derive(Debug, Parser)]
+#[command(name = "cargo xtask", about = "QSA Strings project tasks", version)]
+pub enum Cli {
+    /// Render a scene file offline: WAV, optional CSV, and a JSON summary line on stdout.
+    Render(render::RenderArgs),
+}
+
+/// Run the command line `args` (without the program name), writing the task's report to
+/// `stdout`. Returns the process exit code.
+pub fn run(args: impl IntoIterator<Item = OsString>, stdout: &mut dyn Write, stderr: &mut dyn Write) -> i32 {
+    let cli = match Cli::try_parse_from(std::iter::once(OsString::from("xtask")).chain(args)) {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = write!(stderr, "{}", e.render().ansi());
+            return e.exit_code();
+        }
+    };
+    let result = match cli {
+        Cli::Render(args) => render::run(&args, stdout).map(|_| ()),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            let _ = writeln!(stderr, "error: {e}");
+            1
+        }
+    }
+}

@@ -1,0 +1,201 @@
+//! `cargo xtask render <scene.toml> [--out PATH.wav] [--csv] [--chunk N]`
+//!
+//! Renders a scene file through the dsp engine ([`qsa_dsp::render`]) and
+//! - writes a mono 32-bit float WAV (default: next to the scene file, with extension `.wav`),
+//!   peak-normalised unless the scene's `[output] normalize = false`;
+//! - with `--csv`, writes the per-sample signals next to the WAV (same name, `.csv`), header
+//!   `t,u,y,force,energy,velocity,losses,work,output` (units: s, m, m, N, J, m/s, J, count, as
+//!   the WAV before normalisation);
+//! - prints exactly one JSON line on stdout: the [`Summary`].
+//!
+//! `--chunk N` renders in calls of N samples; `--chunk 0` uses sizes drawn from a seeded
+//! generator (1 to 4096). Output is bit-identical for every chunking.
+//!
+//! A scene error names its key, exits non-zero and writes nothing. Output files are written to
+//! temporary files beside their destination and renamed into place only when complete, so an
+//! existing file is either left untouched or replaced by a complete new one. The scene file
+//! itself is never an output.
+
+use std::fs;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use qsa_dsp::render::{Rendered, SceneError, Summary, parse_scene, render};
+use rand::{RngExt, SeedableRng};
+use tempfile::NamedTempFile;
+
+/// Seed of the random chunk sizes of `--chunk 0`.
+pub const CHUNK_SEED: u64 = 0x5eed_c4a7;
+
+/// Arguments of `render`.
+#[derive(Debug, Clone, Args)]
+pub struct RenderArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// Output WAV path [default: the scene path with extension .wav].
+    #[arg(long, value_name = "PATH.wav")]
+    pub out: Option<PathBuf>,
+    /// Also write per-sample signals to a CSV beside the WAV.
+    #[arg(long)]
+    pub csv: bool,
+    /// Render in calls of N samples (0: seeded random sizes) [default: one call].
+    #[arg(long, value_name = "N")]
+    pub chunk: Option<usize>,
+}
+
+/// Why a render failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The scene file could not be read.
+    #[error("cannot read {path}: {source}")]
+    Read {
+        /// The scene file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The scene is invalid.
+    #[error("{path}: {source}")]
+    Scene {
+        /// The scene file.
+        path: PathBuf,
+        /// What is wrong, naming the key.
+        source: SceneError,
+    },
+    /// An output path is unusable.
+    #[error("{0}")]
+    Output(String),
+    /// Writing an output failed.
+    #[error("cannot write {path}: {source}")]
+    Write {
+        /// The destination.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+}
+
+/// The chunk sizes `--chunk` asks for.
+pub fn chunk_sizes(chunk: Option<usize>) -> Box<dyn Iterator<Item = usize>> {
+    match chunk {
+        None => Box::new(std::iter::empty()),
+        Some(0) => {
+            let mut rng = rand_pcg::Pcg64::seed_from_u64(CHUNK_SEED);
+            Box::new(std::iter::repeat_with(move || rng.random_range(1..=4096)))
+        }
+        Some(n) => Box::new(std::iter::repeat(n)),
+    }
+}
+
+/// Run `render`, printing the summary line to `stdout`.
+pub fn run(args: &RenderArgs, stdout: &mut dyn Write) -> Result<Summary, RenderError> {
+    let text = fs::read_to_string(&args.scene).map_err(|source| RenderError::Read { path: args.scene.clone(), source })?;
+    let scene = parse_scene(&text).map_err(|source| RenderError::Scene { path: args.scene.clone(), source })?;
+    let wav_path = args.out.clone().unwrap_or_else(|| args.scene.with_extension("wav"));
+    let csv_path = args.csv.then(|| wav_path.with_extension("csv"));
+    for path in std::iter::once(&wav_path).chain(csv_path.as_ref()) {
+        check_output_path(path, &args.scene)?;
+    }
+    let rendered = render(&scene, chunk_sizes(args.chunk))
+        .map_err(|source| RenderError::Scene { path: args.scene.clone(), source })?;
+    let options = scene.common().output;
+    let wav = write_temp(&wav_path, |w| write_wav(w, &rendered, scene.common().sample_rate, options.normalize, options.gain))?;
+    let csv = match &csv_path {
+        Some(path) => Some((write_temp(path, |w| write_csv(w, &rendered, scene.common().sample_rate))?, path)),
+        None => None,
+    };
+    persist(wav, &wav_path)?;
+    if let Some((file, path)) = csv {
+        persist(file, path)?;
+    }
+    let line = serde_json::to_string(&rendered.summary).expect("a summary always serialises");
+    writeln!(stdout, "{line}").map_err(|source| RenderError::Write { path: "<stdout>".into(), source })?;
+    Ok(rendered.summary)
+}
+
+fn check_output_path(path: &Path, scene: &Path) -> Result<(), RenderError> {
+    let same = match (fs::canonicalize(path), fs::canonicalize(scene)) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if same {
+        return Err(RenderError::Output(format!("refusing to overwrite the scene file {} with output", scene.display())));
+    }
+    let dir = parent_dir(path);
+    if !dir.is_dir() {
+        return Err(RenderError::Output(format!("output directory {} does not exist", dir.display())));
+    }
+    if path.is_dir() {
+        return Err(RenderError::Output(format!("output path {} is a directory", path.display())));
+    }
+    Ok(())
+}
+
+fn parent_dir(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// Write an output into a temporary file beside `path`.
+fn write_temp(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<&std::fs::File>) -> std::io::Result<()>,
+) -> Result<NamedTempFile, RenderError> {
+    let err = |source| RenderError::Write { path: path.to_owned(), source };
+    let mut builder = tempfile::Builder::new();
+    // Outputs are ordinary files (the temporary default is owner-only).
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
+    let file = builder.tempfile_in(parent_dir(path)).map_err(err)?;
+    let mut w = BufWriter::new(file.as_file());
+    write(&mut w).map_err(err)?;
+    w.flush().map_err(err)?;
+    drop(w);
+    file.as_file().sync_all().map_err(err)?;
+    Ok(file)
+}
+
+fn persist(file: NamedTempFile, path: &Path) -> Result<(), RenderError> {
+    file.persist(path).map_err(|e| RenderError::Write { path: path.to_owned(), source: e.error })?;
+    Ok(())
+}
+
+fn write_wav(w: &mut impl Write, rendered: &Rendered, sample_rate: u32, normalize: bool, gain: f64) -> std::io::Result<()> {
+    let peak = rendered.frames.iter().fold(0.0_f64, |m, f| m.max(f.output.abs()));
+    let scale = if normalize && peak > 0.0 { gain / peak } else { gain };
+    let spec = hound::WavSpec { channels: 1, sample_rate, bits_per_sample: 32, sample_format: hound::SampleFormat::Float };
+    // hound needs Seek to patch the header; write into memory and copy out.
+    let mut buffer = std::io::Cursor::new(Vec::with_capacity(44 + 4 * rendered.frames.len()));
+    {
+        let mut wav = hound::WavWriter::new(&mut buffer, spec).map_err(std::io::Error::other)?;
+        for f in &rendered.frames {
+            wav.write_sample((f.output * scale) as f32).map_err(std::io::Error::other)?;
+        }
+        wav.finalize().map_err(std::io::Error::other)?;
+    }
+    w.write_all(buffer.get_ref())
+}
+
+fn write_csv(w: &mut impl Write, rendered: &Rendered, sample_rate: u32) -> std::io::Result<()> {
+    let dt = 1.0 / sample_rate as f64;
+    writeln!(w, "t,u,y,force,energy,velocity,losses,work,output")?;
+    for (n, f) in rendered.frames.iter().enumerate() {
+        writeln!(
+            w,
+            "{},{},{},{},{},{},{},{},{}",
+            n as f64 * dt,
+            f.displacement,
+            f.compression,
+            f.force,
+            f.energy,
+            f.velocity,
+            f.losses,
+            f.work,
+            f.output
+        )?;
+    }
+    Ok(())
+}
