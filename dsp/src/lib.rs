@@ -7,6 +7,8 @@
 //!
 //! - [`contact`]: the power law, its spline fit and the three solvers of the common scalar
 //!   problem `s + z − q F = 0` (seed eq. 18).
+//! - [`string`]: the modal stiff string with exact per-mode coefficients.
+//! - [`exciter`]: the hammer (and the slide and fingers).
 //! - [`scene`]: physical set-ups built from a solver and bodies; each holds only what it needs.
 //! - [`render`]: scene files (TOML), offline rendering in calls of any size, and the summary
 //!   of a render.
@@ -32,5 +34,8 @@
 //! ```
 
 pub mod contact;
+pub mod exciter;
+pub mod preset;
 pub mod render;
 pub mod scene;
+pub mod string;

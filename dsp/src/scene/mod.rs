@@ -5,8 +5,10 @@
 //! it lacks and no dynamic dispatch. Each call of [`Scene::process`] advances one sample per
 //! [`Frame`]; splitting a render into calls of any size gives bit-identical frames.
 
+mod hammer_string;
 mod mass_barrier;
 
+pub use hammer_string::{HammerString, HammerStringParams, OutputKind, Pickup};
 pub use mass_barrier::{MassBarrier, MassBarrierParams};
 
 /// One sample `n` of a scene's signals.

@@ -1,0 +1,146 @@
+//! Named parameter sets: the Chaigne–Askenfelt C4 piano string and hammer, and a rule that gives
+//! a plausible string and hammer for every MIDI key.
+//!
+//! # Chaigne & Askenfelt (1994) C4 (physics §8.2)
+//!
+//! L = 0.62 m, string mass 3.93 g, T = 670 N, ε = EI/(TL²) = 3.82e-5, b1 = 0.5 s⁻¹,
+//! b3 = 6.25e-9 s; hammer 2.97 g, κ = 4.5e9 N/m^α, α = 2.5, struck at 0.12 L. Mapped to the
+//! model of [`crate::string`] exactly as physics §8.2 prescribes: `ρA = Ms/L`, `EI = ε T L²`,
+//! `η0 = b1`, `η2 = b3·T/ρA`. Derived: ρA = 6.3387e-3 kg/m, EI = 9.838e-3 N·m², f0 = 262.19 Hz,
+//! B = 3.770e-4, η2 = 6.606e-4 m²/s.
+//!
+//! # Per-note rule ([`piano_note`])
+//!
+//! For MIDI key `k` (0..=127), `f0 = 440·2^((k−69)/12)` Hz (equal temperament) and:
+//! - length `L = 0.62·2^(−e(k−60)/12)` m with `e = 0.9` above C4 and `e = 0.45` below (bass
+//!   strings are wound, so they grow more slowly), clamped to 1.9 m;
+//! - tension `T = 670 N` for every key, and `ρA = T/(2Lf0)²` so the flexible-string fundamental
+//!   is exactly `f0`;
+//! - inharmonicity `B` log-linear through the Chaigne–Askenfelt anchors C2 (key 36) 7.4e-5,
+//!   C4 (60) 3.77e-4 and C7 (96) 8.56e-3 (extrapolated, clamped to [1e-5, 0.05]);
+//!   `EI = B T L²/π²`;
+//! - damping, per-mode law `σ_i = b1 + b3 ω0_i²`: b1 log-linear through 0.25, 1.1, 9.17 s⁻¹
+//!   (the C2/C4/C7 values of the second Chaigne–Askenfelt variant), b3 log-linear through
+//!   6.25e-9, 6.25e-9, 2.6e-10 s (Part I);
+//! - hammer mass log-linear through 4.9, 2.97, 2.2 g, clamped to [1, 12] g; felt stiffness κ
+//!   log-linear through 4e8, 4.5e9, 1e12 N/m^α, clamped to [1e8, 1e13]; exponent α linear
+//!   through 2.3, 2.5, 3.0, clamped to [2, 3.5]; striking position linear through 0.12, 0.12,
+//!   0.0625 of L, clamped to [0.04, 0.2].
+//!
+//! The C2 and C7 hammer values are guesses in the source tables (physics §8.2); the rule is meant
+//! to be plausible and smooth across the keyboard, not a measured piano.
+
+use crate::string::{Damping, StringParams};
+
+/// A string and the hammer that strikes it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PianoNote {
+    /// The string.
+    pub string: StringParams,
+    /// Hammer mass (kg).
+    pub hammer_mass: f64,
+    /// Felt stiffness κ (N/m^α).
+    pub kappa: f64,
+    /// Felt exponent α.
+    pub alpha: f64,
+    /// Striking position as a fraction of the length.
+    pub strike_position: f64,
+}
+
+/// The Chaigne–Askenfelt C4 string and hammer, mapped as physics §8.2 prescribes.
+pub fn chaigne_askenfelt_c4() -> PianoNote {
+    let (length, mass, tension, epsilon, b1, b3) = (0.62, 3.93e-3, 670.0, 3.82e-5, 0.5, 6.25e-9);
+    let linear_density = mass / length;
+    PianoNote {
+        string: StringParams {
+            length,
+            tension,
+            linear_density,
+            bending_stiffness: epsilon * tension * length * length,
+            damping: Damping::Viscous { eta0: b1, eta2: b3 * tension / linear_density },
+        },
+        hammer_mass: 2.97e-3,
+        kappa: 4.5e9,
+        alpha: 2.5,
+        strike_position: 0.12,
+    }
+}
+
+/// Equal-tempered frequency of MIDI key `key` (Hz), A4 = 440 Hz.
+pub fn key_frequency(key: u8) -> f64 {
+    440.0 * 2f64.powf((f64::from(key) - 69.0) / 12.0)
+}
+
+/// Anchor keys of the per-note rule: C2, C4, C7.
+const ANCHOR_KEYS: [f64; 3] = [36.0, 60.0, 96.0];
+
+/// Piecewise-linear interpolation through the anchors, extrapolated with the end slopes.
+fn through(key: f64, values: [f64; 3]) -> f64 {
+    let [k0, k1, k2] = ANCHOR_KEYS;
+    if key <= k1 {
+        values[0] + (values[1] - values[0]) * (key - k0) / (k1 - k0)
+    } else {
+        values[1] + (values[2] - values[1]) * (key - k1) / (k2 - k1)
+    }
+}
+
+/// Log-linear interpolation through positive anchors.
+fn log_through(key: f64, values: [f64; 3]) -> f64 {
+    through(key, values.map(f64::ln)).exp()
+}
+
+/// A plausible piano string and hammer for MIDI key `key` (0..=127): the rule in the module docs.
+pub fn piano_note(key: u8) -> PianoNote {
+    let k = f64::from(key.min(127));
+    let f0 = key_frequency(key.min(127));
+    let exponent = if k >= 60.0 { 0.9 } else { 0.45 };
+    let length = (0.62 * 2f64.powf(-exponent * (k - 60.0) / 12.0)).min(1.9);
+    let tension = 670.0;
+    let linear_density = tension / (2.0 * length * f0).powi(2);
+    let b = log_through(k, [7.4e-5, 3.77e-4, 8.56e-3]).clamp(1e-5, 0.05);
+    PianoNote {
+        string: StringParams {
+            length,
+            tension,
+            linear_density,
+            bending_stiffness: b * tension * length * length / std::f64::consts::PI.powi(2),
+            damping: Damping::PerMode {
+                b1: log_through(k, [0.25, 1.1, 9.17]),
+                b3: log_through(k, [6.25e-9, 6.25e-9, 2.6e-10]),
+            },
+        },
+        hammer_mass: log_through(k, [4.9e-3, 2.97e-3, 2.2e-3]).clamp(1e-3, 12e-3),
+        kappa: log_through(k, [4e8, 4.5e9, 1e12]).clamp(1e8, 1e13),
+        alpha: through(k, [2.3, 2.5, 3.0]).clamp(2.0, 3.5),
+        strike_position: through(k, [0.12, 0.12, 0.0625]).clamp(0.04, 0.2),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn c4_matches_the_derived_values_of_physics_8_2() {
+        let c4 = chaigne_askenfelt_c4().string;
+        assert!((c4.linear_density - 6.3387e-3).abs() < 1e-7);
+        assert!((c4.bending_stiffness - 9.838e-3).abs() < 1e-6);
+        assert!((c4.fundamental() - 262.19).abs() < 0.01);
+        assert!((c4.inharmonicity() - 3.770e-4).abs() < 1e-7);
+        let Damping::Viscous { eta0, eta2 } = c4.damping else { panic!("C4 uses the eta law") };
+        assert_eq!(eta0, 0.5);
+        assert!((eta2 - 6.606e-4).abs() < 1e-7);
+    }
+
+    #[test]
+    fn every_key_gives_a_valid_string_at_its_pitch() {
+        for key in 0..=127u8 {
+            let note = piano_note(key);
+            note.string.validate().unwrap_or_else(|e| panic!("key {key}: {e}"));
+            let f0 = note.string.fundamental();
+            assert!((f0 / key_frequency(key) - 1.0).abs() < 1e-12, "key {key}: f0 {f0}");
+            assert!(note.hammer_mass > 0.0 && note.kappa > 0.0 && note.alpha >= 1.0);
+            assert!(note.strike_position > 0.0 && note.strike_position < 0.5);
+        }
+    }
+}

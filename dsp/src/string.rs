@@ -1,0 +1,474 @@
+//! Modal stiff string with damping (seed §5.1–5.2, physics §6).
+//!
+//! # Model (seed eq. 27, with the seed's `ρA ∂x²u` misprint read as `ρA ∂t²u`)
+//!
+//! ```text
+//! ρA u_tt = T u_xx − EI u_xxxx + 2ρA(η2 ∂x² − η0) u_t + Σ forces
+//! ```
+//!
+//! simply supported at `x = 0` and `x = L`. Modes `v_i(x) = sin(β_i x)`, `β_i = iπ/L`, modal
+//! mass `m̃ = ρAL/2`, `ω0_i² = (Tβ_i² + EIβ_i⁴)/ρA`, decay rate `σ_i` (1/s) from a [`Damping`]
+//! law, damped frequency `ω_i = √(ω0_i² − σ_i²)`. Lossless partials: `f_i = i f0 √(1 + B i²)`
+//! with `f0 = √(T/ρA)/(2L)` and `B = π² EI/(T L²)`.
+//!
+//! # Exact-per-mode scheme (seed eq. 37–40, physics §6.2)
+//!
+//! `m̃ δ_tt ũ + R̂ δ_t· ũ + K̂ μ_t² ũ = Σ F h` with `K̂`, `R̂` chosen so the homogeneous recursion
+//! of each mode is `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}`, `P = e^{−σΔt} cos(ωΔt)` (overdamped:
+//! `cosh(γΔt)`, `γ = √(σ² − ω0²)`), `Q = e^{−2σΔt}`: every mode rings at exactly `ω_i` and
+//! decays at exactly `σ_i`, at any sample rate. Per mode:
+//!
+//! ```text
+//! K̂ = (4m̃/Δt²)(1 − 2P + Q)/(1 + 2P + Q),   R̂ = (4m̃/Δt)(1 − Q)/(1 + 2P + Q)
+//! ũ^{n+1} = ũ^{n−1} − z̃ + C·h·F,   z̃ = B ũ^{n−1} − A ũ^n
+//! A = 2P,   B = 1 + Q,   C = Δt²(1 + 2P + Q)/(4m̃)
+//! ```
+//!
+//! `K̂` diverges for an undamped mode at Nyquist, so the string keeps exactly the modes with
+//! `ω_i < π·fs` (strict); `ω_i` increases with `i`, so counting stops at the first failure
+//! (an overdamped mode, which does not ring, is kept while `ω0_i < π·fs`).
+//!
+//! # Energy (physics §6.3)
+//!
+//! ```text
+//! H^{n+1/2} = ½ m̃ ‖(ũ^{n+1} − ũ^n)/Δt‖² + ½ Σ K̂_i ((ũ_i^{n+1} + ũ_i^n)/2)²
+//! H^{n+1/2} − H^{n−1/2} = −Δt (δ_t·ũ)ᵀ R̂ (δ_t·ũ) + (work of the forces)
+//! ```
+//!
+//! # Layout
+//!
+//! Structure of arrays: every per-mode coefficient is a contiguous `Vec<f64>` and a step is two
+//! branch-free passes over the modes. [`ModalString::history`] computes `z̃` and its projections
+//! on the contact vectors in one pass; [`ModalString::advance`] applies the forces, moves the state
+//! on and projects the new state on the output vector in the second.
+
+use serde::Serialize;
+
+/// Most modes a string may have (bounds memory and cost for extreme parameters).
+pub const MAX_MODES: usize = 4096;
+
+/// How the modal decay rates `σ_i` (1/s) are set.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "law", rename_all = "kebab-case")]
+pub enum Damping {
+    /// Seed eq. 27: `σ_i = η0 + η2 β_i²`, with `η0` (1/s) and `η2` (m²/s).
+    Viscous {
+        /// Frequency-independent loss η0 (1/s).
+        eta0: f64,
+        /// Frequency-dependent loss η2 (m²/s).
+        eta2: f64,
+    },
+    /// Chaigne–Askenfelt style per-mode law: `σ_i = b1 + b3 ω0_i²`, with `b1` (1/s) and `b3` (s).
+    PerMode {
+        /// Frequency-independent loss b1 (1/s).
+        b1: f64,
+        /// Loss growing with the square of the mode's frequency, b3 (s).
+        b3: f64,
+    },
+}
+
+impl Damping {
+    /// No loss at all.
+    pub const LOSSLESS: Damping = Damping::Viscous { eta0: 0.0, eta2: 0.0 };
+
+    /// Decay rate `σ` (1/s) of a mode with wavenumber `beta` (1/m) and angular frequency `omega0`
+    /// (rad/s).
+    pub fn sigma(&self, beta: f64, omega0: f64) -> f64 {
+        match *self {
+            Damping::Viscous { eta0, eta2 } => eta0 + eta2 * beta * beta,
+            Damping::PerMode { b1, b3 } => b1 + b3 * omega0 * omega0,
+        }
+    }
+
+    fn terms(&self) -> [(&'static str, f64); 2] {
+        match *self {
+            Damping::Viscous { eta0, eta2 } => [("eta0", eta0), ("eta2", eta2)],
+            Damping::PerMode { b1, b3 } => [("b1", b1), ("b3", b3)],
+        }
+    }
+}
+
+/// Physical parameters of a stiff string.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StringParams {
+    /// Length L (m).
+    pub length: f64,
+    /// Tension T (N).
+    pub tension: f64,
+    /// Linear density ρA (kg/m).
+    pub linear_density: f64,
+    /// Bending stiffness EI (N·m²).
+    pub bending_stiffness: f64,
+    /// Loss law.
+    pub damping: Damping,
+}
+
+/// An invalid string parameter: names the key and the reason.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{key}: {reason}")]
+pub struct StringError {
+    /// Parameter name (as in scene files).
+    pub key: &'static str,
+    /// What is wrong.
+    pub reason: String,
+}
+
+impl StringParams {
+    /// Nominal fundamental of the flexible string, `f0 = √(T/ρA)/(2L)` (Hz).
+    pub fn fundamental(&self) -> f64 {
+        (self.tension / self.linear_density).sqrt() / (2.0 * self.length)
+    }
+
+    /// Inharmonicity coefficient `B = π² EI/(T L²)`.
+    pub fn inharmonicity(&self) -> f64 {
+        std::f64::consts::PI.powi(2) * self.bending_stiffness / (self.tension * self.length * self.length)
+    }
+
+    /// Lossless partial `f_i = i f0 √(1 + B i²)` (Hz), `i ≥ 1`.
+    pub fn partial(&self, i: usize) -> f64 {
+        let i = i as f64;
+        i * self.fundamental() * (1.0 + self.inharmonicity() * i * i).sqrt()
+    }
+
+    /// Check every parameter, naming the first invalid one.
+    pub fn validate(&self) -> Result<(), StringError> {
+        let positive = |key, v: f64| {
+            if v.is_finite() && v > 0.0 { Ok(()) } else { Err(StringError { key, reason: format!("must be finite and > 0 (got {v})") }) }
+        };
+        positive("length", self.length)?;
+        positive("tension", self.tension)?;
+        positive("linear_density", self.linear_density)?;
+        if !(self.bending_stiffness.is_finite() && self.bending_stiffness >= 0.0) {
+            return Err(StringError {
+                key: "bending_stiffness",
+                reason: format!("must be finite and >= 0 (got {})", self.bending_stiffness),
+            });
+        }
+        for (key, v) in self.damping.terms() {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(StringError { key, reason: format!("must be finite and >= 0 (got {v})") });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A modal string prepared for one sample rate: coefficients and state.
+#[derive(Debug, Clone)]
+pub struct ModalString {
+    params: StringParams,
+    sample_rate: f64,
+    /// Modal mass m̃ = ρAL/2 (kg).
+    modal_mass: f64,
+    /// Wavenumbers β_i = iπ/L (1/m).
+    beta: Vec<f64>,
+    /// Undamped angular frequencies ω0_i (rad/s).
+    omega0: Vec<f64>,
+    /// Decay rates σ_i (1/s).
+    sigma: Vec<f64>,
+    /// `A_i = 2P_i`.
+    coef_a: Vec<f64>,
+    /// `B_i = 1 + Q_i`.
+    coef_b: Vec<f64>,
+    /// `C_i = Δt²(1 + 2P + Q)/(4m̃)` (m/N).
+    coef_c: Vec<f64>,
+    /// `K̂_i` (N/m).
+    stiffness: Vec<f64>,
+    /// `R̂_i` (kg/s).
+    resistance: Vec<f64>,
+    /// `ũ^{n−1}` (m).
+    u_prev: Vec<f64>,
+    /// `ũ^n` (m).
+    u_now: Vec<f64>,
+    /// `z̃` of the current step (m), from [`ModalString::history`].
+    history: Vec<f64>,
+}
+
+/// Energy terms of one string step (J), returned by [`ModalString::advance_monitored`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StringEnergy {
+    /// `½ m̃ ‖(ũ^{n+1} − ũ^n)/Δt‖² + ½ Σ K̂ ((ũ^{n+1} + ũ^n)/2)²` (J).
+    pub stored: f64,
+    /// Energy dissipated in the step, `Δt (δ_t·ũ)ᵀ R̂ (δ_t·ũ)` (J).
+    pub dissipated: f64,
+}
+
+impl ModalString {
+    /// Prepare the string at `sample_rate` (Hz): every mode strictly below Nyquist, at rest.
+    pub fn new(params: StringParams, sample_rate: f64) -> Result<Self, StringError> {
+        params.validate()?;
+        if !(sample_rate.is_finite() && sample_rate > 0.0) {
+            return Err(StringError { key: "sample_rate", reason: format!("must be finite and > 0 (got {sample_rate})") });
+        }
+        let dt = 1.0 / sample_rate;
+        let nyquist = std::f64::consts::PI * sample_rate;
+        let modal_mass = 0.5 * params.linear_density * params.length;
+        let mut s = Self {
+            params,
+            sample_rate,
+            modal_mass,
+            beta: Vec::new(),
+            omega0: Vec::new(),
+            sigma: Vec::new(),
+            coef_a: Vec::new(),
+            coef_b: Vec::new(),
+            coef_c: Vec::new(),
+            stiffness: Vec::new(),
+            resistance: Vec::new(),
+            u_prev: Vec::new(),
+            u_now: Vec::new(),
+            history: Vec::new(),
+        };
+        for i in 1.. {
+            let beta = i as f64 * std::f64::consts::PI / params.length;
+            let b2 = beta * beta;
+            let omega0 = ((params.tension * b2 + params.bending_stiffness * b2 * b2) / params.linear_density).sqrt();
+            let sigma = params.damping.sigma(beta, omega0);
+            let underdamped = sigma < omega0;
+            let omega = if underdamped { (omega0 * omega0 - sigma * sigma).sqrt() } else { 0.0 };
+            // Keep modes ringing strictly below Nyquist; an overdamped mode counts by ω0.
+            if !(omega < nyquist) || !(omega0.is_finite()) || (!underdamped && omega0 >= nyquist) {
+                break;
+            }
+            if i > MAX_MODES {
+                return Err(StringError {
+                    key: "length",
+                    reason: format!("the string has more than {MAX_MODES} modes below Nyquist; shorten it or raise the tension"),
+                });
+            }
+            let decay = (-sigma * dt).exp();
+            let p = if underdamped {
+                decay * (omega * dt).cos()
+            } else {
+                decay * ((sigma * sigma - omega0 * omega0).sqrt() * dt).cosh()
+            };
+            let q = decay * decay;
+            let den = 1.0 + 2.0 * p + q;
+            s.beta.push(beta);
+            s.omega0.push(omega0);
+            s.sigma.push(sigma);
+            s.coef_a.push(2.0 * p);
+            s.coef_b.push(1.0 + q);
+            s.coef_c.push(dt * dt * den / (4.0 * modal_mass));
+            s.stiffness.push(4.0 * modal_mass / (dt * dt) * (1.0 - 2.0 * p + q) / den);
+            s.resistance.push(4.0 * modal_mass / dt * (1.0 - q) / den);
+        }
+        let m = s.beta.len();
+        s.u_prev = vec![0.0; m];
+        s.u_now = vec![0.0; m];
+        s.history = vec![0.0; m];
+        Ok(s)
+    }
+
+    /// The physical parameters.
+    pub fn params(&self) -> &StringParams {
+        &self.params
+    }
+
+    /// Sample rate (Hz).
+    pub fn sample_rate(&self) -> f64 {
+        self.sample_rate
+    }
+
+    /// Number of modes M.
+    pub fn modes(&self) -> usize {
+        self.beta.len()
+    }
+
+    /// Modal mass m̃ = ρAL/2 (kg).
+    pub fn modal_mass(&self) -> f64 {
+        self.modal_mass
+    }
+
+    /// Wavenumbers β_i (1/m), mode `i + 1` at index `i`.
+    pub fn wavenumbers(&self) -> &[f64] {
+        &self.beta
+    }
+
+    /// Decay rates σ_i (1/s).
+    pub fn decay_rates(&self) -> &[f64] {
+        &self.sigma
+    }
+
+    /// Undamped angular frequencies ω0_i (rad/s).
+    pub fn angular_frequencies(&self) -> &[f64] {
+        &self.omega0
+    }
+
+    /// Per-mode `C_i` (m/N): the modal displacement change per newton of modal force.
+    pub fn input_gains(&self) -> &[f64] {
+        &self.coef_c
+    }
+
+    /// Modal displacements `ũ^n` (m).
+    pub fn state(&self) -> &[f64] {
+        &self.u_now
+    }
+
+    /// Modal displacements `ũ^{n−1}` (m).
+    pub fn previous_state(&self) -> &[f64] {
+        &self.u_prev
+    }
+
+    /// Set the modal state `ũ^{n−1}`, `ũ^n` (m). Slices must have [`modes`](Self::modes) entries.
+    pub fn set_state(&mut self, previous: &[f64], now: &[f64]) {
+        self.u_prev.copy_from_slice(previous);
+        self.u_now.copy_from_slice(now);
+    }
+
+    /// Bring the string to rest.
+    pub fn reset(&mut self) {
+        self.u_prev.fill(0.0);
+        self.u_now.fill(0.0);
+    }
+
+    /// Write the mode shapes at `x` (m), `sin(β_i x)`, into `out` (dimensionless). Uses the
+    /// recurrence `sin((i+1)θ) = 2cos θ·sin(iθ) − sin((i−1)θ)` with `θ = πx/L`, so costs one
+    /// sine and one cosine for all modes.
+    pub fn mode_shapes(&self, x: f64, out: &mut [f64]) {
+        let theta = std::f64::consts::PI * x / self.params.length;
+        let (s1, c1) = theta.sin_cos();
+        let two_c = 2.0 * c1;
+        let (mut prev, mut now) = (0.0, s1);
+        for o in out.iter_mut().take(self.modes()) {
+            *o = now;
+            let next = two_c * now - prev;
+            prev = now;
+            now = next;
+        }
+    }
+
+    /// The weights that turn the modal state into the transverse force at the bridge (x = 0)
+    /// (N/m): `T β_i + EI β_i³`.
+    pub fn bridge_weights(&self, out: &mut [f64]) {
+        let (t, ei) = (self.params.tension, self.params.bending_stiffness);
+        for (o, &b) in out.iter_mut().zip(&self.beta) {
+            *o = t * b + ei * b * b * b;
+        }
+    }
+
+    /// First pass of a step: compute `z̃ = B ũ^{n−1} − A ũ^n` and return its projections on
+    /// each of the `K` vectors (m).
+    #[inline]
+    pub fn history<const K: usize>(&mut self, vectors: [&[f64]; K]) -> [f64; K] {
+        let m = self.modes();
+        let (a, b) = (&self.coef_a[..m], &self.coef_b[..m]);
+        let (up, un, zt) = (&self.u_prev[..m], &self.u_now[..m], &mut self.history[..m]);
+        let vectors = vectors.map(|v| &v[..m]);
+        let mut acc = [0.0; K];
+        for i in 0..m {
+            let z = b[i] * up[i] - a[i] * un[i];
+            zt[i] = z;
+            for k in 0..K {
+                acc[k] += vectors[k][i] * z;
+            }
+        }
+        acc
+    }
+
+    /// Second pass: `ũ^{n+1} = ũ^{n−1} − z̃ + Σ_k gains_k · F_k`, where `gains_k = C∘h_k` (m/N,
+    /// see [`input_gains`](Self::input_gains)) and `F_k` (N) are the modal forces along each contact
+    /// vector; then step the state on. Returns `outputᵀ ũ^{n+1}`.
+    #[inline]
+    pub fn advance<const K: usize>(&mut self, forces: [(&[f64], f64); K], output: &[f64]) -> f64 {
+        let m = self.modes();
+        let forces = forces.map(|(g, f)| (&g[..m], f));
+        let (up, zt, out) = (&mut self.u_prev[..m], &self.history[..m], &output[..m]);
+        let mut acc = 0.0;
+        for i in 0..m {
+            let mut u = up[i] - zt[i];
+            for (g, f) in &forces {
+                u += g[i] * f;
+            }
+            up[i] = u;
+            acc += out[i] * u;
+        }
+        std::mem::swap(&mut self.u_prev, &mut self.u_now);
+        acc
+    }
+
+    /// [`advance`](Self::advance), also returning the string's energy terms for this step.
+    pub fn advance_monitored<const K: usize>(&mut self, forces: [(&[f64], f64); K], output: &[f64]) -> (f64, StringEnergy) {
+        let m = self.modes();
+        let dt = 1.0 / self.sample_rate;
+        let mm = self.modal_mass;
+        let forces = forces.map(|(g, f)| (&g[..m], f));
+        let (up, un, zt, out) = (&mut self.u_prev[..m], &self.u_now[..m], &self.history[..m], &output[..m]);
+        let (k_hat, r_hat) = (&self.stiffness[..m], &self.resistance[..m]);
+        let mut acc = 0.0;
+        let (mut kinetic, mut potential, mut loss) = (0.0, 0.0, 0.0);
+        for i in 0..m {
+            let mut u = up[i] - zt[i];
+            for (g, f) in &forces {
+                u += g[i] * f;
+            }
+            let v = (u - un[i]) / dt;
+            let mean = 0.5 * (u + un[i]);
+            let centred = (u - up[i]) / (2.0 * dt);
+            kinetic += v * v;
+            potential += k_hat[i] * mean * mean;
+            loss += r_hat[i] * centred * centred;
+            up[i] = u;
+            acc += out[i] * u;
+        }
+        std::mem::swap(&mut self.u_prev, &mut self.u_now);
+        (acc, StringEnergy { stored: 0.5 * mm * kinetic + 0.5 * potential, dissipated: dt * loss })
+    }
+
+    /// The string's energy `H^{n−1/2}` of the current state (J): the stored term between
+    /// `ũ^{n−1}` and `ũ^n`.
+    pub fn energy(&self) -> f64 {
+        let dt = 1.0 / self.sample_rate;
+        let mut e = 0.0;
+        for i in 0..self.modes() {
+            let v = (self.u_now[i] - self.u_prev[i]) / dt;
+            let mean = 0.5 * (self.u_now[i] + self.u_prev[i]);
+            e += 0.5 * self.modal_mass * v * v + 0.5 * self.stiffness[i] * mean * mean;
+        }
+        e
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn c4() -> StringParams {
+        StringParams {
+            length: 0.62,
+            tension: 670.0,
+            linear_density: 3.93e-3 / 0.62,
+            bending_stiffness: 3.82e-5 * 670.0 * 0.62 * 0.62,
+            damping: Damping::Viscous { eta0: 0.5, eta2: 6.25e-9 * 670.0 / (3.93e-3 / 0.62) },
+        }
+    }
+
+    #[test]
+    fn mode_count_is_every_mode_below_nyquist() {
+        // physics §8.2: M = 34 / 56 / 59 / 90 / 132 for the C4 string.
+        for (fs, m) in [(22050.0, 34), (44100.0, 56), (48000.0, 59), (96000.0, 90), (192000.0, 132)] {
+            assert_eq!(ModalString::new(c4(), fs).unwrap().modes(), m, "fs = {fs}");
+        }
+    }
+
+    #[test]
+    fn mode_shape_recurrence_matches_sine() {
+        let s = ModalString::new(c4(), 44100.0).unwrap();
+        let mut shapes = vec![0.0; s.modes()];
+        let x = 0.12 * 0.62;
+        s.mode_shapes(x, &mut shapes);
+        for (i, (&got, &beta)) in shapes.iter().zip(s.wavenumbers()).enumerate() {
+            assert!((got - (beta * x).sin()).abs() < 1e-12, "mode {}", i + 1);
+        }
+    }
+
+    #[test]
+    fn invalid_parameters_name_their_key() {
+        let mut p = c4();
+        p.tension = -1.0;
+        assert_eq!(ModalString::new(p, 44100.0).unwrap_err().key, "tension");
+        let mut p = c4();
+        p.damping = Damping::Viscous { eta0: f64::NAN, eta2: 0.0 };
+        assert_eq!(ModalString::new(p, 44100.0).unwrap_err().key, "eta0");
+    }
+}
