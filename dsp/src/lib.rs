@@ -34,6 +34,7 @@
 //! ```
 
 pub mod contact;
+pub mod control;
 pub mod exciter;
 pub mod preset;
 pub mod render;

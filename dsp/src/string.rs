@@ -338,12 +338,14 @@ impl ModalString {
         }
     }
 
-    /// The weights that turn the modal state into the transverse force at the bridge (x = 0)
-    /// (N/m): `T β_i + EI β_i³`.
-    pub fn bridge_weights(&self, out: &mut [f64]) {
+    /// The weights that turn the modal state into the transverse force on the support (N/m):
+    /// `T β_i + EI β_i³` at `x = 0`, and `(−1)^(i+1)(T β_i + EI β_i³)` at `x = L` (the mirror
+    /// image, since `sin(β_i (L − x)) = (−1)^(i+1) sin(β_i x)`).
+    pub fn bridge_weights(&self, at_far_end: bool, out: &mut [f64]) {
         let (t, ei) = (self.params.tension, self.params.bending_stiffness);
-        for (o, &b) in out.iter_mut().zip(&self.beta) {
-            *o = t * b + ei * b * b * b;
+        for (i, (o, &b)) in out.iter_mut().zip(&self.beta).enumerate() {
+            let sign = if at_far_end && i % 2 == 1 { -1.0 } else { 1.0 };
+            *o = sign * (t * b + ei * b * b * b);
         }
     }
 

@@ -1,6 +1,10 @@
-//! The bodies that excite a string through a contact: the piano hammer (and, with the slide
-//! scene, the slide–hand oscillator and the fingers).
+//! The bodies that excite a string through a contact: the piano hammer, the slide–hand
+//! oscillator and the fingers.
 
+pub mod finger;
 mod hammer;
+mod slide;
 
+pub use finger::FingerParams;
 pub use hammer::{Hammer, HammerParams};
+pub use slide::{HandMotion, SlideHand, SlideParams};

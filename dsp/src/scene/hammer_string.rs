@@ -27,7 +27,8 @@ pub enum OutputKind {
     Displacement,
     /// String velocity at the pickup (m/s), `(u^{n+1} − u^n)/Δt`.
     Velocity,
-    /// Transverse force on the bridge at `x = 0` (N): `Σ (Tβ_i + EIβ_i³) ũ_i`.
+    /// Transverse force on the bridge (N): at `x = 0` for the hammer–string scene,
+    /// `Σ (Tβ_i + EIβ_i³) ũ_i`; at `x = L` for the slide–string scene.
     BridgeForce,
 }
 
@@ -90,7 +91,7 @@ impl<S: ContactSolver> HammerString<S> {
         let mut pickup = vec![0.0; m];
         match params.pickup.kind {
             OutputKind::Displacement | OutputKind::Velocity => string.mode_shapes(params.pickup.position * length, &mut pickup),
-            OutputKind::BridgeForce => string.bridge_weights(&mut pickup),
+            OutputKind::BridgeForce => string.bridge_weights(false, &mut pickup),
         }
         let hammer = Hammer::new(&params.hammer, fs);
         let q = shape.iter().zip(&gain).map(|(h, g)| h * g).sum::<f64>() + hammer.coupling();

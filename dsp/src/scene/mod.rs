@@ -7,9 +7,11 @@
 
 mod hammer_string;
 mod mass_barrier;
+mod slide_string;
 
 pub use hammer_string::{HammerString, HammerStringParams, OutputKind, Pickup};
 pub use mass_barrier::{MassBarrier, MassBarrierParams};
+pub use slide_string::{SlideControls, SlideString, SlideStringParams};
 
 /// One sample `n` of a scene's signals.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

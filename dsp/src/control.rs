@@ -1,0 +1,155 @@
+//! Control inputs and their block-wise linear interpolation (seed §6.7).
+//!
+//! Hosts and scene files give control values at any rate. The engine samples them only at block
+//! boundaries `n = k·N_b` and interpolates linearly inside each block of `N_b` samples, so the
+//! output never depends on how a host splits its buffers. The expensive quantities that depend on
+//! positions (mode-shape vectors, their Gram matrix, `q`) are recomputed once per block, from the
+//! values at the block's start.
+//!
+//! Whether a scene's controls can change at all is a property of the source's *type*
+//! ([`ControlSource::VARYING`]): a scene driven by [`Fixed`] controls never recomputes anything,
+//! and the check compiles away.
+
+/// Piecewise-linear automation: `(time (s), value)` breakpoints, held constant before the first
+/// and after the last point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Breakpoints {
+    points: Vec<(f64, f64)>,
+}
+
+/// Why a breakpoint list is invalid.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BreakpointError {
+    /// No points at all.
+    #[error("needs at least one [time, value] point")]
+    Empty,
+    /// A time or value is NaN or infinite, or a time is negative.
+    #[error("point {index} is not finite, or has a negative time")]
+    NotFinite {
+        /// Index of the point.
+        index: usize,
+    },
+    /// Times must strictly increase.
+    #[error("point {index}: times must strictly increase ({previous} then {time})")]
+    NotIncreasing {
+        /// Index of the point.
+        index: usize,
+        /// The previous time (s).
+        previous: f64,
+        /// This time (s).
+        time: f64,
+    },
+}
+
+impl Breakpoints {
+    /// Validate and wrap `(time, value)` points.
+    pub fn new(points: Vec<(f64, f64)>) -> Result<Self, BreakpointError> {
+        if points.is_empty() {
+            return Err(BreakpointError::Empty);
+        }
+        for (index, &(t, v)) in points.iter().enumerate() {
+            if !(t.is_finite() && v.is_finite() && t >= 0.0) {
+                return Err(BreakpointError::NotFinite { index });
+            }
+            if index > 0 && t <= points[index - 1].0 {
+                return Err(BreakpointError::NotIncreasing { index, previous: points[index - 1].0, time: t });
+            }
+        }
+        Ok(Self { points })
+    }
+
+    /// A single constant value.
+    pub fn constant(value: f64) -> Self {
+        Self { points: vec![(0.0, value)] }
+    }
+
+    /// The points.
+    pub fn points(&self) -> &[(f64, f64)] {
+        &self.points
+    }
+
+    /// Smallest and largest value.
+    pub fn range(&self) -> (f64, f64) {
+        self.points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &(_, v)| (lo.min(v), hi.max(v)))
+    }
+
+    /// Value at time `t` (s).
+    pub fn at(&self, t: f64) -> f64 {
+        let p = &self.points;
+        let i = p.partition_point(|&(tp, _)| tp <= t);
+        if i == 0 {
+            return p[0].1;
+        }
+        if i == p.len() {
+            return p[i - 1].1;
+        }
+        let ((t0, v0), (t1, v1)) = (p[i - 1], p[i]);
+        v0 + (v1 - v0) * (t - t0) / (t1 - t0)
+    }
+}
+
+/// A source of control values of type `T`, sampled at block boundaries.
+pub trait ControlSource<T> {
+    /// Whether the values can change over time. When `false`, scenes never recompute the
+    /// quantities that depend on them.
+    const VARYING: bool;
+
+    /// The values at sample `n`. Called with non-decreasing `n`.
+    fn at(&mut self, n: u64) -> T;
+}
+
+/// Controls that never change.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fixed<T>(pub T);
+
+impl<T: Copy> ControlSource<T> for Fixed<T> {
+    const VARYING: bool = false;
+
+    fn at(&mut self, _n: u64) -> T {
+        self.0
+    }
+}
+
+/// A linear ramp across one block: value `start + slope·k` at sample `k` of the block.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Ramp {
+    start: f64,
+    slope: f64,
+}
+
+impl Ramp {
+    /// A ramp from `from` (at the block's first sample) to `to` (at the next block's first
+    /// sample) over `len` samples.
+    #[inline]
+    pub fn new(from: f64, to: f64, len: usize) -> Self {
+        Self { start: from, slope: (to - from) / len as f64 }
+    }
+
+    /// Value at sample `k` of the block (`k = len` gives the end value).
+    #[inline]
+    pub fn at(&self, k: usize) -> f64 {
+        self.start + self.slope * k as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn breakpoints_interpolate_and_hold() {
+        let b = Breakpoints::new(vec![(0.5, 1.0), (1.5, 3.0)]).unwrap();
+        assert_eq!(b.at(0.0), 1.0);
+        assert_eq!(b.at(1.0), 2.0);
+        assert_eq!(b.at(9.0), 3.0);
+        assert_eq!(b.range(), (1.0, 3.0));
+    }
+
+    #[test]
+    fn invalid_breakpoints_are_refused() {
+        assert_eq!(Breakpoints::new(vec![]), Err(BreakpointError::Empty));
+        assert!(matches!(Breakpoints::new(vec![(0.0, 1.0), (0.0, 2.0)]), Err(BreakpointError::NotIncreasing { index: 1, .. })));
+        assert!(matches!(Breakpoints::new(vec![(0.0, f64::NAN)]), Err(BreakpointError::NotFinite { index: 0 })));
+        assert!(matches!(Breakpoints::new(vec![(-1.0, 0.0)]), Err(BreakpointError::NotFinite { index: 0 })));
+    }
+}

@@ -1,0 +1,149 @@
+//! The slide–hand oscillator (SHO, seed eqs. 49, 64–71; physics §7.2).
+//!
+//! A slide of mass `m_o` (kg) at height `w_o` (m) is held by the hand at height `w_H` (a control
+//! input) through a spring `k_H` (N/m) and a damper `r_H` (kg/s):
+//! `m_o ẅ_o + r_H (ẇ_o − ẇ_H) + k_H (w_o − w_H) = −F`. The contact compression is
+//! `y = h_oᵀũ − w_o`: lowering the hand presses the slide into the string. Discretised with
+//! `m_o δ_tt w_o + r_H δ_t·(w_o − w_H) + k_H μ_t²(w_o − w_H) = −F^n` (seed eq. 64):
+//!
+//! ```text
+//! w_o^{n+1} = w_o^{n−1} − z_sho − q_sho F^n
+//! z_sho = [2(K_H+1) w_o^{n−1} + 2(K_H−1) w_o^n − ξ_o T_H^n] / (1 + K_H + R_H)
+//! q_sho = ξ_o / (1 + K_H + R_H)
+//! K_H = k_HΔt²/(4m_o),  R_H = r_HΔt/(2m_o),  ξ_o = Δt²/m_o
+//! T_H^n = k_H (w_H^{n+1} + 2w_H^n + w_H^{n−1})/4 + r_H (w_H^{n+1} − w_H^{n−1})/(2Δt)
+//! ```
+//!
+//! The seed's eq. 69 prints `(K_H − 1) w_o^n` without the factor 2; with `k_H = r_H = 0` only
+//! the version with the 2 reduces to the free mass `z = 2(w^{n−1} − w^n)`.
+//!
+//! Energy (seed eqs. 76–79): `½ m_o (δ_t+ w_o)² + ½ k_H (μ_t+(w_o − w_H))²`, losing
+//! `Q_o = r_H (δ_t· w_o)²` and gaining the hand power
+//! `P_H = {r_H δ_t· w_o − k_H μ_t²(w_o − w_H)} δ_t· w_H`.
+
+/// Slide and hand parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlideParams {
+    /// Slide mass m_o (kg), > 0.
+    pub mass: f64,
+    /// Hand stiffness k_H (N/m), ≥ 0.
+    pub stiffness: f64,
+    /// Hand damping r_H (kg/s), ≥ 0.
+    pub damping: f64,
+}
+
+/// The SHO state and its per-sample-rate constants.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlideHand {
+    params: SlideParams,
+    dt: f64,
+    /// `K_H = k_H Δt²/(4 m_o)`.
+    k: f64,
+    /// `ξ_o/(1 + K_H + R_H)` (m/N).
+    q: f64,
+    /// `1/(1 + K_H + R_H)`.
+    norm: f64,
+    /// `ξ_o = Δt²/m_o` (m/N).
+    xi: f64,
+    /// `w_o^{n−1}`, `w_o^n` (m).
+    w_prev: f64,
+    w_now: f64,
+}
+
+/// One step's hand input `w_H^{n−1}, w_H^n, w_H^{n+1}` (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HandMotion {
+    /// `w_H^{n−1}` (m).
+    pub prev: f64,
+    /// `w_H^n` (m).
+    pub now: f64,
+    /// `w_H^{n+1}` (m).
+    pub next: f64,
+}
+
+impl SlideHand {
+    /// A slide at rest at height `w0` (m).
+    pub fn new(params: SlideParams, sample_rate: f64, w0: f64) -> Self {
+        let dt = 1.0 / sample_rate;
+        let xi = dt * dt / params.mass;
+        let k = params.stiffness * dt * dt / (4.0 * params.mass);
+        let r = params.damping * dt / (2.0 * params.mass);
+        let norm = 1.0 / (1.0 + k + r);
+        Self { params, dt, k, q: xi * norm, norm, xi, w_prev: w0, w_now: w0 }
+    }
+
+    /// `w_o^{n−1}` (m).
+    #[inline]
+    pub fn previous(&self) -> f64 {
+        self.w_prev
+    }
+
+    /// `w_o^n` (m).
+    #[inline]
+    pub fn position(&self) -> f64 {
+        self.w_now
+    }
+
+    /// `q_sho` (m/N).
+    #[inline]
+    pub fn coupling(&self) -> f64 {
+        self.q
+    }
+
+    /// `z_sho` (m) for the hand motion around step n.
+    #[inline]
+    pub fn history(&self, hand: &HandMotion) -> f64 {
+        let p = &self.params;
+        let t_h = 0.25 * p.stiffness * (hand.next + 2.0 * hand.now + hand.prev)
+            + p.damping * (hand.next - hand.prev) / (2.0 * self.dt);
+        (2.0 * (self.k + 1.0) * self.w_prev + 2.0 * (self.k - 1.0) * self.w_now - self.xi * t_h) * self.norm
+    }
+
+    /// Apply the contact force (N; the slide feels `−F`) and step on. Returns the energy
+    /// exchanged with the hand during the step, `Δt (P_H − Q_o)` (J).
+    #[inline]
+    pub fn advance(&mut self, z_sho: f64, force: f64, hand: &HandMotion) -> f64 {
+        let next = self.w_prev - z_sho - self.q * force;
+        let p = &self.params;
+        let centred = (next - self.w_prev) / (2.0 * self.dt);
+        let hand_centred = (hand.next - hand.prev) / (2.0 * self.dt);
+        let spring = 0.25 * ((next - hand.next) + 2.0 * (self.w_now - hand.now) + (self.w_prev - hand.prev));
+        let exchanged =
+            self.dt * ((p.damping * centred - p.stiffness * spring) * hand_centred - p.damping * centred * centred);
+        self.w_prev = self.w_now;
+        self.w_now = next;
+        exchanged
+    }
+
+    /// Stored energy `½ m_o (δ_t+ w_o)² + ½ k_H (μ_t+(w_o − w_H))²` (J) of the latest step,
+    /// given the hand at the two latest samples.
+    #[inline]
+    pub fn energy(&self, hand_prev: f64, hand_now: f64) -> f64 {
+        let v = (self.w_now - self.w_prev) / self.dt;
+        let stretch = 0.5 * ((self.w_now - hand_now) + (self.w_prev - hand_prev));
+        0.5 * self.params.mass * v * v + 0.5 * self.params.stiffness * stretch * stretch
+    }
+
+    /// Velocity of the latest step (m/s).
+    #[inline]
+    pub fn velocity(&self) -> f64 {
+        (self.w_now - self.w_prev) / self.dt
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// With k_H = r_H = 0 the SHO is a free mass: z_sho = 2(w^{n−1} − w^n) (the check that
+    /// exposes the seed's eq. 69 misprint).
+    #[test]
+    fn reduces_to_a_free_mass() {
+        let mut sho = SlideHand::new(SlideParams { mass: 0.03, stiffness: 0.0, damping: 0.0 }, 44100.0, 1e-3);
+        let still = HandMotion { prev: 0.0, now: 0.0, next: 0.0 };
+        let z = sho.history(&still);
+        sho.advance(z, 0.0, &still);
+        sho.w_now = 2e-3;
+        assert_eq!(sho.history(&still), 2.0 * (1e-3 - 2e-3));
+    }
+}

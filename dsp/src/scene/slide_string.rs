@@ -1,0 +1,346 @@
+//! A slide pressed onto, slid along and lifted off a plucked string (seed §6, physics §7).
+//!
+//! The string ([`ModalString`]) meets
+//! - the slide at `x_o` through the power-law contact, `y = h_oᵀũ − w_o`, `h_o = v(x_o)`, with the
+//!   slide held by the hand through the slide–hand oscillator ([`SlideHand`]);
+//! - the left finger (trailing the slide, damping the dead part of the string) and the right
+//!   finger (plucking), each a force `F_φe` spread over a half-cosine window with damping
+//!   `F_φR = −r|F_φe| δ_t· u_φ` ([`finger`](crate::exciter::finger)).
+//!
+//! # One step (physics §7.3, seed eqs. 65, 72–74)
+//!
+//! With the contact vectors frozen for the step (`ĥ_ζ`, ζ ∈ {o, l, r}), their Gram matrix in the
+//! C metric `θ_ζξ = Σ_i ĥ_ζ,i C_i ĥ_ξ,i`, `z_ζ = ĥ_ζᵀz̃`, `e_ζ = Σ_φ θ_ζφ F_φe`,
+//! `d_φ = e_φ − z_φ` and `γ_φ = r|F_φe|/(2Δt)`, the finger damping forces are eliminated in
+//! closed form:
+//!
+//! ```text
+//! Δ    = (1 + γ_l θ_ll)(1 + γ_r θ_rr) − γ_l γ_r θ_lr²
+//! s_l  = [(1+γ_rθ_rr)(d_l + θ_lo F) − γ_rθ_lr(d_r + θ_ro F)] / Δ  ≡ s_l0 + s_l1 F
+//! s_r  = [(1+γ_lθ_ll)(d_r + θ_ro F) − γ_lθ_rl(d_l + θ_lo F)] / Δ  ≡ s_r0 + s_r1 F
+//! z_str = z_o − e_o + γ_l θ_ol s_l0 + γ_r θ_or s_r0
+//! q_str = θ_oo − γ_l θ_ol s_l1 − γ_r θ_or s_r1
+//! s + (z_str − z_sho) − (q_str + q_sho) F = 0                                  (seed eq. 74)
+//! ```
+//!
+//! and after the solve `F_φR = −γ_φ s_φ` and
+//! `ũ^{n+1} = ũ^{n−1} − z̃ + C(ĥ_o F + Σ_φ ĥ_φ (F_φe + F_φR))` (seed eq. 65 with the excitation
+//! counted once).
+//!
+//! # Controls (seed §6.7)
+//!
+//! Slide position `x_o`, hand height `w_H`, finger positions and finger forces come from a
+//! [`ControlSource`] sampled at block boundaries every `N_b` samples. Within a block the hand
+//! height and finger forces ramp linearly; the vectors, θ and the projections are recomputed once
+//! per block from the positions at the block's start, and only when a position changed. With
+//! [`Fixed`](crate::control::Fixed) controls none of this code runs.
+//!
+//! # Energy (seed eqs. 75–80)
+//!
+//! `H^{n+1/2}` = string + SHO + contact. Per step the losses are `Δt(Q_str + Q_o + Σ Q_φ)` and the
+//! sources `Δt(P_H + Σ P_φ)`, with `Δt Q_φ = γ_φ s_φ²/2` and `Δt P_φ = F_φe s_φ/2` for fixed
+//! finger positions. Moving the slide or the fingers exchanges energy through the time-varying
+//! vectors (seed eq. 77–78), which is not booked: the balance closes to rounding only while the
+//! positions are fixed.
+
+use crate::contact::{ContactProblem, ContactSolver};
+use crate::control::{ControlSource, Ramp};
+use crate::exciter::{FingerParams, HandMotion, SlideHand, SlideParams, finger};
+use crate::scene::{Frame, OutputKind, Pickup, Scene};
+use crate::string::{ModalString, StringParams};
+
+/// The slide scene's control inputs at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlideControls {
+    /// Slide contact position x_o (m from the nut end, x = 0), in (0, L).
+    pub slide_position: f64,
+    /// Hand height w_H (m): the slide's rest height relative to the string; negative presses.
+    pub hand_height: f64,
+    /// Left finger centre x_l (m), in (0, L).
+    pub left_position: f64,
+    /// Left finger force F_le (N).
+    pub left_force: f64,
+    /// Right finger centre x_r (m), in (0, L).
+    pub right_position: f64,
+    /// Right finger force F_re (N).
+    pub right_force: f64,
+}
+
+impl SlideControls {
+    fn positions(&self) -> [f64; 3] {
+        [self.slide_position, self.left_position, self.right_position]
+    }
+}
+
+/// Parameters of a slide–string scene.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlideStringParams {
+    /// The string.
+    pub string: StringParams,
+    /// The slide and hand.
+    pub slide: SlideParams,
+    /// Left finger (trailing the slide).
+    pub left: FingerParams,
+    /// Right finger (plucking).
+    pub right: FingerParams,
+    /// Control block length N_b (samples), ≥ 1.
+    pub block: usize,
+    /// The output (the bridge is at x = L).
+    pub pickup: Pickup,
+}
+
+/// The slide–string scene, generic over its contact solver and its control source.
+#[derive(Debug, Clone)]
+pub struct SlideString<S, C> {
+    string: ModalString,
+    solver: S,
+    controls: C,
+    sho: SlideHand,
+    left_window: Vec<f64>,
+    right_window: Vec<f64>,
+    /// Contact vectors `ĥ_o, ĥ_l, ĥ_r`.
+    shapes: [Vec<f64>; 3],
+    /// `C∘ĥ_ζ` (m/N).
+    gains: [Vec<f64>; 3],
+    /// `θ_ζξ` (m/N).
+    theta: [[f64; 3]; 3],
+    /// Positions the vectors were computed for (m).
+    positions: [f64; 3],
+    pickup: Vec<f64>,
+    kind: OutputKind,
+    /// Finger damping parameters r (s/m).
+    r: [f64; 2],
+    block: usize,
+    /// Sample index of the next step.
+    n: u64,
+    /// Index of the next step within its block.
+    k: usize,
+    /// Controls at the start of the current block and at the start of the next.
+    start: SlideControls,
+    target: SlideControls,
+    hand: Ramp,
+    left_force: Ramp,
+    right_force: Ramp,
+    /// `w_H^{n−1}` (m).
+    hand_prev: f64,
+    y_prev: f64,
+    y_now: f64,
+    out_now: f64,
+    losses: f64,
+    initial_energy: f64,
+    dt: f64,
+}
+
+impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
+    /// Prepare the scene: the string at rest and the slide resting at the hand's height.
+    /// `string` must be prepared at the scene's sample rate and `params.block ≥ 1`.
+    pub fn new(string: ModalString, params: &SlideStringParams, mut solver: S, mut controls: C) -> Self {
+        let m = string.modes();
+        let fs = string.sample_rate();
+        let block = params.block.max(1);
+        let start = controls.at(0);
+        let target = if C::VARYING { controls.at(block as u64) } else { start };
+        let mut pickup = vec![0.0; m];
+        match params.pickup.kind {
+            OutputKind::Displacement | OutputKind::Velocity => {
+                string.mode_shapes(params.pickup.position * string.params().length, &mut pickup)
+            }
+            OutputKind::BridgeForce => string.bridge_weights(true, &mut pickup),
+        }
+        let sho = SlideHand::new(params.slide, fs, start.hand_height);
+        let mut scene = Self {
+            left_window: finger::window_factors(&string, params.left.width),
+            right_window: finger::window_factors(&string, params.right.width),
+            shapes: [vec![0.0; m], vec![0.0; m], vec![0.0; m]],
+            gains: [vec![0.0; m], vec![0.0; m], vec![0.0; m]],
+            theta: [[0.0; 3]; 3],
+            positions: [f64::NAN; 3],
+            pickup,
+            kind: params.pickup.kind,
+            r: [params.left.damping, params.right.damping],
+            block,
+            n: 0,
+            k: 0,
+            start,
+            target,
+            hand: Ramp::new(start.hand_height, target.hand_height, block),
+            left_force: Ramp::new(start.left_force, target.left_force, block),
+            right_force: Ramp::new(start.right_force, target.right_force, block),
+            hand_prev: start.hand_height,
+            y_prev: 0.0,
+            y_now: 0.0,
+            out_now: 0.0,
+            losses: 0.0,
+            initial_energy: 0.0,
+            dt: 1.0 / fs,
+            string,
+            solver: {
+                solver.start(0.0, 0.0);
+                solver
+            },
+            controls,
+            sho,
+        };
+        scene.place(start.positions());
+        scene.solver.start(scene.y_prev, scene.y_now);
+        scene.out_now = dot(scene.string.state(), &scene.pickup);
+        scene.initial_energy = scene.string.energy()
+            + scene.sho.energy(start.hand_height, start.hand_height)
+            + scene.solver.stored_energy(scene.y_now, scene.y_prev);
+        scene
+    }
+
+    /// The string.
+    pub fn string(&self) -> &ModalString {
+        &self.string
+    }
+
+    /// The contact solver.
+    pub fn solver(&self) -> &S {
+        &self.solver
+    }
+
+    /// Recompute the contact vectors, their Gram matrix and the compressions for new positions.
+    fn place(&mut self, positions: [f64; 3]) {
+        let s = &self.string;
+        let windows = [None, Some(&self.left_window), Some(&self.right_window)];
+        for ((shape, gain), (x, window)) in self.shapes.iter_mut().zip(&mut self.gains).zip(positions.into_iter().zip(windows)) {
+            s.mode_shapes(x, shape);
+            if let Some(w) = window {
+                shape.iter_mut().zip(w).for_each(|(h, w)| *h *= w);
+            }
+            gain.iter_mut().zip(shape.iter()).zip(s.input_gains()).for_each(|((g, h), c)| *g = c * h);
+        }
+        for a in 0..3 {
+            for b in a..3 {
+                let t = dot(&self.shapes[a], &self.gains[b]);
+                self.theta[a][b] = t;
+                self.theta[b][a] = t;
+            }
+        }
+        self.y_prev = dot(s.previous_state(), &self.shapes[0]) - self.sho.previous();
+        self.y_now = dot(s.state(), &self.shapes[0]) - self.sho.position();
+        self.positions = positions;
+    }
+
+    /// Start a new block: move the targets on and, if a position changed, the vectors.
+    fn begin_block(&mut self) {
+        self.start = self.target;
+        self.target = self.controls.at(self.n + self.block as u64);
+        let (s, t, len) = (&self.start, &self.target, self.block);
+        self.hand = Ramp::new(s.hand_height, t.hand_height, len);
+        self.left_force = Ramp::new(s.left_force, t.left_force, len);
+        self.right_force = Ramp::new(s.right_force, t.right_force, len);
+        let positions = self.start.positions();
+        if positions != self.positions {
+            self.place(positions);
+        }
+    }
+
+    #[inline]
+    fn step<const MONITOR: bool>(&mut self) -> Frame {
+        let k = self.k;
+        let hand = HandMotion { prev: self.hand_prev, now: self.hand.at(k), next: self.hand.at(k + 1) };
+        let (f_le, f_re) = (self.left_force.at(k), self.right_force.at(k));
+        let th = &self.theta;
+        let [sh_o, sh_l, sh_r] = &self.shapes;
+        let [z_o, z_l, z_r] = self.string.history([sh_o, sh_l, sh_r]);
+        let e = [0, 1, 2].map(|a| th[a][1] * f_le + th[a][2] * f_re);
+        let (d_l, d_r) = (e[1] - z_l, e[2] - z_r);
+        let (g_l, g_r) = (self.r[0] * f_le.abs() / (2.0 * self.dt), self.r[1] * f_re.abs() / (2.0 * self.dt));
+        let (a_l, a_r) = (1.0 + g_l * th[1][1], 1.0 + g_r * th[2][2]);
+        let det = a_l * a_r - g_l * g_r * th[1][2] * th[1][2];
+        let s_l0 = (a_r * d_l - g_r * th[1][2] * d_r) / det;
+        let s_l1 = (a_r * th[1][0] - g_r * th[1][2] * th[2][0]) / det;
+        let s_r0 = (a_l * d_r - g_l * th[2][1] * d_l) / det;
+        let s_r1 = (a_l * th[2][0] - g_l * th[2][1] * th[1][0]) / det;
+        let z_str = z_o - e[0] + g_l * th[0][1] * s_l0 + g_r * th[0][2] * s_r0;
+        let q_str = th[0][0] - g_l * th[0][1] * s_l1 - g_r * th[0][2] * s_r1;
+        let z_sho = self.sho.history(&hand);
+        let problem = ContactProblem { y_prev: self.y_prev, y_now: self.y_now, z: z_str - z_sho, q: q_str + self.sho.coupling() };
+        let solution = self.solver.solve(&problem);
+        let force = solution.force;
+        let y_next = self.y_prev + solution.s;
+        let (s_l, s_r) = (s_l0 + s_l1 * force, s_r0 + s_r1 * force);
+        let [g_o, g_lf, g_rf] = &self.gains;
+        let forces = [(&g_o[..], force), (&g_lf[..], f_le - g_l * s_l), (&g_rf[..], f_re - g_r * s_r)];
+        let (out_next, string_energy) = if MONITOR {
+            self.string.advance_monitored(forces, &self.pickup)
+        } else {
+            (self.string.advance(forces, &self.pickup), Default::default())
+        };
+        let w_now = self.sho.position();
+        let exchanged = self.sho.advance(z_sho, force, &hand);
+        let output = match self.kind {
+            OutputKind::Velocity => (out_next - self.out_now) / self.dt,
+            OutputKind::Displacement | OutputKind::BridgeForce => self.out_now,
+        };
+        let mut frame = Frame {
+            output,
+            displacement: w_now,
+            velocity: self.sho.velocity(),
+            compression: self.y_now,
+            force,
+            energy: 0.0,
+            losses: 0.0,
+            work: self.solver.last_work(),
+        };
+        if MONITOR {
+            let fingers = 0.5 * (g_l * s_l * s_l + g_r * s_r * s_r - f_le * s_l - f_re * s_r);
+            self.losses += string_energy.dissipated + fingers - exchanged;
+            frame.energy = string_energy.stored
+                + self.sho.energy(hand.now, hand.next)
+                + self.solver.stored_energy(y_next, self.y_now);
+            frame.losses = self.losses;
+        }
+        self.out_now = out_next;
+        self.y_prev = self.y_now;
+        self.y_now = y_next;
+        self.hand_prev = hand.now;
+        self.n += 1;
+        self.k += 1;
+        frame
+    }
+
+    /// Run `count` steps, starting blocks where they fall, handing each frame to `sink`.
+    #[inline]
+    fn run<const MONITOR: bool>(&mut self, count: usize, mut sink: impl FnMut(usize, Frame)) {
+        let mut done = 0;
+        while done < count {
+            if self.k == self.block {
+                self.k = 0;
+                if C::VARYING {
+                    self.begin_block();
+                }
+            }
+            let run = (self.block - self.k).min(count - done);
+            for i in done..done + run {
+                sink(i, self.step::<MONITOR>());
+            }
+            done += run;
+        }
+    }
+
+    /// Advance `out.len()` samples writing only the output signal: no energy bookkeeping.
+    pub fn process_output(&mut self, out: &mut [f64]) {
+        self.run::<false>(out.len(), |i, f| out[i] = f.output);
+    }
+}
+
+impl<S: ContactSolver, C: ControlSource<SlideControls>> Scene for SlideString<S, C> {
+    fn sample_rate(&self) -> f64 {
+        self.string.sample_rate()
+    }
+
+    fn initial_energy(&self) -> f64 {
+        self.initial_energy
+    }
+
+    fn process(&mut self, frames: &mut [Frame]) {
+        self.run::<true>(frames.len(), |i, f| frames[i] = f);
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
