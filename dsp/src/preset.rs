@@ -144,3 +144,43 @@ mod tests {
         }
     }
 }
+
+/// A slide-guitar string with its slide, hand and fingers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlideGuitar {
+    /// The string.
+    pub string: StringParams,
+    /// Slide and hand.
+    pub slide: crate::exciter::SlideParams,
+    /// Left finger (trailing the slide).
+    pub left: crate::exciter::FingerParams,
+    /// Right finger (plucking).
+    pub right: crate::exciter::FingerParams,
+    /// Slide contact stiffness κ (N/m^α).
+    pub kappa: f64,
+    /// Slide contact exponent α (Hertzian cylinder on string: 1.5, seed §6).
+    pub alpha: f64,
+}
+
+/// The slide-guitar set-up used for development (physics §8.3: the DAFx-20 parameters were not
+/// available, so these are documented placeholders): an A2 string, L = 0.65 m, T = 100 N,
+/// f0 = 110 Hz (ρA = T/(2Lf0)²), B = 1e-5, η0 = 1 s⁻¹, η2 = 1e-4 m²/s; a 30 g slide held with
+/// k_H = 1e4 N/m and r_H = 5 kg/s; contact κ = 1e9 N/m^1.5, α = 1.5; finger windows 15 mm (left)
+/// and 10 mm (right) with r = 5 s/m.
+pub fn slide_guitar() -> SlideGuitar {
+    let (length, tension, f0, b) = (0.65_f64, 100.0_f64, 110.0_f64, 1e-5);
+    SlideGuitar {
+        string: StringParams {
+            length,
+            tension,
+            linear_density: tension / (2.0 * length * f0).powi(2),
+            bending_stiffness: b * tension * length * length / std::f64::consts::PI.powi(2),
+            damping: Damping::Viscous { eta0: 1.0, eta2: 1e-4 },
+        },
+        slide: crate::exciter::SlideParams { mass: 0.03, stiffness: 1e4, damping: 5.0 },
+        left: crate::exciter::FingerParams { width: 0.015, damping: 5.0 },
+        right: crate::exciter::FingerParams { width: 0.01, damping: 5.0 },
+        kappa: 1e9,
+        alpha: 1.5,
+    }
+}

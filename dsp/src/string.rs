@@ -47,6 +47,23 @@ use serde::Serialize;
 /// Most modes a string may have (bounds memory and cost for extreme parameters).
 pub const MAX_MODES: usize = 4096;
 
+/// Modal amplitudes below this (m) are set to zero (physics §10.11): decaying modes would
+/// otherwise become subnormal numbers, which are slower by orders of magnitude.
+pub const FLUSH_BELOW: f64 = 1e-30;
+
+/// Steps between flushes of tiny amplitudes (counted from the start, so independent of how a
+/// render is split into calls).
+pub const FLUSH_INTERVAL: u32 = 64;
+
+/// Independent partial sums in the per-mode reductions (latency hiding and SIMD).
+const LANES: usize = 8;
+
+/// Sum of the partial sums, in a fixed order.
+#[inline]
+fn lane_sum(acc: [f64; LANES]) -> f64 {
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]))
+}
+
 /// How the modal decay rates `σ_i` (1/s) are set.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(tag = "law", rename_all = "kebab-case")]
@@ -182,6 +199,8 @@ pub struct ModalString {
     u_now: Vec<f64>,
     /// `z̃` of the current step (m), from [`ModalString::history`].
     history: Vec<f64>,
+    /// Steps since the last flush of tiny amplitudes.
+    since_flush: u32,
 }
 
 /// Energy terms of one string step (J), returned by [`ModalString::advance_monitored`].
@@ -218,6 +237,7 @@ impl ModalString {
             u_prev: Vec::new(),
             u_now: Vec::new(),
             history: Vec::new(),
+            since_flush: 0,
         };
         for i in 1.. {
             let beta = i as f64 * std::f64::consts::PI / params.length;
@@ -320,6 +340,7 @@ impl ModalString {
     pub fn reset(&mut self) {
         self.u_prev.fill(0.0);
         self.u_now.fill(0.0);
+        self.since_flush = 0;
     }
 
     /// Write the mode shapes at `x` (m), `sin(β_i x)`, into `out` (dimensionless). Uses the
@@ -357,15 +378,27 @@ impl ModalString {
         let (a, b) = (&self.coef_a[..m], &self.coef_b[..m]);
         let (up, un, zt) = (&self.u_prev[..m], &self.u_now[..m], &mut self.history[..m]);
         let vectors = vectors.map(|v| &v[..m]);
-        let mut acc = [0.0; K];
-        for i in 0..m {
+        // LANES independent partial sums per projection, so the loop vectorises.
+        let mut acc = [[0.0; LANES]; K];
+        let whole = m - m % LANES;
+        for c in (0..whole).step_by(LANES) {
+            for l in 0..LANES {
+                let i = c + l;
+                let z = b[i] * up[i] - a[i] * un[i];
+                zt[i] = z;
+                for k in 0..K {
+                    acc[k][l] += vectors[k][i] * z;
+                }
+            }
+        }
+        for i in whole..m {
             let z = b[i] * up[i] - a[i] * un[i];
             zt[i] = z;
             for k in 0..K {
-                acc[k] += vectors[k][i] * z;
+                acc[k][0] += vectors[k][i] * z;
             }
         }
-        acc
+        acc.map(lane_sum)
     }
 
     /// Second pass: `ũ^{n+1} = ũ^{n−1} − z̃ + Σ_k gains_k · F_k`, where `gains_k = C∘h_k` (m/N,
@@ -376,45 +409,71 @@ impl ModalString {
         let m = self.modes();
         let forces = forces.map(|(g, f)| (&g[..m], f));
         let (up, zt, out) = (&mut self.u_prev[..m], &self.history[..m], &output[..m]);
-        let mut acc = 0.0;
-        for i in 0..m {
+        let mut acc = [0.0; LANES];
+        let whole = m - m % LANES;
+        for c in (0..whole).step_by(LANES) {
+            for l in 0..LANES {
+                let i = c + l;
+                let mut u = up[i] - zt[i];
+                for (g, f) in &forces {
+                    u += g[i] * f;
+                }
+                up[i] = u;
+                acc[l] += out[i] * u;
+            }
+        }
+        for i in whole..m {
             let mut u = up[i] - zt[i];
             for (g, f) in &forces {
                 u += g[i] * f;
             }
             up[i] = u;
-            acc += out[i] * u;
+            acc[0] += out[i] * u;
         }
-        std::mem::swap(&mut self.u_prev, &mut self.u_now);
-        acc
+        self.finish_step();
+        lane_sum(acc)
     }
 
     /// [`advance`](Self::advance), also returning the string's energy terms for this step.
     pub fn advance_monitored<const K: usize>(&mut self, forces: [(&[f64], f64); K], output: &[f64]) -> (f64, StringEnergy) {
         let m = self.modes();
-        let dt = 1.0 / self.sample_rate;
-        let mm = self.modal_mass;
         let forces = forces.map(|(g, f)| (&g[..m], f));
         let (up, un, zt, out) = (&mut self.u_prev[..m], &self.u_now[..m], &self.history[..m], &output[..m]);
         let (k_hat, r_hat) = (&self.stiffness[..m], &self.resistance[..m]);
         let mut acc = 0.0;
-        let (mut kinetic, mut potential, mut loss) = (0.0, 0.0, 0.0);
+        // Σ (ũ^{n+1} − ũ^n)², Σ K̂ (ũ^{n+1} + ũ^n)², Σ R̂ (ũ^{n+1} − ũ^{n−1})²; scaled once below.
+        let (mut step2, mut k_sum2, mut r_diff2) = (0.0, 0.0, 0.0);
         for i in 0..m {
             let mut u = up[i] - zt[i];
             for (g, f) in &forces {
                 u += g[i] * f;
             }
-            let v = (u - un[i]) / dt;
-            let mean = 0.5 * (u + un[i]);
-            let centred = (u - up[i]) / (2.0 * dt);
-            kinetic += v * v;
-            potential += k_hat[i] * mean * mean;
-            loss += r_hat[i] * centred * centred;
+            let (d, s, c) = (u - un[i], u + un[i], u - up[i]);
+            step2 += d * d;
+            k_sum2 += k_hat[i] * s * s;
+            r_diff2 += r_hat[i] * c * c;
             up[i] = u;
             acc += out[i] * u;
         }
+        self.finish_step();
+        let fs = self.sample_rate;
+        let stored = 0.5 * self.modal_mass * step2 * fs * fs + 0.125 * k_sum2;
+        (acc, StringEnergy { stored, dissipated: 0.25 * r_diff2 * fs })
+    }
+
+    /// Step the state on, flushing tiny amplitudes every [`FLUSH_INTERVAL`] steps.
+    #[inline]
+    fn finish_step(&mut self) {
         std::mem::swap(&mut self.u_prev, &mut self.u_now);
-        (acc, StringEnergy { stored: 0.5 * mm * kinetic + 0.5 * potential, dissipated: dt * loss })
+        self.since_flush += 1;
+        if self.since_flush == FLUSH_INTERVAL {
+            self.since_flush = 0;
+            for u in self.u_prev.iter_mut().chain(self.u_now.iter_mut()) {
+                if u.abs() < FLUSH_BELOW {
+                    *u = 0.0;
+                }
+            }
+        }
     }
 
     /// The string's energy `H^{n−1/2}` of the current state (J): the stored term between

@@ -1,40 +1,45 @@
 //! The scene file format (TOML), version 1.
 //!
 //! A scene file describes one render. Unknown keys are errors, and every invalid value is an
-//! error that names its key. The format of each scene kind is documented in the README; this
-//! module mirrors it one struct per table.
+//! error that names its key. The README documents every scene kind; this module mirrors it one
+//! struct per table. Every scene has:
 //!
 //! ```toml
 //! version = 1                 # optional; the only version so far
-//! scene = "mass-barrier"
+//! scene = "mass-barrier"      # | "hammer-string" | "slide-string"
 //! sample_rate = 44100         # Hz, a whole number
 //! duration = 0.005            # s
 //!
 //! [solver]
 //! method = "qsa"              # "qsa" | "imp" | "exp"
-//! segments = 5                # QSA N
+//! segments = 5                # QSA N (default 5)
 //! # v_ref = 0.02              # J; default: the largest energy the scene can put into the contact
 //!
-//! [contact]
+//! [contact]                   # the power law F = -kappa [y]+^alpha
 //! kappa = 1e8                 # N/m^alpha
 //! alpha = 1.3
 //!
-//! [mass]
+//! [output]                    # optional
+//! normalize = true            # peak-normalise the WAV
+//! gain = 1.0                  # linear gain applied after normalisation
+//! ```
+//!
+//! and the tables of its kind (see [`super::strings`] for the string scenes):
+//!
+//! ```toml
+//! [mass]                      # mass-barrier
 //! mass = 0.01                 # kg
 //! u0 = -1e-3                  # m, initial displacement
 //! v0 = 2.0                    # m/s, initial velocity (towards the barrier when positive)
 //!
 //! [barrier]
 //! position = 0.0              # m
-//!
-//! [output]                    # optional
-//! normalize = true            # peak-normalise the WAV
-//! gain = 1.0                  # linear gain applied after normalisation
 //! ```
 
 use serde::Deserialize;
 
 use super::SceneError;
+use super::strings::{HammerStringDescription, HammerStringFile, SlideStringDescription, SlideStringFile};
 use crate::contact::{Method, PowerLaw, SolverSettings};
 use crate::scene::MassBarrierParams;
 
@@ -50,18 +55,27 @@ pub const MAX_SAMPLES: usize = 50_000_000;
 /// Most QSA segments a scene file may ask for.
 pub const MAX_SEGMENTS: usize = 100_000;
 
+/// The scene kinds, as written in files.
+pub const SCENE_KINDS: [&str; 3] = ["mass-barrier", "hammer-string", "slide-string"];
+
 /// A parsed and validated scene.
 #[derive(Debug, Clone, PartialEq)]
 pub enum SceneDescription {
     /// A mass striking a rigid barrier (seed §4).
     MassBarrier(MassBarrierDescription),
+    /// A hammer striking a modal string (seed §5).
+    HammerString(HammerStringDescription),
+    /// A slide on a plucked modal string (seed §6).
+    SlideString(SlideStringDescription),
 }
 
 impl SceneDescription {
     /// The scene kind as written in files.
     pub fn kind(&self) -> &'static str {
         match self {
-            SceneDescription::MassBarrier(_) => "mass-barrier",
+            SceneDescription::MassBarrier(_) => SCENE_KINDS[0],
+            SceneDescription::HammerString(_) => SCENE_KINDS[1],
+            SceneDescription::SlideString(_) => SCENE_KINDS[2],
         }
     }
 
@@ -69,7 +83,20 @@ impl SceneDescription {
     pub fn common(&self) -> &Common {
         match self {
             SceneDescription::MassBarrier(d) => &d.common,
+            SceneDescription::HammerString(d) => &d.common,
+            SceneDescription::SlideString(d) => &d.common,
         }
+    }
+
+    /// The same scene with other solver settings (for comparing methods on one scene).
+    pub fn with_solver(&self, solver: SolverSettings) -> Self {
+        let mut out = self.clone();
+        match &mut out {
+            SceneDescription::MassBarrier(d) => d.common.solver = solver,
+            SceneDescription::HammerString(d) => d.common.solver = solver,
+            SceneDescription::SlideString(d) => d.common.solver = solver,
+        }
+        out
     }
 }
 
@@ -132,24 +159,29 @@ pub fn parse_scene(text: &str) -> Result<SceneDescription, SceneError> {
             }
         }
     }
+    let kinds = SCENE_KINDS.map(|k| format!("\"{k}\"")).join(", ");
     let kind = match table.get("scene") {
-        None => return Err(SceneError::invalid("scene", "missing (one of: \"mass-barrier\")")),
+        None => return Err(SceneError::invalid("scene", format!("missing (one of: {kinds})"))),
         Some(v) => v.as_str().ok_or_else(|| SceneError::invalid("scene", "must be a string"))?,
     };
+    fn typed<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, SceneError> {
+        toml::from_str(text).map_err(|e| SceneError::Syntax(e.to_string()))
+    }
     match kind {
-        "mass-barrier" => {
-            let raw: MassBarrierFile = toml::from_str(text).map_err(|e| SceneError::Syntax(e.to_string()))?;
-            raw.validate().map(SceneDescription::MassBarrier)
-        }
-        other => Err(SceneError::invalid("scene", format!("unknown scene kind \"{other}\" (one of: \"mass-barrier\")"))),
+        "mass-barrier" => typed::<MassBarrierFile>(text)?.validate().map(SceneDescription::MassBarrier),
+        "hammer-string" => typed::<HammerStringFile>(text)?.validate().map(SceneDescription::HammerString),
+        "slide-string" => typed::<SlideStringFile>(text)?.validate().map(SceneDescription::SlideString),
+        other => Err(SceneError::invalid("scene", format!("unknown scene kind \"{other}\" (one of: {kinds})"))),
     }
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MassBarrierFile {
+    /// Checked before the typed parse.
     #[allow(dead_code)]
     version: Option<i64>,
+    /// Checked before the typed parse.
     #[allow(dead_code)]
     scene: String,
     sample_rate: f64,
@@ -162,9 +194,18 @@ struct MassBarrierFile {
     output: OutputTable,
 }
 
+/// The top-level keys every scene file has. (Each file struct lists them itself: serde cannot
+/// combine `flatten` with `deny_unknown_fields`; `version` and `scene` were already checked.)
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Head {
+    pub(super) sample_rate: f64,
+    pub(super) duration: f64,
+}
+
+/// `[solver]`.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct SolverTable {
+pub(super) struct SolverTable {
     method: Method,
     #[serde(default = "default_segments")]
     segments: i64,
@@ -175,11 +216,12 @@ fn default_segments() -> i64 {
     5
 }
 
-#[derive(Debug, Deserialize)]
+/// `[contact]`; each key may fall back to a preset.
+#[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct ContactTable {
-    kappa: f64,
-    alpha: f64,
+pub(super) struct ContactTable {
+    pub(super) kappa: Option<f64>,
+    pub(super) alpha: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -196,13 +238,14 @@ struct BarrierTable {
     position: f64,
 }
 
+/// `[output]` of the mass–barrier scene.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct OutputTable {
+pub(super) struct OutputTable {
     #[serde(default = "yes")]
-    normalize: bool,
+    pub(super) normalize: bool,
     #[serde(default = "unity")]
-    gain: f64,
+    pub(super) gain: f64,
 }
 
 impl Default for OutputTable {
@@ -211,21 +254,21 @@ impl Default for OutputTable {
     }
 }
 
-fn yes() -> bool {
+pub(super) fn yes() -> bool {
     true
 }
 
-fn unity() -> f64 {
+pub(super) fn unity() -> f64 {
     1.0
 }
 
 /// Check that `value` is finite, naming `key` otherwise.
-fn finite(key: &str, value: f64) -> Result<f64, SceneError> {
+pub(super) fn finite(key: &str, value: f64) -> Result<f64, SceneError> {
     if value.is_finite() { Ok(value) } else { Err(SceneError::invalid(key, format!("must be finite (got {value})"))) }
 }
 
 /// Check that `value` is finite and > 0.
-fn positive(key: &str, value: f64) -> Result<f64, SceneError> {
+pub(super) fn positive(key: &str, value: f64) -> Result<f64, SceneError> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
@@ -233,18 +276,42 @@ fn positive(key: &str, value: f64) -> Result<f64, SceneError> {
     }
 }
 
-fn common(
-    sample_rate: f64,
-    duration: f64,
+/// Check that `value` is finite and ≥ 0.
+pub(super) fn non_negative(key: &str, value: f64) -> Result<f64, SceneError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(SceneError::invalid(key, format!("must be finite and >= 0 (got {value})")))
+    }
+}
+
+/// Check that `value` lies strictly inside (0, 1).
+pub(super) fn fraction(key: &str, value: f64) -> Result<f64, SceneError> {
+    if value.is_finite() && value > 0.0 && value < 1.0 {
+        Ok(value)
+    } else {
+        Err(SceneError::invalid(key, format!("must be a fraction of the length strictly between 0 and 1 (got {value})")))
+    }
+}
+
+/// A required key: its value, or the preset's, or an error naming it.
+pub(super) fn required(key: &str, value: Option<f64>, preset: Option<f64>) -> Result<f64, SceneError> {
+    value.or(preset).ok_or_else(|| SceneError::invalid(key, "missing (and no preset provides it)"))
+}
+
+/// Validate the settings every scene has. `law_preset` gives fallbacks for `[contact]`.
+pub(super) fn common(
+    head: &Head,
     solver: &SolverTable,
     contact: &ContactTable,
+    law_preset: Option<(f64, f64)>,
     output: &OutputTable,
 ) -> Result<Common, SceneError> {
-    let fs = positive("sample_rate", sample_rate)?;
+    let fs = positive("sample_rate", head.sample_rate)?;
     if fs.fract() != 0.0 || fs > 10_000_000.0 {
         return Err(SceneError::invalid("sample_rate", format!("must be a whole number of Hz up to 1e7 (got {fs})")));
     }
-    let duration = positive("duration", duration)?;
+    let duration = positive("duration", head.duration)?;
     if duration > MAX_DURATION {
         return Err(SceneError::invalid("duration", format!("must be at most {MAX_DURATION} s (got {duration})")));
     }
@@ -264,7 +331,9 @@ fn common(
     if let Some(v_ref) = solver.v_ref {
         positive("solver.v_ref", v_ref)?;
     }
-    let law = PowerLaw::new(contact.kappa, contact.alpha).map_err(|e| SceneError::contact("contact", e))?;
+    let kappa = required("contact.kappa", contact.kappa, law_preset.map(|p| p.0))?;
+    let alpha = required("contact.alpha", contact.alpha, law_preset.map(|p| p.1))?;
+    let law = PowerLaw::new(kappa, alpha).map_err(|e| SceneError::contact("contact", e))?;
     let gain = finite("output.gain", output.gain)?;
     Ok(Common {
         sample_rate: fs as u32,
@@ -277,7 +346,8 @@ fn common(
 
 impl MassBarrierFile {
     fn validate(self) -> Result<MassBarrierDescription, SceneError> {
-        let common = common(self.sample_rate, self.duration, &self.solver, &self.contact, &self.output)?;
+        let head = Head { sample_rate: self.sample_rate, duration: self.duration };
+        let common = common(&head, &self.solver, &self.contact, None, &self.output)?;
         let params = MassBarrierParams {
             mass: positive("mass.mass", self.mass.mass)?,
             u0: finite("mass.u0", self.mass.u0)?,

@@ -6,18 +6,22 @@
 //! returns every sample's [`Frame`] with a [`Summary`].
 
 mod file;
+mod strings;
 mod summary;
 
 pub use file::{
-    Common, FORMAT_VERSION, MAX_DURATION, MAX_SAMPLES, MAX_SEGMENTS, MassBarrierDescription, OutputOptions,
+    Common, FORMAT_VERSION, MAX_DURATION, MAX_SAMPLES, MAX_SEGMENTS, MassBarrierDescription, OutputOptions, SCENE_KINDS,
     SceneDescription, parse_scene,
 };
+pub use strings::{HammerStringDescription, MAX_BLOCK, SlideStringDescription};
 pub use summary::{Summary, contact_intervals};
 
 use std::time::Instant;
 
 use crate::contact::{ContactError, ContactSolver, WithSolver};
-use crate::scene::{Frame, MassBarrier, Scene};
+use crate::control::Fixed;
+use crate::scene::{Frame, HammerString, MassBarrier, Scene, SlideString};
+use crate::string::ModalString;
 
 /// A scene file that cannot be rendered.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -68,11 +72,13 @@ pub struct Rendered {
 /// when the iterator ends, the rest is rendered in one call).
 pub fn render(scene: &SceneDescription, chunks: impl Iterator<Item = usize>) -> Result<Rendered, SceneError> {
     let common = scene.common();
+    fn build<W: WithSolver>(common: &Common, v_ref: f64, work: W) -> Result<W::Output, SceneError> {
+        common.solver.build(common.law, v_ref, work).map_err(|e| SceneError::contact("contact", e))
+    }
     let run = match scene {
-        SceneDescription::MassBarrier(d) => common
-            .solver
-            .build(common.law, d.default_v_ref(), RenderMassBarrier { scene: d, chunks })
-            .map_err(|e| SceneError::contact("contact", e))?,
+        SceneDescription::MassBarrier(d) => build(common, d.default_v_ref(), Render { scene: d, chunks })?,
+        SceneDescription::HammerString(d) => build(common, d.default_v_ref(), Render { scene: d, chunks })?,
+        SceneDescription::SlideString(d) => build(common, d.default_v_ref(), Render { scene: d, chunks })?,
     };
     let summary = Summary::measure(scene, &run);
     Ok(Rendered { frames: run.frames, summary })
@@ -108,20 +114,60 @@ pub fn drive(mut scene: impl Scene, samples: usize, mut chunks: impl Iterator<It
     (frames, start.elapsed().as_secs_f64())
 }
 
-struct RenderMassBarrier<'a, I> {
-    scene: &'a MassBarrierDescription,
+/// Renders one kind of scene description with whichever solver it is handed.
+struct Render<'a, D, I> {
+    scene: &'a D,
     chunks: I,
 }
 
-impl<I: Iterator<Item = usize>> WithSolver for RenderMassBarrier<'_, I> {
+impl<D, I: Iterator<Item = usize>> Render<'_, D, I> {
+    fn drive(self, scene: impl Scene, samples: usize, segments: usize) -> Run {
+        let initial_energy = scene.initial_energy();
+        let (frames, wall_seconds) = drive(scene, samples, self.chunks);
+        Run { frames, initial_energy, wall_seconds, segments }
+    }
+}
+
+impl<I: Iterator<Item = usize>> WithSolver for Render<'_, MassBarrierDescription, I> {
     type Output = Run;
 
     fn run<S: ContactSolver>(self, solver: S) -> Run {
-        let common = &self.scene.common;
-        let segments = solver.segments();
-        let scene = MassBarrier::new(self.scene.params, common.sample_rate as f64, solver);
-        let initial_energy = scene.initial_energy();
-        let (frames, wall_seconds) = drive(scene, common.samples, self.chunks);
-        Run { frames, initial_energy, wall_seconds, segments }
+        let (common, segments) = (&self.scene.common, solver.segments());
+        let scene = MassBarrier::new(self.scene.params, f64::from(common.sample_rate), solver);
+        self.drive(scene, common.samples, segments)
     }
+}
+
+impl<I: Iterator<Item = usize>> WithSolver for Render<'_, HammerStringDescription, I> {
+    type Output = Run;
+
+    fn run<S: ContactSolver>(self, solver: S) -> Run {
+        let (common, segments) = (&self.scene.common, solver.segments());
+        let string = prepared_string(&self.scene.params.string, common.sample_rate);
+        let scene = HammerString::new(string, &self.scene.params, solver);
+        self.drive(scene, common.samples, segments)
+    }
+}
+
+impl<I: Iterator<Item = usize>> WithSolver for Render<'_, SlideStringDescription, I> {
+    type Output = Run;
+
+    fn run<S: ContactSolver>(self, solver: S) -> Run {
+        let d = self.scene;
+        let (common, segments) = (&d.common, solver.segments());
+        let string = prepared_string(&d.params.string, common.sample_rate);
+        // Constant controls get the scene type that never recomputes its vectors.
+        if d.controls.is_constant() {
+            let fixed = Fixed(d.controls.at_time(0.0));
+            self.drive(SlideString::new(string, &d.params, solver, fixed), common.samples, segments)
+        } else {
+            let scene = SlideString::new(string, &d.params, solver, d.controls.clone());
+            self.drive(scene, common.samples, segments)
+        }
+    }
+}
+
+/// A string prepared at `sample_rate`; its parameters were validated with the scene.
+fn prepared_string(params: &crate::string::StringParams, sample_rate: u32) -> ModalString {
+    ModalString::new(*params, f64::from(sample_rate)).expect("string parameters are validated when the scene is parsed")
 }

@@ -344,3 +344,45 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> Scene for SlideString<S,
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
+
+/// The control target names used by scene files and automation.
+pub const CONTROL_TARGETS: [&str; 6] =
+    ["slide.position", "hand.height", "finger.left.position", "finger.left.force", "finger.right.position", "finger.right.force"];
+
+/// Slide controls from breakpoint automation, one lane per target (in [`CONTROL_TARGETS`]
+/// order), evaluated at `t = n/fs`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SlideAutomation {
+    /// Lanes in [`CONTROL_TARGETS`] order.
+    pub lanes: [crate::control::Breakpoints; 6],
+    /// Sample rate (Hz).
+    pub sample_rate: f64,
+}
+
+impl SlideAutomation {
+    /// The values at time `t` (s).
+    pub fn at_time(&self, t: f64) -> SlideControls {
+        let [a, b, c, d, e, f] = &self.lanes;
+        SlideControls {
+            slide_position: a.at(t),
+            hand_height: b.at(t),
+            left_position: c.at(t),
+            left_force: d.at(t),
+            right_position: e.at(t),
+            right_force: f.at(t),
+        }
+    }
+
+    /// Whether every lane is a single constant.
+    pub fn is_constant(&self) -> bool {
+        self.lanes.iter().all(|l| l.points().len() == 1)
+    }
+}
+
+impl ControlSource<SlideControls> for SlideAutomation {
+    const VARYING: bool = true;
+
+    fn at(&mut self, n: u64) -> SlideControls {
+        self.at_time(n as f64 / self.sample_rate)
+    }
+}

@@ -1,0 +1,503 @@
+//! Scene-file tables of the string scenes: `hammer-string` and `slide-string`.
+//!
+//! ```toml
+//! [string]                     # a preset, explicit parameters, or a preset with overrides
+//! preset = "c4"                # "c4" (Chaigne-Askenfelt) | "piano-note" (with note = 0..127)
+//!                              # | "slide-guitar"
+//! # note = 60                  # MIDI key, for preset = "piano-note"
+//! # length = 0.62              # m
+//! # tension = 670.0            # N
+//! # linear_density = 6.34e-3   # kg/m
+//! # bending_stiffness = 9.8e-3 # N m^2 (default 0 without a preset)
+//! # eta0 = 0.5                 # 1/s  } damping, seed eq. 27: sigma_i = eta0 + eta2 beta_i^2
+//! # eta2 = 6.6e-4              # m^2/s}
+//! # b1 = 0.5                   # 1/s  } or the per-mode law sigma_i = b1 + b3 omega0_i^2
+//! # b3 = 6.25e-9               # s    } (default: lossless without a preset)
+//!
+//! [output]
+//! kind = "displacement"        # | "velocity" | "bridge-force"
+//! position = 0.9               # pickup, fraction of the length (displacement, velocity)
+//! normalize = true
+//! gain = 1.0
+//! ```
+//!
+//! `hammer-string` adds (the piano presets provide mass, position and `[contact]`):
+//!
+//! ```toml
+//! [hammer]
+//! mass = 2.97e-3               # kg
+//! velocity = 3.5               # m/s towards the string
+//! position = 0.12              # fraction of the length
+//! gap = 2e-4                   # m, initial felt-string distance (default 0.2 mm)
+//! ```
+//!
+//! `slide-string` adds (the slide-guitar preset provides `[slide]`, `[fingers]`, `[contact]`):
+//!
+//! ```toml
+//! [slide]
+//! mass = 0.03                  # kg
+//! stiffness = 1e4              # N/m, hand stiffness k_H
+//! damping = 5.0                # kg/s, hand damping r_H
+//!
+//! [fingers]
+//! left_width = 0.015           # m
+//! right_width = 0.01           # m
+//! damping = 5.0                # s/m, r: finger damping is r*|force|
+//!
+//! [control]
+//! block = 64                   # N_b, samples per control block (default 64)
+//!
+//! [controls]                   # constant values of the controls that are not automated
+//! slide.position = 0.2         # m from the nut end x = 0; the speaking length is L - x
+//! hand.height = 1e-3           # m; negative presses the slide into the string
+//! finger.left.position = 0.18  # m (default 0.05 L)
+//! finger.left.force = 0.3      # N (default 0)
+//! finger.right.position = 0.6  # m (default 0.9 L)
+//! finger.right.force = 0.0     # N (default 0)
+//!
+//! [[automation]]               # piecewise linear, held before the first and after the last point
+//! target = "slide.position"    # any of the six names above
+//! points = [[0.0, 0.2], [1.0, 0.3]]   # [time (s), value], times strictly increasing
+//! ```
+
+use serde::Deserialize;
+
+use super::SceneError;
+use super::file::{
+    Common, ContactTable, Head, SolverTable, common, finite, fraction, non_negative, positive, required, unity, yes,
+};
+use crate::control::Breakpoints;
+use crate::exciter::{FingerParams, HammerParams, SlideParams};
+use crate::preset::{chaigne_askenfelt_c4, piano_note, slide_guitar};
+use crate::scene::{CONTROL_TARGETS, HammerStringParams, OutputKind, Pickup, SlideAutomation, SlideStringParams};
+use crate::string::{Damping, StringParams};
+
+/// Most samples per control block.
+pub const MAX_BLOCK: usize = 65_536;
+
+/// A validated hammer–string scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HammerStringDescription {
+    /// Common settings.
+    pub common: Common,
+    /// String, hammer and output.
+    pub params: HammerStringParams,
+}
+
+impl HammerStringDescription {
+    /// Default QSA reference energy: the hammer's kinetic energy `½ m v²` (J).
+    pub fn default_v_ref(&self) -> f64 {
+        let e = self.params.hammer.kinetic_energy();
+        if e > 0.0 { e } else { self.common.law.potential(1e-3) }
+    }
+}
+
+/// A validated slide–string scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SlideStringDescription {
+    /// Common settings.
+    pub common: Common,
+    /// String, slide, fingers, block length and output.
+    pub params: SlideStringParams,
+    /// Control inputs.
+    pub controls: SlideAutomation,
+}
+
+impl SlideStringDescription {
+    /// Default QSA reference energy (J): the potential at the compression where the contact
+    /// force reaches twice the largest static push the scene asks for,
+    /// `F_ref = 2(k_H (d + 1 mm) + |F_le| + |F_re|)` with `d` the deepest hand press
+    /// (`−min hand.height`, at least 0) and the finger forces at their largest. Compressions beyond
+    /// it are still stable (the fit is extended), only softer.
+    pub fn default_v_ref(&self) -> f64 {
+        let lanes = &self.controls.lanes;
+        let depth = (-lanes[1].range().0).max(0.0);
+        let peak = |i: usize| {
+            let (lo, hi) = lanes[i].range();
+            lo.abs().max(hi.abs())
+        };
+        let force = 2.0 * (self.params.slide.stiffness * (depth + 1e-3) + peak(3) + peak(5));
+        let law = &self.common.law;
+        let y = (force.max(1e-3) / law.kappa()).powf(1.0 / law.alpha());
+        law.potential(y)
+    }
+}
+
+/// `[string]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct StringTable {
+    preset: Option<String>,
+    note: Option<i64>,
+    length: Option<f64>,
+    tension: Option<f64>,
+    linear_density: Option<f64>,
+    bending_stiffness: Option<f64>,
+    eta0: Option<f64>,
+    eta2: Option<f64>,
+    b1: Option<f64>,
+    b3: Option<f64>,
+}
+
+/// What a preset provides besides the string.
+#[derive(Debug, Clone, Copy, Default)]
+struct PresetExtras {
+    law: Option<(f64, f64)>,
+    hammer_mass: Option<f64>,
+    strike_position: Option<f64>,
+    slide: Option<SlideParams>,
+    fingers: Option<(FingerParams, FingerParams)>,
+}
+
+impl StringTable {
+    fn resolve(&self) -> Result<(StringParams, PresetExtras), SceneError> {
+        let (base, extras) = match self.preset.as_deref() {
+            None => {
+                if self.note.is_some() {
+                    return Err(SceneError::invalid("string.note", "only used with preset = \"piano-note\""));
+                }
+                (None, PresetExtras::default())
+            }
+            Some(name) => {
+                let piano = match name {
+                    "c4" => chaigne_askenfelt_c4(),
+                    "piano-note" => {
+                        let note = self.note.ok_or_else(|| SceneError::invalid("string.note", "missing (preset \"piano-note\" needs a MIDI key)"))?;
+                        if !(0..=127).contains(&note) {
+                            return Err(SceneError::invalid("string.note", format!("must be a MIDI key 0 to 127 (got {note})")));
+                        }
+                        piano_note(note as u8)
+                    }
+                    "slide-guitar" => {
+                        let g = slide_guitar();
+                        let extras = PresetExtras { law: Some((g.kappa, g.alpha)), slide: Some(g.slide), fingers: Some((g.left, g.right)), ..Default::default() };
+                        return self.with_overrides(Some(g.string)).map(|s| (s, extras));
+                    }
+                    other => {
+                        return Err(SceneError::invalid(
+                            "string.preset",
+                            format!("unknown preset \"{other}\" (one of: \"c4\", \"piano-note\", \"slide-guitar\")"),
+                        ));
+                    }
+                };
+                if name != "piano-note" && self.note.is_some() {
+                    return Err(SceneError::invalid("string.note", "only used with preset = \"piano-note\""));
+                }
+                let extras = PresetExtras {
+                    law: Some((piano.kappa, piano.alpha)),
+                    hammer_mass: Some(piano.hammer_mass),
+                    strike_position: Some(piano.strike_position),
+                    ..Default::default()
+                };
+                (Some(piano.string), extras)
+            }
+        };
+        self.with_overrides(base).map(|s| (s, extras))
+    }
+
+    fn with_overrides(&self, base: Option<StringParams>) -> Result<StringParams, SceneError> {
+        let eta = self.eta0.is_some() || self.eta2.is_some();
+        let per_mode = self.b1.is_some() || self.b3.is_some();
+        if eta && per_mode {
+            return Err(SceneError::invalid("string.b1", "give damping either as eta0/eta2 or as b1/b3, not both"));
+        }
+        let damping = if eta {
+            let (e0, e2) = match base.map(|b| b.damping) {
+                Some(Damping::Viscous { eta0, eta2 }) => (eta0, eta2),
+                _ => (0.0, 0.0),
+            };
+            Damping::Viscous {
+                eta0: non_negative("string.eta0", self.eta0.unwrap_or(e0))?,
+                eta2: non_negative("string.eta2", self.eta2.unwrap_or(e2))?,
+            }
+        } else if per_mode {
+            let (b1, b3) = match base.map(|b| b.damping) {
+                Some(Damping::PerMode { b1, b3 }) => (b1, b3),
+                _ => (0.0, 0.0),
+            };
+            Damping::PerMode {
+                b1: non_negative("string.b1", self.b1.unwrap_or(b1))?,
+                b3: non_negative("string.b3", self.b3.unwrap_or(b3))?,
+            }
+        } else {
+            base.map_or(Damping::LOSSLESS, |b| b.damping)
+        };
+        let params = StringParams {
+            length: positive("string.length", required("string.length", self.length, base.map(|b| b.length))?)?,
+            tension: positive("string.tension", required("string.tension", self.tension, base.map(|b| b.tension))?)?,
+            linear_density: positive(
+                "string.linear_density",
+                required("string.linear_density", self.linear_density, base.map(|b| b.linear_density))?,
+            )?,
+            bending_stiffness: non_negative(
+                "string.bending_stiffness",
+                self.bending_stiffness.or(base.map(|b| b.bending_stiffness)).unwrap_or(0.0),
+            )?,
+            damping,
+        };
+        params.validate().map_err(|e| SceneError::invalid(&format!("string.{}", e.key), e.reason))?;
+        Ok(params)
+    }
+}
+
+/// `[output]` of the string scenes.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct StringOutputTable {
+    kind: Option<OutputKind>,
+    position: Option<f64>,
+    #[serde(default = "yes")]
+    normalize: bool,
+    #[serde(default = "unity")]
+    gain: f64,
+}
+
+impl Default for StringOutputTable {
+    fn default() -> Self {
+        Self { kind: None, position: None, normalize: true, gain: 1.0 }
+    }
+}
+
+impl StringOutputTable {
+    fn pickup(&self, default_kind: OutputKind) -> Result<Pickup, SceneError> {
+        Ok(Pickup { kind: self.kind.unwrap_or(default_kind), position: fraction("output.position", self.position.unwrap_or(0.9))? })
+    }
+
+    fn options(&self) -> super::file::OutputTable {
+        super::file::OutputTable { normalize: self.normalize, gain: self.gain }
+    }
+}
+
+/// A `hammer-string` scene file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct HammerStringFile {
+    /// Checked before the typed parse.
+    #[allow(dead_code)]
+    version: Option<i64>,
+    /// Checked before the typed parse.
+    #[allow(dead_code)]
+    scene: String,
+    sample_rate: f64,
+    duration: f64,
+    solver: SolverTable,
+    #[serde(default)]
+    contact: ContactTable,
+    string: StringTable,
+    hammer: HammerTable,
+    #[serde(default)]
+    output: StringOutputTable,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HammerTable {
+    mass: Option<f64>,
+    velocity: f64,
+    position: Option<f64>,
+    gap: Option<f64>,
+}
+
+impl HammerStringFile {
+    pub(super) fn validate(self) -> Result<HammerStringDescription, SceneError> {
+        let (string, extras) = self.string.resolve()?;
+        let head = Head { sample_rate: self.sample_rate, duration: self.duration };
+        let common = common(&head, &self.solver, &self.contact, extras.law, &self.output.options())?;
+        let h = &self.hammer;
+        let hammer = HammerParams {
+            mass: positive("hammer.mass", required("hammer.mass", h.mass, extras.hammer_mass)?)?,
+            velocity: non_negative("hammer.velocity", h.velocity)?,
+            position: fraction("hammer.position", required("hammer.position", h.position, extras.strike_position)?)?,
+            gap: positive("hammer.gap", h.gap.unwrap_or(HammerParams::DEFAULT_GAP))?,
+        };
+        let pickup = self.output.pickup(OutputKind::BridgeForce)?;
+        Ok(HammerStringDescription { common, params: HammerStringParams { string, hammer, pickup } })
+    }
+}
+
+/// A `slide-string` scene file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SlideStringFile {
+    /// Checked before the typed parse.
+    #[allow(dead_code)]
+    version: Option<i64>,
+    /// Checked before the typed parse.
+    #[allow(dead_code)]
+    scene: String,
+    sample_rate: f64,
+    duration: f64,
+    solver: SolverTable,
+    #[serde(default)]
+    contact: ContactTable,
+    string: StringTable,
+    #[serde(default)]
+    slide: SlideTable,
+    #[serde(default)]
+    fingers: FingersTable,
+    #[serde(default)]
+    control: ControlTable,
+    controls: ControlsTable,
+    #[serde(default)]
+    automation: Vec<AutomationEntry>,
+    #[serde(default)]
+    output: StringOutputTable,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SlideTable {
+    mass: Option<f64>,
+    stiffness: Option<f64>,
+    damping: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FingersTable {
+    left_width: Option<f64>,
+    right_width: Option<f64>,
+    damping: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ControlTable {
+    block: Option<i64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ControlsTable {
+    slide: Option<PositionControl>,
+    hand: Option<HandControl>,
+    finger: Option<FingerControls>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PositionControl {
+    position: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HandControl {
+    height: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FingerControls {
+    left: Option<FingerControl>,
+    right: Option<FingerControl>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FingerControl {
+    position: Option<f64>,
+    force: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AutomationEntry {
+    target: String,
+    points: Vec<(f64, f64)>,
+}
+
+impl ControlsTable {
+    /// Constant values in [`CONTROL_TARGETS`] order, `None` where not given.
+    fn values(&self) -> [Option<f64>; 6] {
+        let left = self.finger.as_ref().and_then(|f| f.left.as_ref());
+        let right = self.finger.as_ref().and_then(|f| f.right.as_ref());
+        [
+            self.slide.as_ref().and_then(|s| s.position),
+            self.hand.as_ref().and_then(|h| h.height),
+            left.and_then(|f| f.position),
+            left.and_then(|f| f.force),
+            right.and_then(|f| f.position),
+            right.and_then(|f| f.force),
+        ]
+    }
+}
+
+impl SlideStringFile {
+    pub(super) fn validate(self) -> Result<SlideStringDescription, SceneError> {
+        let (string, extras) = self.string.resolve()?;
+        let head = Head { sample_rate: self.sample_rate, duration: self.duration };
+        let common = common(&head, &self.solver, &self.contact, extras.law, &self.output.options())?;
+        let preset_slide = extras.slide;
+        let s = &self.slide;
+        let slide = SlideParams {
+            mass: positive("slide.mass", required("slide.mass", s.mass, preset_slide.map(|p| p.mass))?)?,
+            stiffness: non_negative("slide.stiffness", required("slide.stiffness", s.stiffness, preset_slide.map(|p| p.stiffness))?)?,
+            damping: non_negative("slide.damping", required("slide.damping", s.damping, preset_slide.map(|p| p.damping))?)?,
+        };
+        let (pl, pr) = (extras.fingers.map(|f| f.0), extras.fingers.map(|f| f.1));
+        let f = &self.fingers;
+        let r = non_negative("fingers.damping", required("fingers.damping", f.damping, pl.map(|p| p.damping))?)?;
+        let left = FingerParams { width: positive("fingers.left_width", required("fingers.left_width", f.left_width, pl.map(|p| p.width))?)?, damping: r };
+        let right = FingerParams { width: positive("fingers.right_width", required("fingers.right_width", f.right_width, pr.map(|p| p.width))?)?, damping: r };
+        let block = self.control.block.unwrap_or(64);
+        if !(1..=MAX_BLOCK as i64).contains(&block) {
+            return Err(SceneError::invalid("control.block", format!("must be 1 to {MAX_BLOCK} samples (got {block})")));
+        }
+        let controls = self.controls(string.length, common.sample_rate)?;
+        let pickup = self.output.pickup(OutputKind::Displacement)?;
+        let params = SlideStringParams { string, slide, left, right, block: block as usize, pickup };
+        Ok(SlideStringDescription { common, params, controls })
+    }
+
+    fn controls(&self, length: f64, sample_rate: u32) -> Result<SlideAutomation, SceneError> {
+        let constants = self.controls.values();
+        let defaults = [None, None, Some(0.05 * length), Some(0.0), Some(0.9 * length), Some(0.0)];
+        let mut lanes: [Option<Breakpoints>; 6] = Default::default();
+        for (i, entry) in self.automation.iter().enumerate() {
+            let key = format!("automation[{i}].target");
+            let Some(index) = CONTROL_TARGETS.iter().position(|t| *t == entry.target) else {
+                return Err(SceneError::invalid(
+                    &key,
+                    format!("unknown target \"{}\" (one of: {})", entry.target, CONTROL_TARGETS.join(", ")),
+                ));
+            };
+            if lanes[index].is_some() {
+                return Err(SceneError::invalid(&key, format!("\"{}\" is automated twice", entry.target)));
+            }
+            if constants[index].is_some() {
+                return Err(SceneError::invalid(
+                    &key,
+                    format!("\"{}\" is automated and also given in [controls]; give one of them", entry.target),
+                ));
+            }
+            let lane = Breakpoints::new(entry.points.clone())
+                .map_err(|e| SceneError::invalid(&format!("automation[{i}].points"), format!("{} ({}): {e}", entry.target, "time s, value")))?;
+            lanes[index] = Some(lane);
+        }
+        let mut out = Vec::with_capacity(6);
+        for (index, lane) in lanes.into_iter().enumerate() {
+            let target = CONTROL_TARGETS[index];
+            let key = format!("controls.{target}");
+            let lane = match lane {
+                Some(lane) => lane,
+                None => {
+                    let value = constants[index].or(defaults[index]).ok_or_else(|| {
+                        SceneError::invalid(&key, "missing: give a constant here or an [[automation]] for it")
+                    })?;
+                    Breakpoints::constant(finite(&key, value)?)
+                }
+            };
+            if target.ends_with("position") {
+                for &(t, x) in lane.points() {
+                    if !(x > 0.0 && x < length) {
+                        return Err(SceneError::invalid(&key, format!("position {x} m at t = {t} s is outside the string (0, {length}) m")));
+                    }
+                }
+            }
+            out.push(lane);
+        }
+        let lanes: [Breakpoints; 6] = out.try_into().expect("six lanes");
+        Ok(SlideAutomation { lanes, sample_rate: f64::from(sample_rate) })
+    }
+}
