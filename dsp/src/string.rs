@@ -215,12 +215,22 @@ pub struct StringEnergy {
 impl ModalString {
     /// Prepare the string at `sample_rate` (Hz): every mode strictly below Nyquist, at rest.
     pub fn new(params: StringParams, sample_rate: f64) -> Result<Self, StringError> {
+        Self::band_limited(params, sample_rate, f64::INFINITY)
+    }
+
+    /// Prepare the string keeping only the modes that ring strictly below both Nyquist and
+    /// `max_frequency` (Hz). With the same `max_frequency` at every sample rate (below the
+    /// lowest Nyquist in use), the string has the same modes, and so the same sound, at all of them.
+    pub fn band_limited(params: StringParams, sample_rate: f64, max_frequency: f64) -> Result<Self, StringError> {
         params.validate()?;
+        if !(max_frequency > 0.0) {
+            return Err(StringError { key: "max_frequency", reason: format!("must be > 0 (got {max_frequency})") });
+        }
         if !(sample_rate.is_finite() && sample_rate > 0.0) {
             return Err(StringError { key: "sample_rate", reason: format!("must be finite and > 0 (got {sample_rate})") });
         }
         let dt = 1.0 / sample_rate;
-        let nyquist = std::f64::consts::PI * sample_rate;
+        let nyquist = std::f64::consts::PI * sample_rate.min(2.0 * max_frequency);
         let modal_mass = 0.5 * params.linear_density * params.length;
         let mut s = Self {
             params,

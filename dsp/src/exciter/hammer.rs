@@ -3,6 +3,10 @@
 //! `m_h δ_tt w = −F^n`, so `w^{n+1} = w^{n−1} − z_h − ξ_h F^n` with `z_h = 2(w^{n−1} − w^n)` and
 //! `ξ_h = Δt²/m_h`. The hammer sits at `w` (m) on the positive side of the string and moves
 //! towards it with velocity `−v` (m/s); compression `y = hᵀũ − w > 0` means the felt is pressed.
+//!
+//! The state is `w^n` and the increment `δ^n = w^n − w^{n−1}`, updated as `δ^{n+1} = δ^n − ξ_h F^n`:
+//! the velocity and `z_h = −2δ^n` then never come from the difference of two large positions
+//! (a rebounding hammer travels far), so the kinetic energy keeps full precision.
 
 /// Hammer parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -34,17 +38,17 @@ pub struct Hammer {
     /// `ξ_h = Δt²/m_h` (m/N).
     xi: f64,
     dt: f64,
-    /// `w^{n−1}` (m).
-    w_prev: f64,
     /// `w^n` (m).
     w_now: f64,
+    /// `δ^n = w^n − w^{n−1}` (m).
+    step: f64,
 }
 
 impl Hammer {
     /// A hammer at `w^0 = gap`, moving towards the string: `w^{−1} = gap + v Δt`.
     pub fn new(params: &HammerParams, sample_rate: f64) -> Self {
         let dt = 1.0 / sample_rate;
-        Self { mass: params.mass, xi: dt * dt / params.mass, dt, w_prev: params.gap + params.velocity * dt, w_now: params.gap }
+        Self { mass: params.mass, xi: dt * dt / params.mass, dt, w_now: params.gap, step: -params.velocity * dt }
     }
 
     /// `ξ_h = Δt²/m_h` (m/N): the hammer's share of the coupling `q`.
@@ -56,7 +60,7 @@ impl Hammer {
     /// `w^{n−1}` (m).
     #[inline]
     pub fn previous(&self) -> f64 {
-        self.w_prev
+        self.w_now - self.step
     }
 
     /// `w^n` (m).
@@ -68,22 +72,21 @@ impl Hammer {
     /// History term `z_h = 2(w^{n−1} − w^n)` (m).
     #[inline]
     pub fn history(&self) -> f64 {
-        2.0 * (self.w_prev - self.w_now)
+        -2.0 * self.step
     }
 
     /// Apply the contact force `F^n` (N; the hammer feels `−F`) and step on. Returns `w^{n+1}`.
     #[inline]
-    pub fn advance(&mut self, z_h: f64, force: f64) -> f64 {
-        let next = self.w_prev - z_h - self.xi * force;
-        self.w_prev = self.w_now;
-        self.w_now = next;
-        next
+    pub fn advance(&mut self, force: f64) -> f64 {
+        self.step -= self.xi * force;
+        self.w_now += self.step;
+        self.w_now
     }
 
-    /// Velocity `(w^n − w^{n−1})/Δt` (m/s) of the latest step.
+    /// Velocity `δ^n/Δt = (w^n − w^{n−1})/Δt` (m/s) of the latest step.
     #[inline]
     pub fn velocity(&self) -> f64 {
-        (self.w_now - self.w_prev) / self.dt
+        self.step / self.dt
     }
 
     /// Kinetic energy `½ m_h ((w^n − w^{n−1})/Δt)²` (J) of the latest step.

@@ -148,7 +148,7 @@ impl<S: ContactSolver> HammerString<S> {
             (self.string.advance(forces, &self.pickup), Default::default())
         };
         let w_now = self.hammer.position();
-        self.hammer.advance(z_h, solution.force);
+        self.hammer.advance(solution.force);
         let output = match self.kind {
             OutputKind::Velocity => (out_next - self.out_now) / self.dt,
             OutputKind::Displacement | OutputKind::BridgeForce => self.out_now,

@@ -7,8 +7,10 @@
 //! m δ_tt u = F   ⇒   s + z − q·F = 0,   s = y^{n+1} − y^{n−1},   z = 2(y^{n−1} − y^n),   q = Δt²/m
 //! ```
 //!
-//! The state is kept as compressions relative to the barrier, so `y` is never the difference of
-//! two large positions (physics §10.6). The numerical energy (physics §2)
+//! The state is kept as the compression relative to the barrier, `y^n`, and its increment
+//! `δ^n = y^n − y^{n−1}`: `y` is never the difference of two large positions (physics §10.6), and
+//! `z = −2δ^n` and the velocity `δ^{n+1}/Δt = (s − δ^n)/Δt` keep full precision however far the
+//! mass travels. The numerical energy (physics §2)
 //!
 //! ```text
 //! H^{n+1/2} = ½ m ((y^{n+1} − y^n)/Δt)² + (contact term of the solver)
@@ -51,10 +53,10 @@ pub struct MassBarrier<S> {
     dt: f64,
     /// `q = Δt²/m` (m/N).
     q: f64,
-    /// `y^{n−1}` (m).
-    y_prev: f64,
     /// `y^n` (m).
     y_now: f64,
+    /// `δ^n = y^n − y^{n−1}` (m).
+    step: f64,
     initial_energy: f64,
 }
 
@@ -64,11 +66,12 @@ impl<S: ContactSolver> MassBarrier<S> {
     pub fn new(params: MassBarrierParams, sample_rate: f64, mut solver: S) -> Self {
         let dt = 1.0 / sample_rate;
         let y_now = params.u0 - params.barrier;
-        let y_prev = y_now - params.v0 * dt;
+        let step = params.v0 * dt;
+        let y_prev = y_now - step;
         solver.start(y_prev, y_now);
         let kinetic = 0.5 * params.mass * params.v0 * params.v0;
         let initial_energy = kinetic + solver.stored_energy(y_now, y_prev);
-        Self { solver, params, sample_rate, dt, q: dt * dt / params.mass, y_prev, y_now, initial_energy }
+        Self { solver, params, sample_rate, dt, q: dt * dt / params.mass, y_now, step, initial_energy }
     }
 
     /// The contact solver.
@@ -78,17 +81,12 @@ impl<S: ContactSolver> MassBarrier<S> {
 
     #[inline]
     fn step(&mut self) -> Frame {
-        let problem = ContactProblem {
-            y_prev: self.y_prev,
-            y_now: self.y_now,
-            z: 2.0 * (self.y_prev - self.y_now),
-            q: self.q,
-        };
+        let problem = ContactProblem { y_prev: self.y_now - self.step, y_now: self.y_now, z: -2.0 * self.step, q: self.q };
         let solution = self.solver.solve(&problem);
-        let y_next = self.y_prev + solution.s;
-        let velocity = (y_next - self.y_now) / self.dt;
-        let energy = 0.5 * self.params.mass * velocity * velocity
-            + self.solver.stored_energy(y_next, self.y_now);
+        let step = solution.s - self.step;
+        let y_next = self.y_now + step;
+        let velocity = step / self.dt;
+        let energy = 0.5 * self.params.mass * velocity * velocity + self.solver.stored_energy(y_next, self.y_now);
         let frame = Frame {
             output: solution.force,
             displacement: self.y_now + self.params.barrier,
@@ -99,8 +97,8 @@ impl<S: ContactSolver> MassBarrier<S> {
             losses: 0.0,
             work: self.solver.last_work(),
         };
-        self.y_prev = self.y_now;
         self.y_now = y_next;
+        self.step = step;
         frame
     }
 }
