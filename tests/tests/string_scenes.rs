@@ -96,9 +96,10 @@ fn one_mode_rings_and_decays_exactly() {
         now[mode] = exact(0.0);
         s.set_state(&prev, &now);
         let mut worst = 0.0_f64;
+        let silent = s.vector();
         for n in 1..=44_100 {
             s.history::<0>([]);
-            s.advance::<0>([], &now);
+            s.advance::<0>([], &silent);
             worst = worst.max((s.state()[mode] - exact(n as f64)).abs());
         }
         assert!(worst < 1e-10, "mode {}: max error {worst:e}", mode + 1);
@@ -120,9 +121,10 @@ fn lossless_partials_follow_the_stiff_string_formula() {
     let prev: Vec<f64> = omega.iter().map(|w| (w * dt).cos()).collect();
     s.set_state(&prev, &vec![1.0; m]);
     let mut trail = vec![s.previous_state().to_vec(), s.state().to_vec()];
+    let silent = s.vector();
     for _ in 0..200 {
         s.history::<0>([]);
-        s.advance::<0>([], &prev);
+        s.advance::<0>([], &silent);
         trail.push(s.state().to_vec());
     }
     for i in 0..m {

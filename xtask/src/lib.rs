@@ -2,9 +2,11 @@
 //!
 //! - `render`: render a scene file offline to a WAV (and a CSV of per-sample signals) and print a
 //!   one-line JSON summary. See [`render`].
+//! - `bench`: real-time factors of whole voices, one JSON line per case. See [`bench`].
 //!
 //! The tasks are a library so the test harness can run them in-process.
 
+pub mod bench;
 pub mod render;
 
 use std::ffi::OsString;
@@ -18,6 +20,8 @@ use clap::Parser;
 pub enum Cli {
     /// Render a scene file offline: WAV, optional CSV, and a JSON summary line on stdout.
     Render(render::RenderArgs),
+    /// Measure the real-time factor of whole voices: one JSON line per case.
+    Bench(bench::BenchArgs),
 }
 
 /// Run the command line `args` (without the program name), writing the task's report to
@@ -31,7 +35,8 @@ pub fn run(args: impl IntoIterator<Item = OsString>, stdout: &mut dyn Write, std
         }
     };
     let result = match cli {
-        Cli::Render(args) => render::run(&args, stdout).map(|_| ()),
+        Cli::Render(args) => render::run(&args, stdout).map(|_| ()).map_err(|e| e.to_string()),
+        Cli::Bench(args) => bench::run(&args, stdout).map(|_| ()).map_err(|e| e.to_string()),
     };
     match result {
         Ok(()) => 0,

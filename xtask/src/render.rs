@@ -94,6 +94,12 @@ pub fn run(args: &RenderArgs, stdout: &mut dyn Write) -> Result<Summary, RenderE
     let scene = parse_scene(&text).map_err(|source| RenderError::Scene { path: args.scene.clone(), source })?;
     let wav_path = args.out.clone().unwrap_or_else(|| args.scene.with_extension("wav"));
     let csv_path = args.csv.then(|| wav_path.with_extension("csv"));
+    if csv_path.as_ref() == Some(&wav_path) {
+        return Err(RenderError::Output(format!(
+            "with --csv the CSV would replace the WAV {}; give the WAV path another extension",
+            wav_path.display()
+        )));
+    }
     for path in std::iter::once(&wav_path).chain(csv_path.as_ref()) {
         check_output_path(path, &args.scene)?;
     }

@@ -71,17 +71,29 @@ pub struct Rendered {
 /// Render `scene`, advancing in calls of the sizes `chunks` yields (sizes of 0 are skipped;
 /// when the iterator ends, the rest is rendered in one call).
 pub fn render(scene: &SceneDescription, chunks: impl Iterator<Item = usize>) -> Result<Rendered, SceneError> {
-    let common = scene.common();
+    let run = dispatch(scene, FramesJob { chunks })?;
+    let summary = Summary::measure(scene, &run);
+    Ok(Rendered { frames: run.frames, summary })
+}
+
+/// Render only the audio output of `scene` in calls of `chunk` samples, the way a plugin runs a
+/// voice: no per-sample frames, no energy bookkeeping. Returns the output and the wall-clock
+/// time spent computing it (s).
+pub fn render_output(scene: &SceneDescription, chunk: usize) -> Result<(Vec<f64>, f64), SceneError> {
+    dispatch(scene, OutputJob { chunk: chunk.max(1) })
+}
+
+/// Build `scene` around the solver its settings name and hand it to `job`.
+fn dispatch<J: Job>(scene: &SceneDescription, job: J) -> Result<J::Output, SceneError> {
     fn build<W: WithSolver>(common: &Common, v_ref: f64, work: W) -> Result<W::Output, SceneError> {
         common.solver.build(common.law, v_ref, work).map_err(|e| SceneError::contact("contact", e))
     }
-    let run = match scene {
-        SceneDescription::MassBarrier(d) => build(common, d.default_v_ref(), Render { scene: d, chunks })?,
-        SceneDescription::HammerString(d) => build(common, d.default_v_ref(), Render { scene: d, chunks })?,
-        SceneDescription::SlideString(d) => build(common, d.default_v_ref(), Render { scene: d, chunks })?,
-    };
-    let summary = Summary::measure(scene, &run);
-    Ok(Rendered { frames: run.frames, summary })
+    let common = scene.common();
+    match scene {
+        SceneDescription::MassBarrier(d) => build(common, d.default_v_ref(), Build { scene: d, job }),
+        SceneDescription::HammerString(d) => build(common, d.default_v_ref(), Build { scene: d, job }),
+        SceneDescription::SlideString(d) => build(common, d.default_v_ref(), Build { scene: d, job }),
+    }
 }
 
 /// The raw result of driving a scene.
@@ -97,72 +109,97 @@ pub struct Run {
     pub segments: usize,
 }
 
-/// Drive `scene` for `samples` samples in calls of the sizes `chunks` yields.
-pub fn drive(mut scene: impl Scene, samples: usize, mut chunks: impl Iterator<Item = usize>) -> (Vec<Frame>, f64) {
-    let mut frames = vec![Frame::default(); samples];
-    let start = Instant::now();
-    let mut done = 0;
-    while done < samples {
-        let n = match chunks.next() {
-            Some(0) => continue,
-            Some(n) => n.min(samples - done),
-            None => samples - done,
-        };
-        scene.process(&mut frames[done..done + n]);
-        done += n;
-    }
-    (frames, start.elapsed().as_secs_f64())
+/// What to do with a scene once it is built.
+trait Job {
+    type Output;
+    fn run(self, scene: impl Scene, samples: usize, segments: usize) -> Self::Output;
 }
 
-/// Renders one kind of scene description with whichever solver it is handed.
-struct Render<'a, D, I> {
-    scene: &'a D,
+/// Every frame, in calls of the sizes an iterator gives.
+struct FramesJob<I> {
     chunks: I,
 }
 
-impl<D, I: Iterator<Item = usize>> Render<'_, D, I> {
-    fn drive(self, scene: impl Scene, samples: usize, segments: usize) -> Run {
+impl<I: Iterator<Item = usize>> Job for FramesJob<I> {
+    type Output = Run;
+
+    fn run(mut self, mut scene: impl Scene, samples: usize, segments: usize) -> Run {
         let initial_energy = scene.initial_energy();
-        let (frames, wall_seconds) = drive(scene, samples, self.chunks);
-        Run { frames, initial_energy, wall_seconds, segments }
+        let mut frames = vec![Frame::default(); samples];
+        let start = Instant::now();
+        let mut done = 0;
+        while done < samples {
+            let n = match self.chunks.next() {
+                Some(0) => continue,
+                Some(n) => n.min(samples - done),
+                None => samples - done,
+            };
+            scene.process(&mut frames[done..done + n]);
+            done += n;
+        }
+        Run { frames, initial_energy, wall_seconds: start.elapsed().as_secs_f64(), segments }
     }
 }
 
-impl<I: Iterator<Item = usize>> WithSolver for Render<'_, MassBarrierDescription, I> {
-    type Output = Run;
+/// The output signal only, in calls of a fixed size.
+struct OutputJob {
+    chunk: usize,
+}
 
-    fn run<S: ContactSolver>(self, solver: S) -> Run {
+impl Job for OutputJob {
+    type Output = (Vec<f64>, f64);
+
+    fn run(self, mut scene: impl Scene, samples: usize, _segments: usize) -> (Vec<f64>, f64) {
+        let mut out = vec![0.0; samples];
+        let start = Instant::now();
+        for block in out.chunks_mut(self.chunk) {
+            scene.process_output(block);
+        }
+        (out, start.elapsed().as_secs_f64())
+    }
+}
+
+/// Builds one kind of scene description around whichever solver it is handed, then runs a job.
+struct Build<'a, D, J> {
+    scene: &'a D,
+    job: J,
+}
+
+impl<J: Job> WithSolver for Build<'_, MassBarrierDescription, J> {
+    type Output = J::Output;
+
+    fn run<S: ContactSolver>(self, solver: S) -> J::Output {
         let (common, segments) = (&self.scene.common, solver.segments());
         let scene = MassBarrier::new(self.scene.params, f64::from(common.sample_rate), solver);
-        self.drive(scene, common.samples, segments)
+        self.job.run(scene, common.samples, segments)
     }
 }
 
-impl<I: Iterator<Item = usize>> WithSolver for Render<'_, HammerStringDescription, I> {
-    type Output = Run;
+impl<J: Job> WithSolver for Build<'_, HammerStringDescription, J> {
+    type Output = J::Output;
 
-    fn run<S: ContactSolver>(self, solver: S) -> Run {
+    fn run<S: ContactSolver>(self, solver: S) -> J::Output {
         let (common, segments) = (&self.scene.common, solver.segments());
         let string = prepared_string(&self.scene.params.string, common.sample_rate);
         let scene = HammerString::new(string, &self.scene.params, solver);
-        self.drive(scene, common.samples, segments)
+        self.job.run(scene, common.samples, segments)
     }
 }
 
-impl<I: Iterator<Item = usize>> WithSolver for Render<'_, SlideStringDescription, I> {
-    type Output = Run;
+impl<J: Job> WithSolver for Build<'_, SlideStringDescription, J> {
+    type Output = J::Output;
 
-    fn run<S: ContactSolver>(self, solver: S) -> Run {
+    fn run<S: ContactSolver>(self, solver: S) -> J::Output {
         let d = self.scene;
         let (common, segments) = (&d.common, solver.segments());
         let string = prepared_string(&d.params.string, common.sample_rate);
         // Constant controls get the scene type that never recomputes its vectors.
         if d.controls.is_constant() {
             let fixed = Fixed(d.controls.at_time(0.0));
-            self.drive(SlideString::new(string, &d.params, solver, fixed), common.samples, segments)
+            self.job.run(SlideString::new(string, &d.params, solver, fixed), common.samples, segments)
         } else {
             let scene = SlideString::new(string, &d.params, solver, d.controls.clone());
-            self.drive(scene, common.samples, segments)
+            self.job.run(scene, common.samples, segments)
         }
     }
 }

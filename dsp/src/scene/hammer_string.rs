@@ -82,13 +82,12 @@ impl<S: ContactSolver> HammerString<S> {
     /// Prepare the scene: the string at rest, the hammer `gap` away and moving in.
     /// `string` must be prepared at the scene's sample rate.
     pub fn new(string: ModalString, params: &HammerStringParams, mut solver: S) -> Self {
-        let m = string.modes();
         let fs = string.sample_rate();
         let length = string.params().length;
-        let mut shape = vec![0.0; m];
+        let mut shape = string.vector();
         string.mode_shapes(params.hammer.position * length, &mut shape);
         let gain: Vec<f64> = shape.iter().zip(string.input_gains()).map(|(h, c)| h * c).collect();
-        let mut pickup = vec![0.0; m];
+        let mut pickup = string.vector();
         match params.pickup.kind {
             OutputKind::Displacement | OutputKind::Velocity => string.mode_shapes(params.pickup.position * length, &mut pickup),
             OutputKind::BridgeForce => string.bridge_weights(false, &mut pickup),
@@ -174,12 +173,6 @@ impl<S: ContactSolver> HammerString<S> {
         frame
     }
 
-    /// Advance `out.len()` samples writing only the output signal: no energy bookkeeping.
-    pub fn process_output(&mut self, out: &mut [f64]) {
-        for o in out {
-            *o = self.step::<false>().output;
-        }
-    }
 }
 
 impl<S: ContactSolver> Scene for HammerString<S> {
@@ -194,6 +187,12 @@ impl<S: ContactSolver> Scene for HammerString<S> {
     fn process(&mut self, frames: &mut [Frame]) {
         for frame in frames {
             *frame = self.step::<true>();
+        }
+    }
+
+    fn process_output(&mut self, out: &mut [f64]) {
+        for o in out {
+            *o = self.step::<false>().output;
         }
     }
 }

@@ -45,4 +45,8 @@ pub trait Scene {
 
     /// Advance `frames.len()` samples, writing one frame per sample. Never allocates.
     fn process(&mut self, frames: &mut [Frame]);
+
+    /// Advance `out.len()` samples, writing only the output signal: the real-time path, with no
+    /// energy bookkeeping. Gives the same output as [`process`](Self::process).
+    fn process_output(&mut self, out: &mut [f64]);
 }

@@ -135,12 +135,11 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
     /// Prepare the scene: the string at rest and the slide resting at the hand's height.
     /// `string` must be prepared at the scene's sample rate and `params.block ≥ 1`.
     pub fn new(string: ModalString, params: &SlideStringParams, mut solver: S, mut controls: C) -> Self {
-        let m = string.modes();
         let fs = string.sample_rate();
         let block = params.block.max(1);
         let start = controls.at(0);
         let target = if C::VARYING { controls.at(block as u64) } else { start };
-        let mut pickup = vec![0.0; m];
+        let mut pickup = string.vector();
         match params.pickup.kind {
             OutputKind::Displacement | OutputKind::Velocity => {
                 string.mode_shapes(params.pickup.position * string.params().length, &mut pickup)
@@ -151,8 +150,8 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
         let mut scene = Self {
             left_window: finger::window_factors(&string, params.left.width),
             right_window: finger::window_factors(&string, params.right.width),
-            shapes: [vec![0.0; m], vec![0.0; m], vec![0.0; m]],
-            gains: [vec![0.0; m], vec![0.0; m], vec![0.0; m]],
+            shapes: [string.vector(), string.vector(), string.vector()],
+            gains: [string.vector(), string.vector(), string.vector()],
             theta: [[0.0; 3]; 3],
             positions: [f64::NAN; 3],
             pickup,
@@ -321,10 +320,6 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
         }
     }
 
-    /// Advance `out.len()` samples writing only the output signal: no energy bookkeeping.
-    pub fn process_output(&mut self, out: &mut [f64]) {
-        self.run::<false>(out.len(), |i, f| out[i] = f.output);
-    }
 }
 
 impl<S: ContactSolver, C: ControlSource<SlideControls>> Scene for SlideString<S, C> {
@@ -338,6 +333,10 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> Scene for SlideString<S,
 
     fn process(&mut self, frames: &mut [Frame]) {
         self.run::<true>(frames.len(), |i, f| frames[i] = f);
+    }
+
+    fn process_output(&mut self, out: &mut [f64]) {
+        self.run::<false>(out.len(), |i, f| out[i] = f.output);
     }
 }
 

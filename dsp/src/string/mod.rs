@@ -37,12 +37,18 @@
 //!
 //! # Layout
 //!
-//! Structure of arrays: every per-mode coefficient is a contiguous `Vec<f64>` and a step is two
-//! branch-free passes over the modes. [`ModalString::history`] computes `z̃` and its projections
+//! Structure of arrays: every per-mode coefficient is a contiguous `Vec<f64>`, padded with inert
+//! zero modes to a whole number of SIMD chunks ([`ModalString::padded_len`]; vectors handed to
+//! the string come from [`ModalString::vector`]), and a step is two branch-free passes over the
+//! modes (see `kernel`). [`ModalString::history`] computes `z̃` and its projections
 //! on the contact vectors in one pass; [`ModalString::advance`] applies the forces, moves the state
 //! on and projects the new state on the output vector in the second.
 
+mod kernel;
+
 use serde::Serialize;
+
+use kernel::LANES;
 
 /// Most modes a string may have (bounds memory and cost for extreme parameters).
 pub const MAX_MODES: usize = 4096;
@@ -55,14 +61,7 @@ pub const FLUSH_BELOW: f64 = 1e-30;
 /// render is split into calls).
 pub const FLUSH_INTERVAL: u32 = 64;
 
-/// Independent partial sums in the per-mode reductions (latency hiding and SIMD).
-const LANES: usize = 8;
 
-/// Sum of the partial sums, in a fixed order.
-#[inline]
-fn lane_sum(acc: [f64; LANES]) -> f64 {
-    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]))
-}
 
 /// How the modal decay rates `σ_i` (1/s) are set.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -283,10 +282,13 @@ impl ModalString {
             s.stiffness.push(4.0 * modal_mass / (dt * dt) * (1.0 - 2.0 * p + q) / den);
             s.resistance.push(4.0 * modal_mass / dt * (1.0 - q) / den);
         }
-        let m = s.beta.len();
-        s.u_prev = vec![0.0; m];
-        s.u_now = vec![0.0; m];
-        s.history = vec![0.0; m];
+        let padded = s.beta.len().div_ceil(LANES) * LANES;
+        for v in [&mut s.coef_a, &mut s.coef_b, &mut s.coef_c, &mut s.stiffness, &mut s.resistance] {
+            v.resize(padded, 0.0);
+        }
+        s.u_prev = vec![0.0; padded];
+        s.u_now = vec![0.0; padded];
+        s.history = vec![0.0; padded];
         Ok(s)
     }
 
@@ -303,6 +305,17 @@ impl ModalString {
     /// Number of modes M.
     pub fn modes(&self) -> usize {
         self.beta.len()
+    }
+
+    /// Length of every per-mode vector the string works with: M rounded up to whole SIMD chunks.
+    pub fn padded_len(&self) -> usize {
+        self.u_now.len()
+    }
+
+    /// A zero vector of [`padded_len`](Self::padded_len) entries, for mode shapes, gains and
+    /// output weights.
+    pub fn vector(&self) -> Vec<f64> {
+        vec![0.0; self.padded_len()]
     }
 
     /// Modal mass m̃ = ρAL/2 (kg).
@@ -325,25 +338,27 @@ impl ModalString {
         &self.omega0
     }
 
-    /// Per-mode `C_i` (m/N): the modal displacement change per newton of modal force.
+    /// Per-mode `C_i` (m/N): the modal displacement change per newton of modal force
+    /// ([`padded_len`](Self::padded_len) entries, zero past M).
     pub fn input_gains(&self) -> &[f64] {
         &self.coef_c
     }
 
-    /// Modal displacements `ũ^n` (m).
+    /// Modal displacements `ũ^n` (m), M entries.
     pub fn state(&self) -> &[f64] {
-        &self.u_now
+        &self.u_now[..self.modes()]
     }
 
-    /// Modal displacements `ũ^{n−1}` (m).
+    /// Modal displacements `ũ^{n−1}` (m), M entries.
     pub fn previous_state(&self) -> &[f64] {
-        &self.u_prev
+        &self.u_prev[..self.modes()]
     }
 
     /// Set the modal state `ũ^{n−1}`, `ũ^n` (m). Slices must have [`modes`](Self::modes) entries.
     pub fn set_state(&mut self, previous: &[f64], now: &[f64]) {
-        self.u_prev.copy_from_slice(previous);
-        self.u_now.copy_from_slice(now);
+        let m = self.modes();
+        self.u_prev[..m].copy_from_slice(previous);
+        self.u_now[..m].copy_from_slice(now);
     }
 
     /// Bring the string to rest.
@@ -353,7 +368,8 @@ impl ModalString {
         self.since_flush = 0;
     }
 
-    /// Write the mode shapes at `x` (m), `sin(β_i x)`, into `out` (dimensionless). Uses the
+    /// Write the mode shapes at `x` (m), `sin(β_i x)`, into `out` (dimensionless; entries past M
+    /// are zeroed). Uses the
     /// recurrence `sin((i+1)θ) = 2cos θ·sin(iθ) − sin((i−1)θ)` with `θ = πx/L`, so costs one
     /// sine and one cosine for all modes.
     pub fn mode_shapes(&self, x: f64, out: &mut [f64]) {
@@ -361,18 +377,21 @@ impl ModalString {
         let (s1, c1) = theta.sin_cos();
         let two_c = 2.0 * c1;
         let (mut prev, mut now) = (0.0, s1);
-        for o in out.iter_mut().take(self.modes()) {
+        let (shapes, padding) = out.split_at_mut(self.modes().min(out.len()));
+        for o in shapes {
             *o = now;
             let next = two_c * now - prev;
             prev = now;
             now = next;
         }
+        padding.fill(0.0);
     }
 
     /// The weights that turn the modal state into the transverse force on the support (N/m):
     /// `T β_i + EI β_i³` at `x = 0`, and `(−1)^(i+1)(T β_i + EI β_i³)` at `x = L` (the mirror
     /// image, since `sin(β_i (L − x)) = (−1)^(i+1) sin(β_i x)`).
     pub fn bridge_weights(&self, at_far_end: bool, out: &mut [f64]) {
+        out.fill(0.0);
         let (t, ei) = (self.params.tension, self.params.bending_stiffness);
         for (i, (o, &b)) in out.iter_mut().zip(&self.beta).enumerate() {
             let sign = if at_far_end && i % 2 == 1 { -1.0 } else { 1.0 };
@@ -381,34 +400,10 @@ impl ModalString {
     }
 
     /// First pass of a step: compute `z̃ = B ũ^{n−1} − A ũ^n` and return its projections on
-    /// each of the `K` vectors (m).
+    /// each of the `K` vectors (m). Vectors have [`padded_len`](Self::padded_len) entries.
     #[inline]
     pub fn history<const K: usize>(&mut self, vectors: [&[f64]; K]) -> [f64; K] {
-        let m = self.modes();
-        let (a, b) = (&self.coef_a[..m], &self.coef_b[..m]);
-        let (up, un, zt) = (&self.u_prev[..m], &self.u_now[..m], &mut self.history[..m]);
-        let vectors = vectors.map(|v| &v[..m]);
-        // LANES independent partial sums per projection, so the loop vectorises.
-        let mut acc = [[0.0; LANES]; K];
-        let whole = m - m % LANES;
-        for c in (0..whole).step_by(LANES) {
-            for l in 0..LANES {
-                let i = c + l;
-                let z = b[i] * up[i] - a[i] * un[i];
-                zt[i] = z;
-                for k in 0..K {
-                    acc[k][l] += vectors[k][i] * z;
-                }
-            }
-        }
-        for i in whole..m {
-            let z = b[i] * up[i] - a[i] * un[i];
-            zt[i] = z;
-            for k in 0..K {
-                acc[k][0] += vectors[k][i] * z;
-            }
-        }
-        acc.map(lane_sum)
+        kernel::history(&self.coef_a, &self.coef_b, &self.u_prev, &self.u_now, &mut self.history, vectors)
     }
 
     /// Second pass: `ũ^{n+1} = ũ^{n−1} − z̃ + Σ_k gains_k · F_k`, where `gains_k = C∘h_k` (m/N,
@@ -416,59 +411,27 @@ impl ModalString {
     /// vector; then step the state on. Returns `outputᵀ ũ^{n+1}`.
     #[inline]
     pub fn advance<const K: usize>(&mut self, forces: [(&[f64], f64); K], output: &[f64]) -> f64 {
-        let m = self.modes();
-        let forces = forces.map(|(g, f)| (&g[..m], f));
-        let (up, zt, out) = (&mut self.u_prev[..m], &self.history[..m], &output[..m]);
-        let mut acc = [0.0; LANES];
-        let whole = m - m % LANES;
-        for c in (0..whole).step_by(LANES) {
-            for l in 0..LANES {
-                let i = c + l;
-                let mut u = up[i] - zt[i];
-                for (g, f) in &forces {
-                    u += g[i] * f;
-                }
-                up[i] = u;
-                acc[l] += out[i] * u;
-            }
-        }
-        for i in whole..m {
-            let mut u = up[i] - zt[i];
-            for (g, f) in &forces {
-                u += g[i] * f;
-            }
-            up[i] = u;
-            acc[0] += out[i] * u;
-        }
+        let projection = kernel::advance(&mut self.u_prev, &self.history, forces, output);
         self.finish_step();
-        lane_sum(acc)
+        projection
     }
 
     /// [`advance`](Self::advance), also returning the string's energy terms for this step.
     pub fn advance_monitored<const K: usize>(&mut self, forces: [(&[f64], f64); K], output: &[f64]) -> (f64, StringEnergy) {
-        let m = self.modes();
-        let forces = forces.map(|(g, f)| (&g[..m], f));
-        let (up, un, zt, out) = (&mut self.u_prev[..m], &self.u_now[..m], &self.history[..m], &output[..m]);
-        let (k_hat, r_hat) = (&self.stiffness[..m], &self.resistance[..m]);
-        let mut acc = 0.0;
-        // Σ (ũ^{n+1} − ũ^n)², Σ K̂ (ũ^{n+1} + ũ^n)², Σ R̂ (ũ^{n+1} − ũ^{n−1})²; scaled once below.
-        let (mut step2, mut k_sum2, mut r_diff2) = (0.0, 0.0, 0.0);
-        for i in 0..m {
-            let mut u = up[i] - zt[i];
-            for (g, f) in &forces {
-                u += g[i] * f;
-            }
-            let (d, s, c) = (u - un[i], u + un[i], u - up[i]);
-            step2 += d * d;
-            k_sum2 += k_hat[i] * s * s;
-            r_diff2 += r_hat[i] * c * c;
-            up[i] = u;
-            acc += out[i] * u;
-        }
+        let (projection, [step2, k_sum2, r_diff2]) = kernel::advance_monitored(
+            &mut self.u_prev,
+            &self.u_now,
+            &self.history,
+            forces,
+            output,
+            &self.stiffness,
+            &self.resistance,
+        );
         self.finish_step();
         let fs = self.sample_rate;
+        // ½m̃‖δ_t+ũ‖² + ½ΣK̂(μ_t+ũ)² and Δt·ΣR̂(δ_t·ũ)², from the unscaled sums.
         let stored = 0.5 * self.modal_mass * step2 * fs * fs + 0.125 * k_sum2;
-        (acc, StringEnergy { stored, dissipated: 0.25 * r_diff2 * fs })
+        (projection, StringEnergy { stored, dissipated: 0.25 * r_diff2 * fs })
     }
 
     /// Step the state on, flushing tiny amplitudes every [`FLUSH_INTERVAL`] steps.
