@@ -148,7 +148,10 @@ mod tests {
     #[test]
     fn invalid_breakpoints_are_refused() {
         assert_eq!(Breakpoints::new(vec![]), Err(BreakpointError::Empty));
-        assert!(matches!(Breakpoints::new(vec![(0.0, 1.0), (0.0, 2.0)]), Err(BreakpointError::NotIncreasing { index: 1, .. })));
+        assert!(matches!(
+            Breakpoints::new(vec![(0.0, 1.0), (0.0, 2.0)]),
+            Err(BreakpointError::NotIncreasing { index: 1, .. })
+        ));
         assert!(matches!(Breakpoints::new(vec![(0.0, f64::NAN)]), Err(BreakpointError::NotFinite { index: 0 })));
         assert!(matches!(Breakpoints::new(vec![(-1.0, 0.0)]), Err(BreakpointError::NotFinite { index: 0 })));
     }

@@ -1,13 +1,17 @@
 //! Modal string, hammer–string and slide–string physics (issue 3). Reference numbers and their
 //! sources are in `shared/reference/physics.md` (§ numbers below).
 
-use qsa_dsp::contact::{ContactSolver, ExplicitSolver, Method, NewtonSolver, PowerLaw, QsaSolver, QuadSpline, SolverSettings};
+use qsa_dsp::contact::{
+    ContactSolver, ExplicitSolver, Method, NewtonSolver, PowerLaw, QsaSolver, QuadSpline, SolverSettings,
+};
 use qsa_dsp::control::Fixed;
 use qsa_dsp::exciter::HammerParams;
 use qsa_dsp::preset::{chaigne_askenfelt_c4, slide_guitar};
 use qsa_dsp::render::{SceneDescription, parse_scene, render};
-use qsa_dsp::scene::{Frame, HammerString, HammerStringParams, OutputKind, Pickup, Scene, SlideControls, SlideString, SlideStringParams};
-use qsa_dsp::string::{Damping, ModalString, StringParams};
+use qsa_dsp::scene::{
+    Frame, HammerString, HammerStringParams, OutputKind, Pickup, Scene, SlideControls, SlideString, SlideStringParams,
+};
+use qsa_dsp::string::{Damping, ModalString};
 
 const FS: f64 = 44100.0;
 
@@ -22,7 +26,12 @@ fn fig5(velocity: f64) -> HammerStringParams {
     let c4 = chaigne_askenfelt_c4();
     HammerStringParams {
         string: c4.string,
-        hammer: HammerParams { mass: c4.hammer_mass, velocity, position: c4.strike_position, gap: HammerParams::DEFAULT_GAP },
+        hammer: HammerParams {
+            mass: c4.hammer_mass,
+            velocity,
+            position: c4.strike_position,
+            gap: HammerParams::DEFAULT_GAP,
+        },
         pickup: Pickup { kind: OutputKind::Displacement, position: 0.3 },
     }
 }
@@ -251,8 +260,10 @@ fn fig5_is_consistent_across_sample_rates() {
 #[test]
 fn band_limited_string_has_the_same_modes_at_every_rate() {
     let params = chaigne_askenfelt_c4().string;
-    let counts: Vec<usize> =
-        [44100.0, 96000.0, 192000.0].iter().map(|&fs| ModalString::band_limited(params, fs, 20_000.0).unwrap().modes()).collect();
+    let counts: Vec<usize> = [44100.0, 96000.0, 192000.0]
+        .iter()
+        .map(|&fs| ModalString::band_limited(params, fs, 20_000.0).unwrap().modes())
+        .collect();
     let expected = (1..).take_while(|&i| params.partial(i) < 20_000.0).count();
     assert_eq!(counts, vec![expected; 3]);
 }
@@ -329,7 +340,10 @@ fn slide_phrase_attaches_rattles_and_follows_the_speaking_length() {
         let f = fundamental(window, fs, 60.0, 400.0);
         println!("t {t0}-{t1} s: x_o {x:.4} m, f0 {f:.2} Hz, from L - x_o {expected:.2} Hz");
         assert!((f / expected - 1.0).abs() < 0.01, "f0 {f} Hz vs {expected} Hz");
-        assert!(out.frames[(t0 * fs) as usize..(t1 * fs) as usize].iter().all(|f| f.force < 0.0), "attached in {t0}-{t1} s");
+        assert!(
+            out.frames[(t0 * fs) as usize..(t1 * fs) as usize].iter().all(|f| f.force < 0.0),
+            "attached in {t0}-{t1} s"
+        );
     }
     // Lifted at the end: no contact, the open string.
     let tail = &out.frames[(3.5 * fs) as usize..];
@@ -376,20 +390,33 @@ fn bad_string_scenes_are_errors_naming_the_key() {
         (hammer.replace("preset = \"c4\"", "preset = \"c4\"\ntension = -5.0"), "string.tension"),
         (hammer.replace("preset = \"c4\"", "preset = \"c5\""), "string.preset"),
         (hammer.replace("kind = \"bridge-force\"", "kind = \"bridge-force\"\nposition = 1.5"), "output.position"),
-        (slide.replace("finger.right.position = 0.58", "finger.right.position = 0.7"), "controls.finger.right.position"),
+        (
+            slide.replace("finger.right.position = 0.58", "finger.right.position = 0.7"),
+            "controls.finger.right.position",
+        ),
         (slide.replace("target = \"hand.height\"", "target = \"hand.heigth\""), "automation[2].target"),
         (slide.replace("[[0.0, 3e-3], [0.15, 3e-3]", "[[0.0, 3e-3], [0.0, 3e-3]"), "automation[2].points"),
         (slide.replace("[[0.0, 3e-3], [0.15, 3e-3]", "[[0.2, 3e-3], [0.15, 3e-3]"), "automation[2].points"),
         (slide.replace("block = 64", "block = 0"), "control.block"),
-        (slide.replace("preset = \"slide-guitar\"", "preset = \"slide-guitar\"\n\n[slide]\nmass = -0.03"), "slide.mass"),
-        (slide.replace("finger.right.position = 0.58", "finger.right.position = 0.58\nslide.position = 0.3"), "automation[0].target"),
+        (
+            slide.replace("preset = \"slide-guitar\"", "preset = \"slide-guitar\"\n\n[slide]\nmass = -0.03"),
+            "slide.mass",
+        ),
+        (
+            slide.replace("finger.right.position = 0.58", "finger.right.position = 0.58\nslide.position = 0.3"),
+            "automation[0].target",
+        ),
     ];
     for (text, key) in cases {
         let err = parse_scene(&text).expect_err(key).to_string();
         assert!(err.contains(key), "error for {key} does not name it: {err}");
     }
     // A slide position leaving the string in the automation.
-    let bad = slide.replacen("target = \"slide.position\"\npoints = [[0, ", "target = \"slide.position\"\npoints = [[0, 0.7], [0.01, ", 1);
+    let bad = slide.replacen(
+        "target = \"slide.position\"\npoints = [[0, ",
+        "target = \"slide.position\"\npoints = [[0, 0.7], [0.01, ",
+        1,
+    );
     assert_ne!(bad, slide, "the edit must apply");
     let err = parse_scene(&bad).expect_err("slide outside").to_string();
     assert!(err.contains("controls.slide.position") && err.contains("outside"), "{err}");

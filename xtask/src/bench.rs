@@ -68,7 +68,8 @@ pub enum BenchError {
 
 fn load(dir: &Path, name: &str) -> Result<SceneDescription, BenchError> {
     let path = dir.join(name);
-    let text = std::fs::read_to_string(&path).map_err(|e| BenchError::Scene(format!("cannot read {}: {e}", path.display())))?;
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| BenchError::Scene(format!("cannot read {}: {e}", path.display())))?;
     parse_scene(&text).map_err(|e| BenchError::Scene(format!("{}: {e}", path.display())))
 }
 

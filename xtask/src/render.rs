@@ -90,7 +90,8 @@ pub fn chunk_sizes(chunk: Option<usize>) -> Box<dyn Iterator<Item = usize>> {
 
 /// Run `render`, printing the summary line to `stdout`.
 pub fn run(args: &RenderArgs, stdout: &mut dyn Write) -> Result<Summary, RenderError> {
-    let text = fs::read_to_string(&args.scene).map_err(|source| RenderError::Read { path: args.scene.clone(), source })?;
+    let text =
+        fs::read_to_string(&args.scene).map_err(|source| RenderError::Read { path: args.scene.clone(), source })?;
     let scene = parse_scene(&text).map_err(|source| RenderError::Scene { path: args.scene.clone(), source })?;
     let wav_path = args.out.clone().unwrap_or_else(|| args.scene.with_extension("wav"));
     let csv_path = args.csv.then(|| wav_path.with_extension("csv"));
@@ -106,7 +107,9 @@ pub fn run(args: &RenderArgs, stdout: &mut dyn Write) -> Result<Summary, RenderE
     let rendered = render(&scene, chunk_sizes(args.chunk))
         .map_err(|source| RenderError::Scene { path: args.scene.clone(), source })?;
     let options = scene.common().output;
-    let wav = write_temp(&wav_path, |w| write_wav(w, &rendered, scene.common().sample_rate, options.normalize, options.gain))?;
+    let wav = write_temp(&wav_path, |w| {
+        write_wav(w, &rendered, scene.common().sample_rate, options.normalize, options.gain)
+    })?;
     let csv = match &csv_path {
         Some(path) => Some((write_temp(path, |w| write_csv(w, &rendered, scene.common().sample_rate))?, path)),
         None => None,
@@ -126,7 +129,10 @@ fn check_output_path(path: &Path, scene: &Path) -> Result<(), RenderError> {
         _ => false,
     };
     if same {
-        return Err(RenderError::Output(format!("refusing to overwrite the scene file {} with output", scene.display())));
+        return Err(RenderError::Output(format!(
+            "refusing to overwrite the scene file {} with output",
+            scene.display()
+        )));
     }
     let dir = parent_dir(path);
     if !dir.is_dir() {
@@ -169,10 +175,17 @@ fn persist(file: NamedTempFile, path: &Path) -> Result<(), RenderError> {
     Ok(())
 }
 
-fn write_wav(w: &mut impl Write, rendered: &Rendered, sample_rate: u32, normalize: bool, gain: f64) -> std::io::Result<()> {
+fn write_wav(
+    w: &mut impl Write,
+    rendered: &Rendered,
+    sample_rate: u32,
+    normalize: bool,
+    gain: f64,
+) -> std::io::Result<()> {
     let peak = rendered.frames.iter().fold(0.0_f64, |m, f| m.max(f.output.abs()));
     let scale = if normalize && peak > 0.0 { gain / peak } else { gain };
-    let spec = hound::WavSpec { channels: 1, sample_rate, bits_per_sample: 32, sample_format: hound::SampleFormat::Float };
+    let spec =
+        hound::WavSpec { channels: 1, sample_rate, bits_per_sample: 32, sample_format: hound::SampleFormat::Float };
     // hound needs Seek to patch the header; write into memory and copy out.
     let mut buffer = std::io::Cursor::new(Vec::with_capacity(44 + 4 * rendered.frames.len()));
     {

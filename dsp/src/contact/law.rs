@@ -152,8 +152,7 @@ mod tests {
     fn quadratised_potential_reproduces_the_force() {
         let law = PowerLaw::new(4.5e9, 2.5).unwrap();
         for &y in &[1e-6, 3e-5, 7.9e-4] {
-            let rel = (law.psi(y) * law.psi_gradient(y) - law.potential_slope(y)).abs()
-                / law.potential_slope(y);
+            let rel = (law.psi(y) * law.psi_gradient(y) - law.potential_slope(y)).abs() / law.potential_slope(y);
             assert!(rel < 1e-14, "psi*g != V' at y = {y}: rel {rel}");
         }
     }

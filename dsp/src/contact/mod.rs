@@ -173,12 +173,7 @@ pub trait WithSolver {
 impl SolverSettings {
     /// Build the solver these settings name on `law`, and hand it to `work`. `default_v_ref` (J)
     /// sizes the QSA fit when the settings give no V_ref.
-    pub fn build<W: WithSolver>(
-        &self,
-        law: PowerLaw,
-        default_v_ref: f64,
-        work: W,
-    ) -> Result<W::Output, ContactError> {
+    pub fn build<W: WithSolver>(&self, law: PowerLaw, default_v_ref: f64, work: W) -> Result<W::Output, ContactError> {
         Ok(match self.method {
             Method::Qsa => {
                 let v_ref = self.v_ref.unwrap_or(default_v_ref);

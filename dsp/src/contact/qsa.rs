@@ -96,7 +96,7 @@ impl QsaSolver {
 
     /// Upper bound on sign tests per step for this N and search (see the module docs).
     pub fn max_sign_tests(&self) -> u32 {
-        let log = (usize::BITS - self.spline.segments().leading_zeros()) as u32; // ⌈log2(N+1)⌉
+        let log = usize::BITS - self.spline.segments().leading_zeros(); // ⌈log2(N+1)⌉
         match self.search {
             SegmentSearch::Linear => self.spline.segments() as u32,
             SegmentSearch::Binary => log,
@@ -252,14 +252,7 @@ impl ContactSolver for QsaSolver {
         }
         let sp = &self.spline;
         let k = sp.segment_of(yp);
-        let st = StepData {
-            yp,
-            z,
-            q,
-            k,
-            v_yp: sp.segment_potential(k, yp),
-            g0: z + q * sp.segment_slope(k, yp),
-        };
+        let st = StepData { yp, z, q, k, v_yp: sp.segment_potential(k, yp), g0: z + q * sp.segment_slope(k, yp) };
         if st.g0 == 0.0 {
             self.last_segment = k;
             self.last_tests = 0;
@@ -313,8 +306,8 @@ mod tests {
 
     #[test]
     fn stable_roots_match_the_textbook_formula() {
-        for &(a, b, c) in &[(2.0, -3.0, -5.0), (1.0, 5.0, 6.0), (3.0, 1e8, -1.0), (1.0, -1e8, 1.0)] {
-            let d = ((b * b - 4.0 * a * c) as f64).sqrt();
+        for &(a, b, c) in &[(2.0_f64, -3.0_f64, -5.0_f64), (1.0, 5.0, 6.0), (3.0, 1e8, -1.0), (1.0, -1e8, 1.0)] {
+            let d = (b * b - 4.0 * a * c).sqrt();
             let (lo, hi) = ((-b - d) / (2.0 * a), (-b + d) / (2.0 * a));
             let (l, h) = (smaller_root(a, b, c), larger_root(a, b, c));
             // Each must be an accurate root: check the residual relative to the terms.

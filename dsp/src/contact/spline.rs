@@ -44,11 +44,7 @@ pub struct QuadSpline {
 impl QuadSpline {
     /// Fit N = `segments` quadratics over `[0, y_ref]`, with `y_ref` the compression at which the
     /// law stores `v_ref` joules (seed eq. 5).
-    pub fn from_reference_energy(
-        law: PowerLaw,
-        v_ref: f64,
-        segments: usize,
-    ) -> Result<Self, ContactError> {
+    pub fn from_reference_energy(law: PowerLaw, v_ref: f64, segments: usize) -> Result<Self, ContactError> {
         if !(v_ref.is_finite() && v_ref > 0.0) {
             return Err(ContactError::invalid("v_ref", "must be finite and > 0", v_ref));
         }

@@ -46,7 +46,13 @@ mod tests {
     /// The closed form equals the quadrature of eq. 52, including the mode at β W = π.
     #[test]
     fn window_factor_matches_quadrature() {
-        let params = StringParams { length: 0.65, tension: 100.0, linear_density: 4.9e-3, bending_stiffness: 0.0, damping: Damping::LOSSLESS };
+        let params = StringParams {
+            length: 0.65,
+            tension: 100.0,
+            linear_density: 4.9e-3,
+            bending_stiffness: 0.0,
+            damping: Damping::LOSSLESS,
+        };
         let string = ModalString::new(params, 44100.0).unwrap();
         // W = L/10 puts mode 10 exactly on the singularity β W = π.
         let width = 0.065;
@@ -57,7 +63,10 @@ mod tests {
             let quad: f64 = (0..n)
                 .map(|k| {
                     let x = -0.5 * width + (k as f64 + 0.5) * h;
-                    std::f64::consts::PI / (2.0 * width) * (std::f64::consts::PI * x / width).cos() * (beta * x).cos() * h
+                    std::f64::consts::PI / (2.0 * width)
+                        * (std::f64::consts::PI * x / width).cos()
+                        * (beta * x).cos()
+                        * h
                 })
                 .sum();
             assert!((f - quad).abs() < 1e-8, "mode {}: closed form {f}, quadrature {quad}", i + 1);

@@ -290,7 +290,10 @@ pub(super) fn fraction(key: &str, value: f64) -> Result<f64, SceneError> {
     if value.is_finite() && value > 0.0 && value < 1.0 {
         Ok(value)
     } else {
-        Err(SceneError::invalid(key, format!("must be a fraction of the length strictly between 0 and 1 (got {value})")))
+        Err(SceneError::invalid(
+            key,
+            format!("must be a fraction of the length strictly between 0 and 1 (got {value})"),
+        ))
     }
 }
 

@@ -10,8 +10,8 @@ mod strings;
 mod summary;
 
 pub use file::{
-    Common, FORMAT_VERSION, MAX_DURATION, MAX_SAMPLES, MAX_SEGMENTS, MassBarrierDescription, OutputOptions, SCENE_KINDS,
-    SceneDescription, parse_scene,
+    Common, FORMAT_VERSION, MAX_DURATION, MAX_SAMPLES, MAX_SEGMENTS, MassBarrierDescription, OutputOptions,
+    SCENE_KINDS, SceneDescription, parse_scene,
 };
 pub use strings::{HammerStringDescription, MAX_BLOCK, SlideStringDescription};
 pub use summary::{Summary, contact_intervals};

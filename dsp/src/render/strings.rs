@@ -162,15 +162,25 @@ impl StringTable {
                 let piano = match name {
                     "c4" => chaigne_askenfelt_c4(),
                     "piano-note" => {
-                        let note = self.note.ok_or_else(|| SceneError::invalid("string.note", "missing (preset \"piano-note\" needs a MIDI key)"))?;
+                        let note = self.note.ok_or_else(|| {
+                            SceneError::invalid("string.note", "missing (preset \"piano-note\" needs a MIDI key)")
+                        })?;
                         if !(0..=127).contains(&note) {
-                            return Err(SceneError::invalid("string.note", format!("must be a MIDI key 0 to 127 (got {note})")));
+                            return Err(SceneError::invalid(
+                                "string.note",
+                                format!("must be a MIDI key 0 to 127 (got {note})"),
+                            ));
                         }
                         piano_note(note as u8)
                     }
                     "slide-guitar" => {
                         let g = slide_guitar();
-                        let extras = PresetExtras { law: Some((g.kappa, g.alpha)), slide: Some(g.slide), fingers: Some((g.left, g.right)), ..Default::default() };
+                        let extras = PresetExtras {
+                            law: Some((g.kappa, g.alpha)),
+                            slide: Some(g.slide),
+                            fingers: Some((g.left, g.right)),
+                            ..Default::default()
+                        };
                         return self.with_overrides(Some(g.string)).map(|s| (s, extras));
                     }
                     other => {
@@ -260,7 +270,10 @@ impl Default for StringOutputTable {
 
 impl StringOutputTable {
     fn pickup(&self, default_kind: OutputKind) -> Result<Pickup, SceneError> {
-        Ok(Pickup { kind: self.kind.unwrap_or(default_kind), position: fraction("output.position", self.position.unwrap_or(0.9))? })
+        Ok(Pickup {
+            kind: self.kind.unwrap_or(default_kind),
+            position: fraction("output.position", self.position.unwrap_or(0.9))?,
+        })
     }
 
     fn options(&self) -> super::file::OutputTable {
@@ -432,17 +445,35 @@ impl SlideStringFile {
         let s = &self.slide;
         let slide = SlideParams {
             mass: positive("slide.mass", required("slide.mass", s.mass, preset_slide.map(|p| p.mass))?)?,
-            stiffness: non_negative("slide.stiffness", required("slide.stiffness", s.stiffness, preset_slide.map(|p| p.stiffness))?)?,
-            damping: non_negative("slide.damping", required("slide.damping", s.damping, preset_slide.map(|p| p.damping))?)?,
+            stiffness: non_negative(
+                "slide.stiffness",
+                required("slide.stiffness", s.stiffness, preset_slide.map(|p| p.stiffness))?,
+            )?,
+            damping: non_negative(
+                "slide.damping",
+                required("slide.damping", s.damping, preset_slide.map(|p| p.damping))?,
+            )?,
         };
         let (pl, pr) = (extras.fingers.map(|f| f.0), extras.fingers.map(|f| f.1));
         let f = &self.fingers;
         let r = non_negative("fingers.damping", required("fingers.damping", f.damping, pl.map(|p| p.damping))?)?;
-        let left = FingerParams { width: positive("fingers.left_width", required("fingers.left_width", f.left_width, pl.map(|p| p.width))?)?, damping: r };
-        let right = FingerParams { width: positive("fingers.right_width", required("fingers.right_width", f.right_width, pr.map(|p| p.width))?)?, damping: r };
+        let left = FingerParams {
+            width: positive("fingers.left_width", required("fingers.left_width", f.left_width, pl.map(|p| p.width))?)?,
+            damping: r,
+        };
+        let right = FingerParams {
+            width: positive(
+                "fingers.right_width",
+                required("fingers.right_width", f.right_width, pr.map(|p| p.width))?,
+            )?,
+            damping: r,
+        };
         let block = self.control.block.unwrap_or(64);
         if !(1..=MAX_BLOCK as i64).contains(&block) {
-            return Err(SceneError::invalid("control.block", format!("must be 1 to {MAX_BLOCK} samples (got {block})")));
+            return Err(SceneError::invalid(
+                "control.block",
+                format!("must be 1 to {MAX_BLOCK} samples (got {block})"),
+            ));
         }
         let controls = self.controls(string.length, common.sample_rate)?;
         let pickup = self.output.pickup(OutputKind::Displacement)?;
@@ -471,8 +502,12 @@ impl SlideStringFile {
                     format!("\"{}\" is automated and also given in [controls]; give one of them", entry.target),
                 ));
             }
-            let lane = Breakpoints::new(entry.points.clone())
-                .map_err(|e| SceneError::invalid(&format!("automation[{i}].points"), format!("{} ({}): {e}", entry.target, "time s, value")))?;
+            let lane = Breakpoints::new(entry.points.clone()).map_err(|e| {
+                SceneError::invalid(
+                    &format!("automation[{i}].points"),
+                    format!("{} ({}): {e}", entry.target, "time s, value"),
+                )
+            })?;
             lanes[index] = Some(lane);
         }
         let mut out = Vec::with_capacity(6);
@@ -491,7 +526,10 @@ impl SlideStringFile {
             if target.ends_with("position") {
                 for &(t, x) in lane.points() {
                     if !(x > 0.0 && x < length) {
-                        return Err(SceneError::invalid(&key, format!("position {x} m at t = {t} s is outside the string (0, {length}) m")));
+                        return Err(SceneError::invalid(
+                            &key,
+                            format!("position {x} m at t = {t} s is outside the string (0, {length}) m"),
+                        ));
                     }
                 }
             }

@@ -89,7 +89,9 @@ impl<S: ContactSolver> HammerString<S> {
         let gain: Vec<f64> = shape.iter().zip(string.input_gains()).map(|(h, c)| h * c).collect();
         let mut pickup = string.vector();
         match params.pickup.kind {
-            OutputKind::Displacement | OutputKind::Velocity => string.mode_shapes(params.pickup.position * length, &mut pickup),
+            OutputKind::Displacement | OutputKind::Velocity => {
+                string.mode_shapes(params.pickup.position * length, &mut pickup)
+            }
             OutputKind::BridgeForce => string.bridge_weights(false, &mut pickup),
         }
         let hammer = Hammer::new(&params.hammer, fs);
@@ -172,7 +174,6 @@ impl<S: ContactSolver> HammerString<S> {
         self.y_now = y_next;
         frame
     }
-
 }
 
 impl<S: ContactSolver> Scene for HammerString<S> {

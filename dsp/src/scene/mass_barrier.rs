@@ -81,7 +81,8 @@ impl<S: ContactSolver> MassBarrier<S> {
 
     #[inline]
     fn step(&mut self) -> Frame {
-        let problem = ContactProblem { y_prev: self.y_now - self.step, y_now: self.y_now, z: -2.0 * self.step, q: self.q };
+        let problem =
+            ContactProblem { y_prev: self.y_now - self.step, y_now: self.y_now, z: -2.0 * self.step, q: self.q };
         let solution = self.solver.solve(&problem);
         let step = solution.s - self.step;
         let y_next = self.y_now + step;

@@ -33,7 +33,8 @@
 //! [`ControlSource`] sampled at block boundaries every `N_b` samples. Within a block the hand
 //! height and finger forces ramp linearly; the vectors, θ and the projections are recomputed once
 //! per block from the positions at the block's start, and only when a position changed. With
-//! [`Fixed`](crate::control::Fixed) controls none of this code runs.
+//! [`Fixed`](crate::control::Fixed) controls none of this code runs. A finger whose force is zero
+//! throughout a block is left out of that block's passes over the modes.
 //!
 //! # Energy (seed eqs. 75–80)
 //!
@@ -69,6 +70,30 @@ pub struct SlideControls {
 impl SlideControls {
     fn positions(&self) -> [f64; 3] {
         [self.slide_position, self.left_position, self.right_position]
+    }
+}
+
+/// Which fingers touch the string during a block. A finger whose force is zero at both ends of
+/// a block (so throughout it) neither excites nor damps the string there (`F_φe = 0`, `γ_φ = 0`),
+/// so its projection and its share of the update are skipped for the block.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Fingers {
+    None,
+    Left,
+    Right,
+    Both,
+}
+
+impl Fingers {
+    fn touching(start: &SlideControls, end: &SlideControls) -> Self {
+        let left = start.left_force != 0.0 || end.left_force != 0.0;
+        let right = start.right_force != 0.0 || end.right_force != 0.0;
+        match (left, right) {
+            (false, false) => Fingers::None,
+            (true, false) => Fingers::Left,
+            (false, true) => Fingers::Right,
+            (true, true) => Fingers::Both,
+        }
     }
 }
 
@@ -121,6 +146,8 @@ pub struct SlideString<S, C> {
     hand: Ramp,
     left_force: Ramp,
     right_force: Ramp,
+    /// Which fingers touch the string anywhere in the current block.
+    fingers: Fingers,
     /// `w_H^{n−1}` (m).
     hand_prev: f64,
     y_prev: f64,
@@ -165,6 +192,7 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
             hand: Ramp::new(start.hand_height, target.hand_height, block),
             left_force: Ramp::new(start.left_force, target.left_force, block),
             right_force: Ramp::new(start.right_force, target.right_force, block),
+            fingers: Fingers::touching(&start, &target),
             hand_prev: start.hand_height,
             y_prev: 0.0,
             y_now: 0.0,
@@ -203,7 +231,9 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
     fn place(&mut self, positions: [f64; 3]) {
         let s = &self.string;
         let windows = [None, Some(&self.left_window), Some(&self.right_window)];
-        for ((shape, gain), (x, window)) in self.shapes.iter_mut().zip(&mut self.gains).zip(positions.into_iter().zip(windows)) {
+        for ((shape, gain), (x, window)) in
+            self.shapes.iter_mut().zip(&mut self.gains).zip(positions.into_iter().zip(windows))
+        {
             s.mode_shapes(x, shape);
             if let Some(w) = window {
                 shape.iter_mut().zip(w).for_each(|(h, w)| *h *= w);
@@ -230,6 +260,7 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
         self.hand = Ramp::new(s.hand_height, t.hand_height, len);
         self.left_force = Ramp::new(s.left_force, t.left_force, len);
         self.right_force = Ramp::new(s.right_force, t.right_force, len);
+        self.fingers = Fingers::touching(s, t);
         let positions = self.start.positions();
         if positions != self.positions {
             self.place(positions);
@@ -243,7 +274,24 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
         let (f_le, f_re) = (self.left_force.at(k), self.right_force.at(k));
         let th = &self.theta;
         let [sh_o, sh_l, sh_r] = &self.shapes;
-        let [z_o, z_l, z_r] = self.string.history([sh_o, sh_l, sh_r]);
+        let (z_o, z_l, z_r) = match self.fingers {
+            Fingers::None => {
+                let [z_o] = self.string.history([sh_o]);
+                (z_o, 0.0, 0.0)
+            }
+            Fingers::Left => {
+                let [z_o, z_l] = self.string.history([sh_o, sh_l]);
+                (z_o, z_l, 0.0)
+            }
+            Fingers::Right => {
+                let [z_o, z_r] = self.string.history([sh_o, sh_r]);
+                (z_o, 0.0, z_r)
+            }
+            Fingers::Both => {
+                let [z_o, z_l, z_r] = self.string.history([sh_o, sh_l, sh_r]);
+                (z_o, z_l, z_r)
+            }
+        };
         let e = [0, 1, 2].map(|a| th[a][1] * f_le + th[a][2] * f_re);
         let (d_l, d_r) = (e[1] - z_l, e[2] - z_r);
         let (g_l, g_r) = (self.r[0] * f_le.abs() / (2.0 * self.dt), self.r[1] * f_re.abs() / (2.0 * self.dt));
@@ -256,17 +304,20 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
         let z_str = z_o - e[0] + g_l * th[0][1] * s_l0 + g_r * th[0][2] * s_r0;
         let q_str = th[0][0] - g_l * th[0][1] * s_l1 - g_r * th[0][2] * s_r1;
         let z_sho = self.sho.history(&hand);
-        let problem = ContactProblem { y_prev: self.y_prev, y_now: self.y_now, z: z_str - z_sho, q: q_str + self.sho.coupling() };
+        let problem =
+            ContactProblem { y_prev: self.y_prev, y_now: self.y_now, z: z_str - z_sho, q: q_str + self.sho.coupling() };
         let solution = self.solver.solve(&problem);
         let force = solution.force;
         let y_next = self.y_prev + solution.s;
         let (s_l, s_r) = (s_l0 + s_l1 * force, s_r0 + s_r1 * force);
         let [g_o, g_lf, g_rf] = &self.gains;
-        let forces = [(&g_o[..], force), (&g_lf[..], f_le - g_l * s_l), (&g_rf[..], f_re - g_r * s_r)];
-        let (out_next, string_energy) = if MONITOR {
-            self.string.advance_monitored(forces, &self.pickup)
-        } else {
-            (self.string.advance(forces, &self.pickup), Default::default())
+        let (o, l, r) = ((&g_o[..], force), (&g_lf[..], f_le - g_l * s_l), (&g_rf[..], f_re - g_r * s_r));
+        let (out_next, string_energy) = match (MONITOR, self.fingers) {
+            (true, _) => self.string.advance_monitored([o, l, r], &self.pickup),
+            (false, Fingers::None) => (self.string.advance([o], &self.pickup), Default::default()),
+            (false, Fingers::Left) => (self.string.advance([o, l], &self.pickup), Default::default()),
+            (false, Fingers::Right) => (self.string.advance([o, r], &self.pickup), Default::default()),
+            (false, Fingers::Both) => (self.string.advance([o, l, r], &self.pickup), Default::default()),
         };
         let w_now = self.sho.position();
         let exchanged = self.sho.advance(z_sho, force, &hand);
@@ -319,7 +370,6 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
             done += run;
         }
     }
-
 }
 
 impl<S: ContactSolver, C: ControlSource<SlideControls>> Scene for SlideString<S, C> {
@@ -345,8 +395,14 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// The control target names used by scene files and automation.
-pub const CONTROL_TARGETS: [&str; 6] =
-    ["slide.position", "hand.height", "finger.left.position", "finger.left.force", "finger.right.position", "finger.right.force"];
+pub const CONTROL_TARGETS: [&str; 6] = [
+    "slide.position",
+    "hand.height",
+    "finger.left.position",
+    "finger.left.force",
+    "finger.right.position",
+    "finger.right.force",
+];
 
 /// Slide controls from breakpoint automation, one lane per target (in [`CONTROL_TARGETS`]
 /// order), evaluated at `t = n/fs`.

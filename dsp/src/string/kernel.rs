@@ -15,17 +15,22 @@ use multiversion::multiversion;
 /// Modes per chunk; arrays are padded to a multiple of it.
 pub const LANES: usize = 8;
 
-/// Sum of the lane partial sums, in a fixed order.
+/// Sum of the lane partial sums, in a fixed order: the halving tree of a vector reduction
+/// (lanes `i` and `i+4`, then `i` and `i+2`, then the last two), which SIMD code can follow
+/// without shuffling lanes inside the loop.
 #[inline(always)]
 pub fn lane_sum(acc: [f64; LANES]) -> f64 {
-    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]))
+    ((acc[0] + acc[4]) + (acc[2] + acc[6])) + ((acc[1] + acc[5]) + (acc[3] + acc[7]))
 }
 
-/// `aᵀb` with [`LANES`] partial sums combined in a fixed order.
+/// `aᵀb` with [`LANES`] partial sums combined in a fixed order. The slices have equal length,
+/// a multiple of [`LANES`].
 #[inline(always)]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     let mut acc = [0.0; LANES];
-    for (x, y) in a.chunks_exact(LANES).zip(b.chunks_exact(LANES)) {
+    for c in (0..a.len()).step_by(LANES) {
+        let x: [f64; LANES] = a[c..c + LANES].try_into().expect("whole chunks");
+        let y: [f64; LANES] = b[c..c + LANES].try_into().expect("whole chunks");
         for l in 0..LANES {
             acc[l] += x[l] * y[l];
         }

@@ -61,8 +61,6 @@ pub const FLUSH_BELOW: f64 = 1e-30;
 /// render is split into calls).
 pub const FLUSH_INTERVAL: u32 = 64;
 
-
-
 /// How the modal decay rates `σ_i` (1/s) are set.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(tag = "law", rename_all = "kebab-case")]
@@ -149,7 +147,11 @@ impl StringParams {
     /// Check every parameter, naming the first invalid one.
     pub fn validate(&self) -> Result<(), StringError> {
         let positive = |key, v: f64| {
-            if v.is_finite() && v > 0.0 { Ok(()) } else { Err(StringError { key, reason: format!("must be finite and > 0 (got {v})") }) }
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(StringError { key, reason: format!("must be finite and > 0 (got {v})") })
+            }
         };
         positive("length", self.length)?;
         positive("tension", self.tension)?;
@@ -226,7 +228,10 @@ impl ModalString {
             return Err(StringError { key: "max_frequency", reason: format!("must be > 0 (got {max_frequency})") });
         }
         if !(sample_rate.is_finite() && sample_rate > 0.0) {
-            return Err(StringError { key: "sample_rate", reason: format!("must be finite and > 0 (got {sample_rate})") });
+            return Err(StringError {
+                key: "sample_rate",
+                reason: format!("must be finite and > 0 (got {sample_rate})"),
+            });
         }
         let dt = 1.0 / sample_rate;
         let nyquist = std::f64::consts::PI * sample_rate.min(2.0 * max_frequency);
@@ -262,7 +267,9 @@ impl ModalString {
             if i > MAX_MODES {
                 return Err(StringError {
                     key: "length",
-                    reason: format!("the string has more than {MAX_MODES} modes below Nyquist; shorten it or raise the tension"),
+                    reason: format!(
+                        "the string has more than {MAX_MODES} modes below Nyquist; shorten it or raise the tension"
+                    ),
                 });
             }
             let decay = (-sigma * dt).exp();
@@ -417,7 +424,11 @@ impl ModalString {
     }
 
     /// [`advance`](Self::advance), also returning the string's energy terms for this step.
-    pub fn advance_monitored<const K: usize>(&mut self, forces: [(&[f64], f64); K], output: &[f64]) -> (f64, StringEnergy) {
+    pub fn advance_monitored<const K: usize>(
+        &mut self,
+        forces: [(&[f64], f64); K],
+        output: &[f64],
+    ) -> (f64, StringEnergy) {
         let (projection, [step2, k_sum2, r_diff2]) = kernel::advance_monitored(
             &mut self.u_prev,
             &self.u_now,
