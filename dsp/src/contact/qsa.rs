@@ -89,6 +89,11 @@ impl QsaSolver {
         &self.spline
     }
 
+    /// The spline, to refit in place (for example for a new strike's reference energy).
+    pub fn spline_mut(&mut self) -> &mut QuadSpline {
+        &mut self.spline
+    }
+
     /// The segment that held `y^{n+1}` in the last step (0 = no contact).
     pub fn last_segment(&self) -> usize {
         self.last_segment

@@ -53,6 +53,31 @@ impl QuadSpline {
 
     /// Fit N = `segments` quadratics over `[0, y_ref]` (m).
     pub fn new(law: PowerLaw, y_ref: f64, segments: usize) -> Result<Self, ContactError> {
+        let mut spline = Self::with_capacity(law, segments);
+        spline.refit(law, y_ref, segments)?;
+        Ok(spline)
+    }
+
+    /// A spline with room for `segments` segments, fitted with one segment over 1 mm until
+    /// [`refit`](Self::refit) says otherwise.
+    pub fn with_capacity(law: PowerLaw, segments: usize) -> Self {
+        let n = segments.max(1) + 1;
+        let mut spline = Self {
+            law,
+            dy: 1e-3,
+            segments: 1,
+            knot_potential: Vec::with_capacity(n),
+            knot_slope: Vec::with_capacity(n),
+            curvature: Vec::with_capacity(n),
+        };
+        spline.refit(law, 1e-3, 1).expect("one segment over 1 mm is always a valid fit");
+        spline
+    }
+
+    /// Refit in place: N = `segments` quadratics over `[0, y_ref]` (m) for `law`. Never allocates
+    /// while `segments` is within the capacity the spline was made with. On error the spline is
+    /// left unchanged.
+    pub fn refit(&mut self, law: PowerLaw, y_ref: f64, segments: usize) -> Result<(), ContactError> {
         if segments == 0 {
             return Err(ContactError::invalid("segments", "must be >= 1", 0.0));
         }
@@ -64,20 +89,32 @@ impl QuadSpline {
             ));
         }
         let dy = y_ref / segments as f64;
-        let n = segments;
-        let mut knot_potential = vec![0.0; n + 1];
-        let mut knot_slope = vec![0.0; n + 1];
-        let mut curvature = vec![0.0; n + 1];
-        for j in 1..=n {
-            knot_potential[j] = law.potential(j as f64 * dy);
-            let a = (knot_potential[j] - knot_potential[j - 1] - knot_slope[j - 1] * dy) / (dy * dy);
+        // Check convexity before touching the fit, so a failure leaves it intact.
+        let (mut vk, mut d) = (0.0, 0.0);
+        for j in 1..=segments {
+            let next = law.potential(j as f64 * dy);
+            let a = (next - vk - d * dy) / (dy * dy);
             if !(a.is_finite() && a > 0.0) {
                 return Err(ContactError::NotConvex { segment: j, curvature: a });
             }
-            curvature[j] = a;
-            knot_slope[j] = knot_slope[j - 1] + 2.0 * a * dy;
+            vk = next;
+            d += 2.0 * a * dy;
         }
-        Ok(Self { law, dy, segments, knot_potential, knot_slope, curvature })
+        let n = segments;
+        for v in [&mut self.knot_potential, &mut self.knot_slope, &mut self.curvature] {
+            v.clear();
+            v.resize(n + 1, 0.0);
+        }
+        for j in 1..=n {
+            self.knot_potential[j] = law.potential(j as f64 * dy);
+            let a = (self.knot_potential[j] - self.knot_potential[j - 1] - self.knot_slope[j - 1] * dy) / (dy * dy);
+            self.curvature[j] = a;
+            self.knot_slope[j] = self.knot_slope[j - 1] + 2.0 * a * dy;
+        }
+        self.law = law;
+        self.dy = dy;
+        self.segments = n;
+        Ok(())
     }
 
     /// The power law this spline approximates.

@@ -55,9 +55,66 @@ pub struct HammerStringParams {
 /// The hammer–string scene, generic over its contact solver.
 #[derive(Debug, Clone)]
 pub struct HammerString<S> {
+    core: HammerCore,
+    solver: S,
+    initial_energy: f64,
+}
+
+impl<S: ContactSolver> HammerString<S> {
+    /// Prepare the scene: the string at rest, the hammer `gap` away and moving in.
+    /// `string` must be prepared at the scene's sample rate.
+    pub fn new(string: ModalString, params: &HammerStringParams, mut solver: S) -> Self {
+        let core = HammerCore::new(string, params);
+        let (y_prev, y_now) = core.compressions();
+        solver.start(y_prev, y_now);
+        let initial_energy = core.energy() + solver.stored_energy(y_now, y_prev);
+        Self { core, solver, initial_energy }
+    }
+
+    /// The string.
+    pub fn string(&self) -> &ModalString {
+        &self.core.string
+    }
+
+    /// The contact solver.
+    pub fn solver(&self) -> &S {
+        &self.solver
+    }
+
+    /// The coupling `q = hᵀCh + ξ_h` (m/N).
+    pub fn coupling(&self) -> f64 {
+        self.core.q
+    }
+}
+
+impl<S: ContactSolver> Scene for HammerString<S> {
+    fn sample_rate(&self) -> f64 {
+        self.core.string.sample_rate()
+    }
+
+    fn initial_energy(&self) -> f64 {
+        self.initial_energy
+    }
+
+    fn process(&mut self, frames: &mut [Frame]) {
+        for frame in frames {
+            *frame = self.core.step::<S, true>(&mut self.solver);
+        }
+    }
+
+    fn process_output(&mut self, out: &mut [f64]) {
+        self.core.process_output(&mut self.solver, out);
+    }
+}
+
+/// Everything of a hammer–string scene except the solver: string, hammer, contact and output
+/// vectors. An instrument voice keeps one core and one solver of each kind, and picks the solver
+/// once per block; [`retune`](Self::retune) and [`strike`](Self::strike) reuse the core for a new
+/// note without allocating.
+#[derive(Debug, Clone)]
+pub struct HammerCore {
     string: ModalString,
     hammer: Hammer,
-    solver: S,
     /// `h_i = sin(β_i x_h)` (dimensionless).
     shape: Vec<f64>,
     /// `C_i h_i` (m/N).
@@ -74,50 +131,88 @@ pub struct HammerString<S> {
     out_now: f64,
     /// Energy dissipated so far (J).
     losses: f64,
-    initial_energy: f64,
     dt: f64,
 }
 
-impl<S: ContactSolver> HammerString<S> {
-    /// Prepare the scene: the string at rest, the hammer `gap` away and moving in.
-    /// `string` must be prepared at the scene's sample rate.
-    pub fn new(string: ModalString, params: &HammerStringParams, mut solver: S) -> Self {
+impl HammerCore {
+    /// A core around `string` (prepared at the scene's sample rate), the hammer `gap` away and
+    /// moving in. The vectors get room for the string's capacity.
+    pub fn new(string: ModalString, params: &HammerStringParams) -> Self {
         let fs = string.sample_rate();
-        let length = string.params().length;
-        let mut shape = string.vector();
-        string.mode_shapes(params.hammer.position * length, &mut shape);
-        let gain: Vec<f64> = shape.iter().zip(string.input_gains()).map(|(h, c)| h * c).collect();
-        let mut pickup = string.vector();
-        match params.pickup.kind {
-            OutputKind::Displacement | OutputKind::Velocity => {
-                string.mode_shapes(params.pickup.position * length, &mut pickup)
-            }
-            OutputKind::BridgeForce => string.bridge_weights(false, &mut pickup),
-        }
         let hammer = Hammer::new(&params.hammer, fs);
-        let q = shape.iter().zip(&gain).map(|(h, g)| h * g).sum::<f64>() + hammer.coupling();
-        let project = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(a, b)| a * b).sum::<f64>();
-        let y_prev = project(string.previous_state(), &shape) - hammer.previous();
-        let y_now = project(string.state(), &shape) - hammer.position();
-        solver.start(y_prev, y_now);
-        let out_now = project(string.state(), &pickup);
-        let initial_energy = string.energy() + hammer.energy() + solver.stored_energy(y_now, y_prev);
-        Self {
+        let mut core = Self {
+            shape: string.vector(),
+            gain: string.vector(),
+            pickup: string.vector(),
+            kind: params.pickup.kind,
+            q: 0.0,
+            y_prev: 0.0,
+            y_now: 0.0,
+            out_now: 0.0,
+            losses: 0.0,
+            dt: 1.0 / fs,
             string,
             hammer,
-            solver,
-            shape,
-            gain,
-            pickup,
-            kind: params.pickup.kind,
-            q,
-            y_prev,
-            y_now,
-            out_now,
-            losses: 0.0,
-            initial_energy,
-            dt: 1.0 / fs,
+        };
+        core.place(params.hammer.position, params.pickup);
+        core
+    }
+
+    /// Compute the contact and output vectors, `q` and the compressions for the current string.
+    fn place(&mut self, hammer_position: f64, pickup: Pickup) {
+        let s = &self.string;
+        let length = s.params().length;
+        for v in [&mut self.shape, &mut self.gain, &mut self.pickup] {
+            s.fit_vector(v);
         }
+        s.mode_shapes(hammer_position * length, &mut self.shape);
+        for ((g, h), c) in self.gain.iter_mut().zip(&self.shape).zip(s.input_gains()) {
+            *g = h * c;
+        }
+        match pickup.kind {
+            OutputKind::Displacement | OutputKind::Velocity => s.mode_shapes(pickup.position * length, &mut self.pickup),
+            OutputKind::BridgeForce => s.bridge_weights(false, &mut self.pickup),
+        }
+        self.kind = pickup.kind;
+        self.q = dot(&self.shape, &self.gain) + self.hammer.coupling();
+        self.measure();
+    }
+
+    /// Recompute the compressions and the output from the state.
+    fn measure(&mut self) {
+        self.y_prev = dot(self.string.previous_state(), &self.shape) - self.hammer.previous();
+        self.y_now = dot(self.string.state(), &self.shape) - self.hammer.position();
+        self.out_now = dot(self.string.state(), &self.pickup);
+    }
+
+    /// Re-prepare for another string (at rest) and striking point without allocating; see
+    /// [`ModalString::retune`]. The hammer is left where it is: follow with [`strike`](Self::strike).
+    pub fn retune(
+        &mut self,
+        string: StringParams,
+        max_frequency: f64,
+        hammer_position: f64,
+        pickup: Pickup,
+    ) -> Result<(), crate::string::StringError> {
+        let fs = self.string.sample_rate();
+        self.string.retune(string, fs, max_frequency)?;
+        self.losses = 0.0;
+        self.place(hammer_position, pickup);
+        Ok(())
+    }
+
+    /// Throw the hammer again: `gap` away and moving in at `velocity`, with `mass`; the string
+    /// keeps its motion. Restart the solver with [`compressions`](Self::compressions) afterwards.
+    pub fn strike(&mut self, hammer: &HammerParams) {
+        let old_coupling = self.hammer.coupling();
+        self.hammer = Hammer::new(hammer, self.string.sample_rate());
+        self.q += self.hammer.coupling() - old_coupling;
+        self.measure();
+    }
+
+    /// `(y^{n−1}, y^n)` (m), to start a solver from.
+    pub fn compressions(&self) -> (f64, f64) {
+        (self.y_prev, self.y_now)
     }
 
     /// The string.
@@ -125,22 +220,28 @@ impl<S: ContactSolver> HammerString<S> {
         &self.string
     }
 
-    /// The contact solver.
-    pub fn solver(&self) -> &S {
-        &self.solver
+    /// The string, to damp it.
+    pub fn string_mut(&mut self) -> &mut ModalString {
+        &mut self.string
     }
 
-    /// The coupling `q = hᵀCh + ξ_h` (m/N).
-    pub fn coupling(&self) -> f64 {
-        self.q
+    /// String and hammer energy of the current state (J), without the contact term.
+    pub fn energy(&self) -> f64 {
+        self.string.energy() + self.hammer.energy()
     }
 
+    /// Whether the felt is touching or about to: compression above zero now or one step back.
+    pub fn in_contact(&self) -> bool {
+        self.y_now > 0.0 || self.y_prev > 0.0
+    }
+
+    /// One step with `solver`.
     #[inline]
-    fn step<const MONITOR: bool>(&mut self) -> Frame {
+    pub fn step<S: ContactSolver, const MONITOR: bool>(&mut self, solver: &mut S) -> Frame {
         let [hz] = self.string.history([&self.shape]);
         let z_h = self.hammer.history();
         let problem = ContactProblem { y_prev: self.y_prev, y_now: self.y_now, z: hz - z_h, q: self.q };
-        let solution = self.solver.solve(&problem);
+        let solution = solver.solve(&problem);
         let y_next = self.y_prev + solution.s;
         let forces = [(&self.gain[..], solution.force)];
         let (out_next, string_energy) = if MONITOR {
@@ -162,11 +263,11 @@ impl<S: ContactSolver> HammerString<S> {
             force: solution.force,
             energy: 0.0,
             losses: 0.0,
-            work: self.solver.last_work(),
+            work: solver.last_work(),
         };
         if MONITOR {
             self.losses += string_energy.dissipated;
-            frame.energy = string_energy.stored + self.hammer.energy() + self.solver.stored_energy(y_next, self.y_now);
+            frame.energy = string_energy.stored + self.hammer.energy() + solver.stored_energy(y_next, self.y_now);
             frame.losses = self.losses;
         }
         self.out_now = out_next;
@@ -174,26 +275,15 @@ impl<S: ContactSolver> HammerString<S> {
         self.y_now = y_next;
         frame
     }
+
+    /// Advance `out.len()` samples with `solver`, writing only the output.
+    pub fn process_output<S: ContactSolver>(&mut self, solver: &mut S, out: &mut [f64]) {
+        for o in out {
+            *o = self.step::<S, false>(solver).output;
+        }
+    }
 }
 
-impl<S: ContactSolver> Scene for HammerString<S> {
-    fn sample_rate(&self) -> f64 {
-        self.string.sample_rate()
-    }
-
-    fn initial_energy(&self) -> f64 {
-        self.initial_energy
-    }
-
-    fn process(&mut self, frames: &mut [Frame]) {
-        for frame in frames {
-            *frame = self.step::<true>();
-        }
-    }
-
-    fn process_output(&mut self, out: &mut [f64]) {
-        for o in out {
-            *o = self.step::<false>().output;
-        }
-    }
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }

@@ -9,7 +9,7 @@ mod hammer_string;
 mod mass_barrier;
 mod slide_string;
 
-pub use hammer_string::{HammerString, HammerStringParams, OutputKind, Pickup};
+pub use hammer_string::{HammerCore, HammerString, HammerStringParams, OutputKind, Pickup};
 pub use mass_barrier::{MassBarrier, MassBarrierParams};
 pub use slide_string::{CONTROL_TARGETS, SlideAutomation, SlideControls, SlideString, SlideStringParams};
 

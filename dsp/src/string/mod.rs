@@ -171,6 +171,71 @@ impl StringParams {
     }
 }
 
+fn check_rates(sample_rate: f64, max_frequency: f64) -> Result<(), StringError> {
+    if !(sample_rate.is_finite() && sample_rate > 0.0) {
+        return Err(StringError { key: "sample_rate", reason: format!("must be finite and > 0 (got {sample_rate})") });
+    }
+    if !(max_frequency > 0.0) {
+        return Err(StringError { key: "max_frequency", reason: format!("must be > 0 (got {max_frequency})") });
+    }
+    Ok(())
+}
+
+/// One mode of a string: wavenumber (1/m), undamped and damped angular frequencies (rad/s),
+/// decay rate (1/s).
+#[derive(Debug, Clone, Copy)]
+struct Mode {
+    beta: f64,
+    omega0: f64,
+    omega: f64,
+    sigma: f64,
+    underdamped: bool,
+}
+
+/// The modes of a string that ring strictly below Nyquist and a frequency limit, in order.
+/// `ω_i` increases with `i`, so the sequence stops at the first mode that fails (an overdamped
+/// mode, which does not ring, is kept while `ω0_i` is below the limit).
+struct ModeCounter<'a> {
+    params: &'a StringParams,
+    /// π·min(fs, 2 f_max) (rad/s).
+    limit: f64,
+    i: usize,
+}
+
+impl<'a> ModeCounter<'a> {
+    fn new(params: &'a StringParams, sample_rate: f64, max_frequency: f64) -> Self {
+        Self { params, limit: std::f64::consts::PI * sample_rate.min(2.0 * max_frequency), i: 0 }
+    }
+
+    /// Number of modes, counting at most `MAX_MODES + 1`.
+    fn count(mut self) -> usize {
+        let mut n = 0;
+        while n <= MAX_MODES && self.next().is_some() {
+            n += 1;
+        }
+        n
+    }
+}
+
+impl Iterator for ModeCounter<'_> {
+    type Item = Mode;
+
+    fn next(&mut self) -> Option<Mode> {
+        let p = self.params;
+        self.i += 1;
+        let beta = self.i as f64 * std::f64::consts::PI / p.length;
+        let b2 = beta * beta;
+        let omega0 = ((p.tension * b2 + p.bending_stiffness * b2 * b2) / p.linear_density).sqrt();
+        let sigma = p.damping.sigma(beta, omega0);
+        let underdamped = sigma < omega0;
+        let omega = if underdamped { (omega0 * omega0 - sigma * sigma).sqrt() } else { 0.0 };
+        if !(omega < self.limit) || !omega0.is_finite() || (!underdamped && omega0 >= self.limit) {
+            return None;
+        }
+        Some(Mode { beta, omega0, omega, sigma, underdamped })
+    }
+}
+
 /// A modal string prepared for one sample rate: coefficients and state.
 #[derive(Debug, Clone)]
 pub struct ModalString {
@@ -223,80 +288,98 @@ impl ModalString {
     /// `max_frequency` (Hz). With the same `max_frequency` at every sample rate (below the
     /// lowest Nyquist in use), the string has the same modes, and so the same sound, at all of them.
     pub fn band_limited(params: StringParams, sample_rate: f64, max_frequency: f64) -> Result<Self, StringError> {
+        check_rates(sample_rate, max_frequency)?;
         params.validate()?;
-        if !(max_frequency > 0.0) {
-            return Err(StringError { key: "max_frequency", reason: format!("must be > 0 (got {max_frequency})") });
-        }
-        if !(sample_rate.is_finite() && sample_rate > 0.0) {
+        let count = ModeCounter::new(&params, sample_rate, max_frequency).count();
+        if count > MAX_MODES {
             return Err(StringError {
-                key: "sample_rate",
-                reason: format!("must be finite and > 0 (got {sample_rate})"),
+                key: "length",
+                reason: format!(
+                    "the string has more than {MAX_MODES} modes below Nyquist; shorten it or raise the tension"
+                ),
             });
         }
-        let dt = 1.0 / sample_rate;
-        let nyquist = std::f64::consts::PI * sample_rate.min(2.0 * max_frequency);
-        let modal_mass = 0.5 * params.linear_density * params.length;
-        let mut s = Self {
-            params,
-            sample_rate,
-            modal_mass,
-            beta: Vec::new(),
-            omega0: Vec::new(),
-            sigma: Vec::new(),
-            coef_a: Vec::new(),
-            coef_b: Vec::new(),
-            coef_c: Vec::new(),
-            stiffness: Vec::new(),
-            resistance: Vec::new(),
-            u_prev: Vec::new(),
-            u_now: Vec::new(),
-            history: Vec::new(),
+        let mut s = Self::with_capacity(count);
+        s.retune(params, sample_rate, max_frequency)?;
+        Ok(s)
+    }
+
+    /// An empty string (no modes) with room for `modes` modes, so that later
+    /// [`retune`](Self::retune)s never allocate.
+    pub fn with_capacity(modes: usize) -> Self {
+        let padded = modes.div_ceil(LANES) * LANES;
+        let v = || Vec::with_capacity(padded);
+        Self {
+            params: StringParams { length: 1.0, tension: 1.0, linear_density: 1.0, bending_stiffness: 0.0, damping: Damping::LOSSLESS },
+            sample_rate: 1.0,
+            modal_mass: 0.5,
+            beta: v(),
+            omega0: v(),
+            sigma: v(),
+            coef_a: v(),
+            coef_b: v(),
+            coef_c: v(),
+            stiffness: v(),
+            resistance: v(),
+            u_prev: v(),
+            u_now: v(),
+            history: v(),
             since_flush: 0,
-        };
-        for i in 1.. {
-            let beta = i as f64 * std::f64::consts::PI / params.length;
-            let b2 = beta * beta;
-            let omega0 = ((params.tension * b2 + params.bending_stiffness * b2 * b2) / params.linear_density).sqrt();
-            let sigma = params.damping.sigma(beta, omega0);
-            let underdamped = sigma < omega0;
-            let omega = if underdamped { (omega0 * omega0 - sigma * sigma).sqrt() } else { 0.0 };
-            // Keep modes ringing strictly below Nyquist; an overdamped mode counts by ω0.
-            if !(omega < nyquist) || !(omega0.is_finite()) || (!underdamped && omega0 >= nyquist) {
-                break;
-            }
-            if i > MAX_MODES {
-                return Err(StringError {
-                    key: "length",
-                    reason: format!(
-                        "the string has more than {MAX_MODES} modes below Nyquist; shorten it or raise the tension"
-                    ),
-                });
-            }
-            let decay = (-sigma * dt).exp();
-            let p = if underdamped {
-                decay * (omega * dt).cos()
+        }
+    }
+
+    /// Most modes this string can hold without allocating.
+    pub fn capacity(&self) -> usize {
+        self.coef_a.capacity() / LANES * LANES
+    }
+
+    /// Re-prepare the string in place for new parameters: every mode below Nyquist and
+    /// `max_frequency` (Hz), up to [`capacity`](Self::capacity) (higher modes are dropped), at rest.
+    /// Never allocates.
+    pub fn retune(&mut self, params: StringParams, sample_rate: f64, max_frequency: f64) -> Result<(), StringError> {
+        check_rates(sample_rate, max_frequency)?;
+        params.validate()?;
+        let dt = 1.0 / sample_rate;
+        let modal_mass = 0.5 * params.linear_density * params.length;
+        let limit = self.capacity();
+        let all = [&mut self.beta, &mut self.omega0, &mut self.sigma, &mut self.coef_a, &mut self.coef_b];
+        all.into_iter().for_each(Vec::clear);
+        for v in [&mut self.coef_c, &mut self.stiffness, &mut self.resistance] {
+            v.clear();
+        }
+        let mut counter = ModeCounter::new(&params, sample_rate, max_frequency);
+        while self.beta.len() < limit {
+            let Some(mode) = counter.next() else { break };
+            let decay = (-mode.sigma * dt).exp();
+            let p = if mode.underdamped {
+                decay * (mode.omega * dt).cos()
             } else {
-                decay * ((sigma * sigma - omega0 * omega0).sqrt() * dt).cosh()
+                decay * ((mode.sigma * mode.sigma - mode.omega0 * mode.omega0).sqrt() * dt).cosh()
             };
             let q = decay * decay;
             let den = 1.0 + 2.0 * p + q;
-            s.beta.push(beta);
-            s.omega0.push(omega0);
-            s.sigma.push(sigma);
-            s.coef_a.push(2.0 * p);
-            s.coef_b.push(1.0 + q);
-            s.coef_c.push(dt * dt * den / (4.0 * modal_mass));
-            s.stiffness.push(4.0 * modal_mass / (dt * dt) * (1.0 - 2.0 * p + q) / den);
-            s.resistance.push(4.0 * modal_mass / dt * (1.0 - q) / den);
+            self.beta.push(mode.beta);
+            self.omega0.push(mode.omega0);
+            self.sigma.push(mode.sigma);
+            self.coef_a.push(2.0 * p);
+            self.coef_b.push(1.0 + q);
+            self.coef_c.push(dt * dt * den / (4.0 * modal_mass));
+            self.stiffness.push(4.0 * modal_mass / (dt * dt) * (1.0 - 2.0 * p + q) / den);
+            self.resistance.push(4.0 * modal_mass / dt * (1.0 - q) / den);
         }
-        let padded = s.beta.len().div_ceil(LANES) * LANES;
-        for v in [&mut s.coef_a, &mut s.coef_b, &mut s.coef_c, &mut s.stiffness, &mut s.resistance] {
+        let padded = self.beta.len().div_ceil(LANES) * LANES;
+        for v in [&mut self.coef_a, &mut self.coef_b, &mut self.coef_c, &mut self.stiffness, &mut self.resistance] {
             v.resize(padded, 0.0);
         }
-        s.u_prev = vec![0.0; padded];
-        s.u_now = vec![0.0; padded];
-        s.history = vec![0.0; padded];
-        Ok(s)
+        for v in [&mut self.u_prev, &mut self.u_now, &mut self.history] {
+            v.clear();
+            v.resize(padded, 0.0);
+        }
+        self.params = params;
+        self.sample_rate = sample_rate;
+        self.modal_mass = modal_mass;
+        self.since_flush = 0;
+        Ok(())
     }
 
     /// The physical parameters.
@@ -320,9 +403,19 @@ impl ModalString {
     }
 
     /// A zero vector of [`padded_len`](Self::padded_len) entries, for mode shapes, gains and
-    /// output weights.
+    /// output weights, with room for [`capacity`](Self::capacity) modes so that it can follow
+    /// later [`retune`](Self::retune)s without allocating (see [`fit_vector`](Self::fit_vector)).
     pub fn vector(&self) -> Vec<f64> {
-        vec![0.0; self.padded_len()]
+        let mut v = Vec::with_capacity(self.capacity().max(self.padded_len()));
+        v.resize(self.padded_len(), 0.0);
+        v
+    }
+
+    /// Resize `v` (made by [`vector`](Self::vector)) to the current [`padded_len`](Self::padded_len),
+    /// zeroed. Does not allocate within the string's capacity.
+    pub fn fit_vector(&self, v: &mut Vec<f64>) {
+        v.clear();
+        v.resize(self.padded_len(), 0.0);
     }
 
     /// Modal mass m̃ = ρAL/2 (kg).
