@@ -10,6 +10,7 @@
 //! - [`string`]: the modal stiff string with exact per-mode coefficients.
 //! - [`exciter`]: the hammer (and the slide and fingers).
 //! - [`scene`]: physical set-ups built from a solver and bodies; each holds only what it needs.
+//! - [`instrument`]: the playable engine: a voice pool driven by note and controller events.
 //! - [`render`]: scene files (TOML), offline rendering in calls of any size, and the summary
 //!   of a render.
 //!
@@ -36,6 +37,7 @@
 pub mod contact;
 pub mod control;
 pub mod exciter;
+pub mod instrument;
 pub mod preset;
 pub mod render;
 pub mod scene;

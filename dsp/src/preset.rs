@@ -14,11 +14,11 @@
 //! For MIDI key `k` (0..=127), `f0 = 440·2^((k−69)/12)` Hz (equal temperament) and:
 //! - length `L = 0.62·2^(−e(k−60)/12)` m with `e = 0.9` above C4 and `e = 0.45` below (bass
 //!   strings are wound, so they grow more slowly), clamped to 1.9 m;
-//! - tension `T = 670 N` for every key, and `ρA = T/(2Lf0)²` so the flexible-string fundamental
-//!   is exactly `f0`;
 //! - inharmonicity `B` log-linear through the Chaigne–Askenfelt anchors C2 (key 36) 7.4e-5,
 //!   C4 (60) 3.77e-4 and C7 (96) 8.56e-3 (extrapolated, clamped to [1e-5, 0.05]);
 //!   `EI = B T L²/π²`;
+//! - tension `T = 670 N` for every key, and `ρA = T/(2L f_flex)²` with `f_flex = f0/√(1 + B)`, so
+//!   that the first partial `f_flex √(1 + B)` is exactly `f0`, as a tuner would set it;
 //! - damping, per-mode law `σ_i = b1 + b3 ω0_i²`: b1 log-linear through 0.25, 1.1, 9.17 s⁻¹
 //!   (the C2/C4/C7 values of the second Chaigne–Askenfelt variant), b3 log-linear through
 //!   6.25e-9, 6.25e-9, 2.6e-10 s (Part I);
@@ -96,8 +96,9 @@ pub fn piano_note(key: u8) -> PianoNote {
     let exponent = if k >= 60.0 { 0.9 } else { 0.45 };
     let length = (0.62 * 2f64.powf(-exponent * (k - 60.0) / 12.0)).min(1.9);
     let tension = 670.0;
-    let linear_density = tension / (2.0 * length * f0).powi(2);
     let b = log_through(k, [7.4e-5, 3.77e-4, 8.56e-3]).clamp(1e-5, 0.05);
+    let flexible = f0 / (1.0 + b).sqrt();
+    let linear_density = tension / (2.0 * length * flexible).powi(2);
     PianoNote {
         string: StringParams {
             length,
@@ -137,8 +138,8 @@ mod tests {
         for key in 0..=127u8 {
             let note = piano_note(key);
             note.string.validate().unwrap_or_else(|e| panic!("key {key}: {e}"));
-            let f0 = note.string.fundamental();
-            assert!((f0 / key_frequency(key) - 1.0).abs() < 1e-12, "key {key}: f0 {f0}");
+            let f1 = note.string.partial(1);
+            assert!((f1 / key_frequency(key) - 1.0).abs() < 1e-12, "key {key}: first partial {f1}");
             assert!(note.hammer_mass > 0.0 && note.kappa > 0.0 && note.alpha >= 1.0);
             assert!(note.strike_position > 0.0 && note.strike_position < 0.5);
         }

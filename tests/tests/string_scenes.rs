@@ -12,6 +12,7 @@ use qsa_dsp::scene::{
     Frame, HammerString, HammerStringParams, OutputKind, Pickup, Scene, SlideControls, SlideString, SlideStringParams,
 };
 use qsa_dsp::string::{Damping, ModalString};
+use qsa_tests::fundamental;
 
 const FS: f64 = 44100.0;
 
@@ -71,20 +72,6 @@ fn worst_step_balance(frames: &[Frame], e0: f64) -> f64 {
         prev = now;
     }
     worst
-}
-
-/// Fundamental frequency (Hz) of `signal` by autocorrelation: the shortest lag in
-/// `[fs/f_max, fs/f_min]` whose correlation is within 10 % of the largest, refined by a parabola.
-fn fundamental(signal: &[f64], fs: f64, f_min: f64, f_max: f64) -> f64 {
-    let mean = signal.iter().sum::<f64>() / signal.len() as f64;
-    let x: Vec<f64> = signal.iter().map(|v| v - mean).collect();
-    let (lo, hi) = ((fs / f_max).floor() as usize, (fs / f_min).ceil() as usize + 1);
-    let n = x.len() - hi - 1;
-    let r: Vec<f64> = (0..=hi + 1).map(|lag| (0..n).map(|i| x[i] * x[i + lag]).sum()).collect();
-    let peak = (lo..=hi).map(|l| r[l]).fold(f64::NEG_INFINITY, f64::max);
-    let lag = (lo..=hi).find(|&l| r[l] >= 0.9 * peak && r[l] >= r[l - 1] && r[l] >= r[l + 1]).expect("a peak");
-    let (a, b, c) = (r[lag - 1], r[lag], r[lag + 1]);
-    fs / (lag as f64 + 0.5 * (a - c) / (a - 2.0 * b + c))
 }
 
 /// Free vibration of single modes follows `e^{−σt} cos(ωt)` with the damped ω exactly (physics

@@ -17,16 +17,23 @@
 //! `s`, `ψ^{n+1/2} ≥ 0` holds iff `0 ≤ g ≤ g_max` with
 //!
 //! ```text
-//! g_max = 4ψ^{n−1/2} / (z + √(z² + 4q(ψ^{n−1/2})²))      (ψ^{n−1/2} > 0)
-//! g_max = +∞ if z ≤ 0, 0 if z > 0                         (ψ^{n−1/2} = 0)
+//! g_max = 4ψ / (z + √(z² + 4qψ²))  if z > 0,   (√(z² + 4qψ²) − z) / (qψ)  if z ≤ 0   (ψ = ψ^{n−1/2} > 0)
+//! g_max = +∞ if z ≤ 0, 0 if z > 0                                                 (ψ^{n−1/2} = 0)
 //! ```
 //!
-//! (the stable form of the positive root of `¼qψg² + ½zg − ψ = 0`). The branch is
+//! (the positive root of `¼qψg² + ½zg − ψ = 0`, each sign of z in the form without cancellation:
+//! for `z < 0` and `4qψ² < ε·z²` the first form divides by `z + |z| = 0`). The branch is
 //! - `y^n > 0`: `g = min(dψ/dy(y^n), g_max)`, so the force is never adhesive;
 //! - `y^n ≤ 0`, `ψ > 0`: `g = g_max`, which drains ψ to zero and hands its energy back;
 //! - `y^n ≤ 0`, `ψ = 0`: `g = 0` (free flight).
 //!
-//! Rounding can leave a tiny negative `ψ^{n+1/2}`; it is clamped to 0.
+//! Whenever `g = g_max` the step ends with `ψ^{n+1/2} = 0` exactly, and then
+//! `s = −2ψ^{n−1/2}/g_max`, evaluated as `−(z + √(z² + 4qψ²))/2` (z > 0) or
+//! `−2qψ²/(√(z² + 4qψ²) − z)` (z ≤ 0): no huge `g_max` is formed (it overflows to +∞ when ψ is
+//! tiny, and the general update would then give ∞/∞ = NaN), and no rounding residue is left in ψ.
+//! (A residue of 1e-18 √J left by the general update, followed by a step out of contact with
+//! `z < 0`, is how the slide excerpt of the report produced NaN: `stability_cases.rs`.) Otherwise
+//! `ψ^{n+1/2} ≥ 0` holds in exact arithmetic; a negative value from rounding is clamped to 0.
 
 use super::{ContactProblem, ContactSolution, ContactSolver, Method, PowerLaw};
 
@@ -42,6 +49,11 @@ impl ExplicitSolver {
     /// An explicit solver on the exact `law`.
     pub fn new(law: PowerLaw) -> Self {
         Self { law, psi: 0.0 }
+    }
+
+    /// Replace the contact law (for a new note); restart the solver afterwards.
+    pub fn set_law(&mut self, law: PowerLaw) {
+        self.law = law;
     }
 
     /// The auxiliary variable ψ at the latest half step (√J).
@@ -60,8 +72,9 @@ impl ContactSolver for ExplicitSolver {
     fn solve(&mut self, problem: &ContactProblem) -> ContactSolution {
         let ContactProblem { y_now, z, q, .. } = *problem;
         let psi = self.psi;
+        let root = (z * z + 4.0 * q * psi * psi).sqrt();
         let g_max = if psi > 0.0 {
-            4.0 * psi / (z + (z * z + 4.0 * q * psi * psi).sqrt())
+            if z > 0.0 { 4.0 * psi / (z + root) } else { (root - z) / (q * psi) }
         } else if z <= 0.0 {
             f64::INFINITY
         } else {
@@ -76,6 +89,12 @@ impl ContactSolver for ExplicitSolver {
         };
         if g == 0.0 {
             return ContactSolution { s: -z, force: 0.0 };
+        }
+        if psi > 0.0 && g == g_max {
+            // ψ^{n+1/2} = 0 exactly; s = −2ψ/g_max without forming g_max (see the module docs).
+            let s = if z > 0.0 { -0.5 * (z + root) } else { -2.0 * q * psi * psi / (root - z) };
+            self.psi = 0.0;
+            return ContactSolution::from_increment(s, problem);
         }
         let s = -(z + q * psi * g) / (1.0 + 0.25 * q * g * g);
         self.psi = (psi + 0.5 * g * s).max(0.0);

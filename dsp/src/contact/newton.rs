@@ -37,6 +37,11 @@ impl NewtonSolver {
         Self { law, last_iterations: 0 }
     }
 
+    /// Replace the contact law (for a new note); restart the solver afterwards.
+    pub fn set_law(&mut self, law: PowerLaw) {
+        self.law = law;
+    }
+
     /// The exact law.
     pub fn law(&self) -> &PowerLaw {
         &self.law

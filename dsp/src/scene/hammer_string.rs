@@ -170,7 +170,9 @@ impl HammerCore {
             *g = h * c;
         }
         match pickup.kind {
-            OutputKind::Displacement | OutputKind::Velocity => s.mode_shapes(pickup.position * length, &mut self.pickup),
+            OutputKind::Displacement | OutputKind::Velocity => {
+                s.mode_shapes(pickup.position * length, &mut self.pickup)
+            }
             OutputKind::BridgeForce => s.bridge_weights(false, &mut self.pickup),
         }
         self.kind = pickup.kind;

@@ -310,7 +310,13 @@ impl ModalString {
         let padded = modes.div_ceil(LANES) * LANES;
         let v = || Vec::with_capacity(padded);
         Self {
-            params: StringParams { length: 1.0, tension: 1.0, linear_density: 1.0, bending_stiffness: 0.0, damping: Damping::LOSSLESS },
+            params: StringParams {
+                length: 1.0,
+                tension: 1.0,
+                linear_density: 1.0,
+                bending_stiffness: 0.0,
+                damping: Damping::LOSSLESS,
+            },
             sample_rate: 1.0,
             modal_mass: 0.5,
             beta: v(),
@@ -459,6 +465,14 @@ impl ModalString {
         let m = self.modes();
         self.u_prev[..m].copy_from_slice(previous);
         self.u_now[..m].copy_from_slice(now);
+    }
+
+    /// Multiply the modal state by `factor` (0..=1): an extra decay of the free vibration by that
+    /// factor, applied at once (a damper applies `e^{−σ_d N_b Δt}` once per control block).
+    pub fn scale_state(&mut self, factor: f64) {
+        for u in self.u_prev.iter_mut().chain(self.u_now.iter_mut()) {
+            *u *= factor;
+        }
     }
 
     /// Bring the string to rest.

@@ -1,0 +1,245 @@
+//! The playable instrument: a fixed pool of voices driven by note and controller events, shared
+//! by the plugin and the offline MIDI renderer.
+//!
+//! # Piano mode
+//!
+//! - A key gets the string and hammer of the per-note rule ([`crate::preset::piano_note`]),
+//!   adjusted by the relative [`Settings`] (hardness, hammer mass, striking position, damping,
+//!   brightness), every string band-limited to `max_frequency` so that the sound is the same at
+//!   every sample rate.
+//! - Note velocity sets the hammer speed: `v = 0.3 · 20^velocity` m/s (0.3 to 6 m/s,
+//!   [`hammer_speed`]).
+//! - Note-off lets the damper down: an extra decay `σ_d` ramped towards `damper_rate` with time
+//!   constant `damper_time`, applied to the string once per control block, as a felt settling on
+//!   the string would. The sustain pedal (CC64 ≥ 64 on the note's channel) holds dampers off.
+//! - Striking a key that still sounds strikes the same string again, which keeps vibrating.
+//!
+//! # Voices
+//!
+//! The pool is sized once ([`Instrument::new`]); nothing allocates after that. A note takes a free
+//! voice or, when none is free, steals the quietest voice whose key is up (else the oldest): that
+//! voice fades out over 5 ms with a strong damper before its new note starts, so stealing does not
+//! click. A voice is released when its energy falls 140 dB below its strike's.
+//!
+//! # Timing
+//!
+//! Events take effect at the sample they are handled at; [`Settings`] changes at the next control
+//! block boundary, blocks being counted from the first sample. Nothing depends on how the host
+//! splits its buffers: rendering in calls of any size gives the same samples.
+
+mod settings;
+mod voice;
+
+pub use settings::{MAX_BLOCK, MAX_SEGMENTS, Settings, hammer_speed};
+pub use voice::{PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike};
+
+use crate::string::ModalString;
+
+/// Most voices an instrument may have.
+pub const MAX_VOICES: usize = 128;
+
+/// Output scale (1/N): bridge force to full scale. A fortissimo C4 (6 m/s) peaks near 0.5.
+pub const OUTPUT_SCALE: f64 = 0.016;
+
+/// A note or controller event, as MIDI delivers them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Event {
+    /// Key pressed. Velocity 0 is a note-off.
+    NoteOn {
+        /// MIDI channel, 0..=15.
+        channel: u8,
+        /// MIDI key, 0..=127.
+        key: u8,
+        /// Velocity, 0..=1.
+        velocity: f32,
+    },
+    /// Key released.
+    NoteOff {
+        /// MIDI channel, 0..=15.
+        channel: u8,
+        /// MIDI key, 0..=127.
+        key: u8,
+    },
+    /// Sustain pedal (CC64) on a channel.
+    Sustain {
+        /// MIDI channel, 0..=15.
+        channel: u8,
+        /// Pedal down.
+        down: bool,
+    },
+    /// Release every key and pedal (CC123), letting the notes ring out under their dampers.
+    AllNotesOff,
+    /// Silence everything at once (CC120).
+    AllSoundOff,
+}
+
+/// The instrument engine.
+#[derive(Debug, Clone)]
+pub struct Instrument {
+    sample_rate: f64,
+    /// Settings as last set.
+    requested: Settings,
+    /// Settings in force for the current control block.
+    settings: Settings,
+    voices: Vec<PianoVoice>,
+    /// Sustain pedal per channel.
+    sustain: [bool; 16],
+    /// Samples rendered since the start.
+    now: u64,
+    /// Samples into the current control block.
+    in_block: usize,
+    /// One control block of one voice's output.
+    scratch: Vec<f64>,
+}
+
+impl Instrument {
+    /// An instrument with `voices` voices (1..=[`MAX_VOICES`]) at `sample_rate` (Hz). Allocates
+    /// everything it will ever need: every voice gets room for the longest string of the keyboard.
+    pub fn new(sample_rate: f64, voices: usize, settings: Settings) -> Self {
+        let sample_rate = if sample_rate.is_finite() && sample_rate >= 1000.0 { sample_rate } else { 44100.0 };
+        let settings = settings.sanitized();
+        let modes = Self::largest_string(sample_rate, &settings);
+        let count = voices.clamp(1, MAX_VOICES);
+        Self {
+            sample_rate,
+            requested: settings,
+            settings,
+            voices: (0..count).map(|_| PianoVoice::new(modes, sample_rate)).collect(),
+            sustain: [false; 16],
+            now: 0,
+            in_block: 0,
+            scratch: vec![0.0; MAX_BLOCK],
+        }
+    }
+
+    /// Most modes any key can need at `sample_rate`: the largest count over the keyboard at the
+    /// settings' extremes (the flexible, lowest-damping string, band-limited at 24 kHz).
+    fn largest_string(sample_rate: f64, settings: &Settings) -> usize {
+        let extreme = Settings { brightness: 0.0, damping: 0.1, max_frequency: 24_000.0, ..*settings };
+        (0..=127u8)
+            .map(|key| {
+                let string = PianoVoice::string_for(key, &extreme);
+                ModalString::band_limited(string, sample_rate, extreme.max_frequency).map_or(0, |s| s.modes())
+            })
+            .max()
+            .unwrap_or(0)
+            .min(crate::string::MAX_MODES)
+    }
+
+    /// Sample rate (Hz).
+    pub fn sample_rate(&self) -> f64 {
+        self.sample_rate
+    }
+
+    /// Size of the voice pool.
+    pub fn voices(&self) -> usize {
+        self.voices.len()
+    }
+
+    /// Voices currently sounding.
+    pub fn sounding(&self) -> usize {
+        self.voices.iter().filter(|v| v.sounding || v.fading()).count()
+    }
+
+    /// Set what the host controls; takes effect at the next control block. Values out of range
+    /// are clamped and NaN replaced by the default.
+    pub fn set_settings(&mut self, settings: &Settings) {
+        self.requested = settings.sanitized();
+    }
+
+    /// Handle one event at the current sample.
+    pub fn handle(&mut self, event: Event) {
+        match event {
+            Event::NoteOn { channel, key, velocity } if velocity > 0.0 => {
+                let strike = Strike { channel: channel & 15, key: key & 127, velocity: f64::from(velocity.min(1.0)) };
+                self.note_on(strike);
+            }
+            Event::NoteOn { channel, key, .. } | Event::NoteOff { channel, key } => {
+                for v in &mut self.voices {
+                    v.key_up(channel & 15, key & 127);
+                }
+            }
+            Event::Sustain { channel, down } => self.sustain[usize::from(channel & 15)] = down,
+            Event::AllNotesOff => {
+                self.sustain = [false; 16];
+                self.voices.iter_mut().for_each(PianoVoice::release);
+            }
+            Event::AllSoundOff => {
+                self.sustain = [false; 16];
+                self.voices.iter_mut().for_each(PianoVoice::silence);
+            }
+        }
+    }
+
+    fn note_on(&mut self, strike: Strike) {
+        let now = self.now;
+        // The same key again: strike the same string.
+        if let Some(v) = self.voices.iter_mut().find(|v| v.upcoming_key() == Some(strike.key)) {
+            if v.fading() {
+                v.steal(strike, self.sample_rate, now);
+            } else {
+                v.play(strike, &self.settings, now);
+            }
+            return;
+        }
+        if let Some(v) = self.voices.iter_mut().find(|v| !v.sounding && !v.fading()) {
+            v.play(strike, &self.settings, now);
+            return;
+        }
+        // Steal: the quietest released voice, else the oldest.
+        let released = self
+            .voices
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| !v.key_down && !v.fading())
+            .min_by(|(_, a), (_, b)| a.energy().total_cmp(&b.energy()))
+            .map(|(i, _)| i);
+        let victim = released.or_else(|| {
+            self.voices.iter().enumerate().filter(|(_, v)| !v.fading()).min_by_key(|(_, v)| v.started).map(|(i, _)| i)
+        });
+        if let Some(i) = victim {
+            self.voices[i].steal(strike, self.sample_rate, now);
+        }
+    }
+
+    /// Render into `left` and `right` (the same length), replacing their contents.
+    pub fn process(&mut self, left: &mut [f32], right: &mut [f32]) {
+        let n = left.len().min(right.len());
+        left.fill(0.0);
+        right.fill(0.0);
+        let mut done = 0;
+        while done < n {
+            if self.in_block == 0 {
+                self.begin_block();
+            }
+            let len = (self.settings.block - self.in_block).min(n - done);
+            let scale = OUTPUT_SCALE * self.settings.gain;
+            let scratch = &mut self.scratch[..len];
+            for voice in self.voices.iter_mut().filter(|v| v.sounding) {
+                voice.render(scratch);
+                for ((l, r), &x) in
+                    left[done..done + len].iter_mut().zip(&mut right[done..done + len]).zip(scratch.iter())
+                {
+                    let y = (x * scale) as f32;
+                    *l += y;
+                    *r += y;
+                }
+            }
+            done += len;
+            self.now += len as u64;
+            self.in_block += len;
+            if self.in_block >= self.settings.block {
+                self.in_block = 0;
+            }
+        }
+    }
+
+    fn begin_block(&mut self) {
+        self.settings = self.requested;
+        let len = self.settings.block;
+        for v in &mut self.voices {
+            let sustained = self.sustain[usize::from(v.strike.channel)];
+            v.begin_block(&self.settings, sustained, len, self.now);
+        }
+    }
+}

@@ -1,0 +1,118 @@
+//! Instrument settings: what host parameters control, in physical units, with safe clamping.
+
+use crate::contact::Method;
+
+/// Most QSA segments the instrument offers (every voice's spline is sized for it up front).
+pub const MAX_SEGMENTS: usize = 64;
+
+/// Longest control block N_b (samples).
+pub const MAX_BLOCK: usize = 256;
+
+/// Everything the host can set. Piano quantities are relative to the per-note rule
+/// ([`crate::preset::piano_note`]), so the keyboard keeps its natural variation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// Contact solver of new notes.
+    pub method: Method,
+    /// QSA segments N of new notes, 1..=[`MAX_SEGMENTS`].
+    pub segments: usize,
+    /// Control block N_b (samples), 1..=[`MAX_BLOCK`]: controls are sampled every N_b samples.
+    pub block: usize,
+    /// Highest mode frequency kept in every string (Hz), 1 kHz to 24 kHz (and below Nyquist):
+    /// the same modes, and so the same sound, at every sample rate above twice this.
+    pub max_frequency: f64,
+    /// Felt stiffness κ relative to the per-note value, 0.1..=10.
+    pub hardness: f64,
+    /// Hammer mass relative to the per-note value, 0.25..=4.
+    pub hammer_mass: f64,
+    /// Striking position relative to the per-note value, 0.25..=2.5 (the result is kept in
+    /// 0.02..=0.5 of the length).
+    pub strike_position: f64,
+    /// String damping (b1 and b3 of the per-mode law) relative to the per-note value, 0.1..=10.
+    pub damping: f64,
+    /// Inharmonicity B relative to the per-note value, 0..=4 (0 is a flexible string).
+    pub brightness: f64,
+    /// Extra decay rate a damper adds when it rests on the string (1/s), 1..=500.
+    pub damper_rate: f64,
+    /// Time for a damper to settle on or lift off the string (s), 0.001..=0.1.
+    pub damper_time: f64,
+    /// Output gain (linear), 0..=10.
+    pub gain: f64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            method: Method::Qsa,
+            segments: 6,
+            block: 64,
+            max_frequency: 20_000.0,
+            hardness: 1.0,
+            hammer_mass: 1.0,
+            strike_position: 1.0,
+            damping: 1.0,
+            brightness: 1.0,
+            damper_rate: 60.0,
+            damper_time: 0.01,
+            gain: 1.0,
+        }
+    }
+}
+
+/// `value` clamped to `[lo, hi]`; NaN gives `fallback`.
+fn clamp(value: f64, lo: f64, hi: f64, fallback: f64) -> f64 {
+    if value.is_nan() { fallback } else { value.clamp(lo, hi) }
+}
+
+impl Settings {
+    /// The same settings with every value brought into its range (NaN becomes the default):
+    /// whatever a host sends, the engine gets something it can play.
+    pub fn sanitized(&self) -> Self {
+        let d = Self::default();
+        Self {
+            method: self.method,
+            segments: self.segments.clamp(1, MAX_SEGMENTS),
+            block: self.block.clamp(1, MAX_BLOCK),
+            max_frequency: clamp(self.max_frequency, 1_000.0, 24_000.0, d.max_frequency),
+            hardness: clamp(self.hardness, 0.1, 10.0, d.hardness),
+            hammer_mass: clamp(self.hammer_mass, 0.25, 4.0, d.hammer_mass),
+            strike_position: clamp(self.strike_position, 0.25, 2.5, d.strike_position),
+            damping: clamp(self.damping, 0.1, 10.0, d.damping),
+            brightness: clamp(self.brightness, 0.0, 4.0, d.brightness),
+            damper_rate: clamp(self.damper_rate, 1.0, 500.0, d.damper_rate),
+            damper_time: clamp(self.damper_time, 0.001, 0.1, d.damper_time),
+            gain: clamp(self.gain, 0.0, 10.0, d.gain),
+        }
+    }
+}
+
+/// Hammer speed (m/s) for a MIDI note velocity `velocity` in (0, 1]: exponential from 0.3 m/s
+/// (pianissimo) to 6 m/s (fortissimo), `v = 0.3 · 20^velocity`, so equal velocity steps are
+/// equal ratios of speed (and roughly equal steps in loudness).
+pub fn hammer_speed(velocity: f64) -> f64 {
+    let v = if velocity.is_nan() { 0.0 } else { velocity.clamp(0.0, 1.0) };
+    0.3 * 20f64.powf(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn velocity_curve_spans_the_documented_range() {
+        assert!((hammer_speed(0.0) - 0.3).abs() < 1e-12);
+        assert!((hammer_speed(1.0) - 6.0).abs() < 1e-12);
+        assert!((hammer_speed(0.5) - (0.3f64 * 6.0).sqrt()).abs() < 1e-12, "geometric mid-point");
+        assert_eq!(hammer_speed(f64::NAN), 0.3);
+    }
+
+    #[test]
+    fn sanitizing_clamps_and_replaces_nan() {
+        let s = Settings { hardness: f64::NAN, gain: f64::INFINITY, segments: 0, block: 100_000, ..Default::default() };
+        let c = s.sanitized();
+        assert_eq!(c.hardness, 1.0);
+        assert_eq!(c.gain, 10.0);
+        assert_eq!(c.segments, 1);
+        assert_eq!(c.block, MAX_BLOCK);
+    }
+}

@@ -1,0 +1,274 @@
+//! The instrument engine (piano mode): pitch, dampers and pedal, re-strikes, voice stealing,
+//! host-buffer invariance, bad input, and no allocation after preparation.
+//!
+//! `unsafe` is allowed here for one reason: a counting global allocator, which forwards every
+//! call to the system allocator unchanged.
+#![allow(unsafe_code)]
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use qsa_dsp::contact::Method;
+use qsa_dsp::instrument::{Event, Instrument, Settings};
+use qsa_dsp::preset::key_frequency;
+use qsa_tests::{seeded_rng, spectral_peak};
+use rand::RngExt;
+
+/// Counts heap allocations made by a thread while its `COUNTING` flag is set (other tests run
+/// in parallel threads and allocate freely).
+struct CountingAllocator;
+
+thread_local! {
+    static COUNTING: Cell<bool> = const { Cell::new(false) };
+}
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+fn counting() -> bool {
+    COUNTING.try_with(Cell::get).unwrap_or(false)
+}
+
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if counting() {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        if counting() {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingAllocator = CountingAllocator;
+
+/// Allocations made by this thread in `f`. Tests using it run one at a time (`ALLOC_LOCK`),
+/// since the total is shared.
+fn allocations_in(f: impl FnOnce()) -> usize {
+    let _guard = ALLOC_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    ALLOCATIONS.store(0, Ordering::SeqCst);
+    COUNTING.with(|c| c.set(true));
+    f();
+    COUNTING.with(|c| c.set(false));
+    ALLOCATIONS.load(Ordering::SeqCst)
+}
+
+static ALLOC_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+const FS: f64 = 48000.0;
+
+/// Timed events: (sample, event).
+type Score = Vec<(usize, Event)>;
+
+fn on(key: u8, velocity: f32) -> Event {
+    Event::NoteOn { channel: 0, key, velocity }
+}
+
+fn off(key: u8) -> Event {
+    Event::NoteOff { channel: 0, key }
+}
+
+/// Render `samples` samples of `score`, calling `process` in pieces of the sizes `sizes` yields,
+/// split further at every event. Returns the left channel.
+fn play(instrument: &mut Instrument, score: &Score, samples: usize, mut sizes: impl FnMut() -> usize) -> Vec<f32> {
+    let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
+    let mut next_event = 0;
+    let mut t = 0;
+    while t < samples {
+        while next_event < score.len() && score[next_event].0 <= t {
+            instrument.handle(score[next_event].1);
+            next_event += 1;
+        }
+        let until_event = score.get(next_event).map_or(samples, |e| e.0);
+        let n = sizes().max(1).min(until_event - t).min(samples - t);
+        instrument.process(&mut left[t..t + n], &mut right[t..t + n]);
+        t += n;
+    }
+    assert_eq!(left, right, "piano mode is mono");
+    left
+}
+
+fn piano(voices: usize) -> Instrument {
+    Instrument::new(FS, voices, Settings::default())
+}
+
+fn rms(x: &[f32]) -> f64 {
+    (x.iter().map(|&v| f64::from(v).powi(2)).sum::<f64>() / x.len() as f64).sqrt()
+}
+
+/// Each key sounds at its equal-tempered pitch: the first partial of the rendered sound is within
+/// 1 % of the key's frequency (it is `f0 √(1 + B)` with the damped-mode shift, 0.02 % sharp at
+/// C4), and the loudest note stays below full scale.
+#[test]
+fn keys_sound_at_their_pitch() {
+    for key in [21u8, 36, 48, 60, 69, 84, 108] {
+        let mut p = piano(4);
+        let out = play(&mut p, &vec![(0, on(key, 0.8))], 24_000, || 512);
+        let signal: Vec<f64> = out[2_400..].iter().map(|&v| f64::from(v)).collect();
+        let expected = key_frequency(key);
+        let f = spectral_peak(&signal, FS, 0.9 * expected, 1.1 * expected);
+        println!("key {key}: {f:.2} Hz (expected {expected:.2} Hz)");
+        assert!((f / expected - 1.0).abs() < 0.01, "key {key}: {f} Hz vs {expected} Hz");
+    }
+    let mut p = piano(4);
+    let out = play(&mut p, &vec![(0, on(60, 1.0))], 9_600, || 512);
+    let peak = out.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+    println!("fortissimo C4 peak {peak}");
+    assert!(peak > 0.05 && peak < 1.0, "fortissimo C4 peak {peak}");
+}
+
+/// Harder playing is louder, monotonically over the velocity range.
+#[test]
+fn velocity_sets_loudness() {
+    let peaks: Vec<f32> = [0.1f32, 0.3, 0.5, 0.7, 1.0]
+        .iter()
+        .map(|&v| {
+            let mut p = piano(2);
+            let out = play(&mut p, &vec![(0, on(60, v))], 4_800, || 256);
+            out.iter().fold(0.0f32, |m, x| m.max(x.abs()))
+        })
+        .collect();
+    println!("peaks {peaks:?}");
+    assert!(peaks.windows(2).all(|w| w[1] > w[0]), "{peaks:?}");
+}
+
+/// The damper: after note-off the sound dies within ~0.1 s (60 1/s extra decay: −52 dB in
+/// 0.1 s in amplitude); with the sustain pedal down it keeps ringing with the string's own decay.
+#[test]
+fn damper_and_sustain_pedal() {
+    let score_damped: Score = vec![(0, on(60, 0.7)), (9_600, off(60))];
+    let score_held: Score = vec![(0, Event::Sustain { channel: 0, down: true }), (0, on(60, 0.7)), (9_600, off(60))];
+    let damped = play(&mut piano(2), &score_damped, 24_000, || 64);
+    let held = play(&mut piano(2), &score_held, 24_000, || 64);
+    let before = rms(&held[7_200..9_600]);
+    let (d, h) = (rms(&damped[19_200..24_000]), rms(&held[19_200..24_000]));
+    println!("rms before {before:e}, 0.2-0.3 s after release: damped {d:e}, held {h:e}");
+    assert!(h > 0.5 * before, "the pedal holds the note: {h} vs {before}");
+    assert!(d < 1e-3 * h, "the damper silences the note: {d} vs {h}");
+}
+
+/// Striking a sounding key again strikes the same string: one voice, and the second strike
+/// adds to the vibration rather than restarting from rest.
+#[test]
+fn restrike_uses_the_same_string() {
+    let mut p = piano(4);
+    let score: Score = vec![(0, on(60, 0.6)), (4_800, on(60, 0.6))];
+    let out = play(&mut p, &score, 9_600, || 128);
+    assert_eq!(p.sounding(), 1);
+    assert!(out.iter().all(|v| v.is_finite()));
+}
+
+/// More notes than voices: the pool never grows, every sample stays finite and bounded, and the
+/// stolen voice fades out (no jump larger than the notes' own largest sample-to-sample step).
+#[test]
+fn stealing_keeps_the_pool_and_does_not_click() {
+    let mut p = piano(3);
+    let score: Score = (0..8).map(|i| (i * 2_400, on(48 + 3 * i as u8, 0.7))).collect();
+    let out = play(&mut p, &score, 24_000, || 100);
+    assert!(p.sounding() <= 3);
+    assert!(out.iter().all(|v| v.is_finite() && v.abs() < 4.0));
+    let single = play(&mut piano(3), &vec![(0, on(48, 0.7))], 2_400, || 100);
+    let step = |x: &[f32]| x.windows(2).map(|w| (w[1] - w[0]).abs()).fold(0.0f32, f32::max);
+    println!("largest step: {} (one note alone: {})", step(&out), step(&single));
+    assert!(step(&out) < 4.0 * step(&single));
+}
+
+/// Host buffer sizes never change the output: blocks of 1, 32, 512 and seeded random sizes give
+/// bit-identical samples, for every solver.
+#[test]
+fn output_does_not_depend_on_host_buffers() {
+    let score: Score = vec![
+        (0, on(60, 0.7)),
+        (1_000, on(64, 0.5)),
+        (2_345, Event::Sustain { channel: 0, down: true }),
+        (5_000, off(60)),
+        (7_777, on(67, 0.9)),
+        (9_000, Event::Sustain { channel: 0, down: false }),
+        (11_111, off(64)),
+    ];
+    for method in [Method::Qsa, Method::Imp, Method::Exp] {
+        let settings = Settings { method, block: 48, ..Default::default() };
+        let reference = play(&mut Instrument::new(FS, 8, settings), &score, 14_400, || 14_400);
+        for size in [1usize, 32, 512] {
+            let out = play(&mut Instrument::new(FS, 8, settings), &score, 14_400, || size);
+            assert!(
+                out.iter().zip(&reference).all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{method:?}, blocks of {size}"
+            );
+        }
+        let mut rng = seeded_rng(7);
+        let out = play(&mut Instrument::new(FS, 8, settings), &score, 14_400, || rng.random_range(1..700));
+        assert!(out.iter().zip(&reference).all(|(a, b)| a.to_bits() == b.to_bits()), "{method:?}, random blocks");
+    }
+}
+
+/// Garbage in one block: 10,000 random events (any channel, keys 0 and 127, velocity 0, NaN,
+/// note-offs without note-ons, pedals), NaN and infinite settings: no panic, finite output, and
+/// no allocation in `handle`, `set_settings` or `process`.
+#[test]
+fn garbage_input_is_safe_and_allocation_free() {
+    let mut p = piano(16);
+    let mut rng = seeded_rng(42);
+    let events: Vec<Event> = (0..10_000)
+        .map(|_| {
+            let channel = rng.random_range(0..=255u8);
+            let key = rng.random_range(0..=255u8);
+            match rng.random_range(0..6) {
+                0 => Event::NoteOn { channel, key, velocity: rng.random_range(0.0..1.5) },
+                1 => Event::NoteOn { channel, key, velocity: f32::NAN },
+                2 => Event::NoteOff { channel, key },
+                3 => Event::Sustain { channel, down: rng.random_bool(0.5) },
+                4 => Event::NoteOn { channel, key: [0, 127][usize::from(key % 2)], velocity: 0.0 },
+                _ => Event::AllNotesOff,
+            }
+        })
+        .collect();
+    let bad = Settings {
+        hardness: f64::NAN,
+        gain: f64::INFINITY,
+        damping: -1.0,
+        segments: 1_000,
+        block: 0,
+        ..Default::default()
+    };
+    let (mut left, mut right) = (vec![0.0f32; 4096], vec![0.0f32; 4096]);
+    let count = allocations_in(|| {
+        p.set_settings(&bad);
+        for e in &events {
+            p.handle(*e);
+        }
+        for _ in 0..20 {
+            p.process(&mut left, &mut right);
+        }
+    });
+    assert_eq!(count, 0, "allocations on the audio path");
+    assert!(left.iter().all(|v| v.is_finite()));
+}
+
+/// A steady stream of notes (with steals and releases) allocates nothing after `new`.
+#[test]
+fn playing_allocates_nothing() {
+    let mut p = piano(8);
+    let (mut left, mut right) = (vec![0.0f32; 256], vec![0.0f32; 256]);
+    let count = allocations_in(|| {
+        for i in 0..400u32 {
+            if i % 3 == 0 {
+                p.handle(on(21 + (i * 7 % 88) as u8, 0.5 + (i % 5) as f32 * 0.1));
+            }
+            if i % 5 == 0 {
+                p.handle(off(21 + (i * 11 % 88) as u8));
+            }
+            p.process(&mut left, &mut right);
+        }
+    });
+    assert_eq!(count, 0);
+}
