@@ -6,13 +6,18 @@
 //! (wall seconds per simulated second) measured in this one run of the command, after one
 //! discarded warm-up run. Cases:
 //! - `hammer-c4/{qsa,exp,imp}`: the Fig. 5 voice (C4 string, 56 modes at 44.1 kHz), QSA N = 6;
-//! - `slide-phrase/nb{1,8,64}`: the slide phrase with control blocks of 1, 8 and 64 samples.
+//! - `slide-phrase/nb{1,8,64}`: the slide phrase with control blocks of 1, 8 and 64 samples;
+//! - `piano/16-voices`: the instrument engine at 48 kHz with 16 keys (C3 to C6 in whole tones
+//!   and thirds) struck together, pedal down, rendered in 512-sample calls;
+//! - `piano/88-keys`: all 88 keys (A0 to C8) struck together, pedal down, 48 kHz: the whole
+//!   piano at once. Its line also says how many C4 voices fit in real time on one core.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
 use qsa_dsp::contact::{Method, SolverSettings};
+use qsa_dsp::instrument::{Event, Instrument, Settings};
 use qsa_dsp::render::{SceneDescription, parse_scene, render_output};
 use qsa_dsp::string::ModalString;
 use serde::Serialize;
@@ -56,6 +61,8 @@ pub struct BenchLine {
     pub ns_per_sample: f64,
     /// Runs measured.
     pub runs: usize,
+    /// Voices sounding (instrument cases; 1 for single scenes).
+    pub voices: usize,
 }
 
 /// Why the bench could not run.
@@ -104,7 +111,62 @@ pub fn measure(name: &str, scene: &SceneDescription, runs: usize) -> Result<Benc
         rtf_min: rtfs[0],
         ns_per_sample: rtf * 1e9 / f64::from(fs),
         runs: rtfs.len(),
+        voices: 1,
     })
+}
+
+/// Sample rate of the instrument cases (Hz).
+const PIANO_RATE: f64 = 48_000.0;
+
+/// Time the instrument playing `keys` together with the pedal down, `runs` times, rendering
+/// `seconds` in calls of `call` samples.
+pub fn measure_piano(name: &str, keys: &[u8], seconds: f64, call: usize, runs: usize) -> BenchLine {
+    let settings = Settings::default();
+    let samples = (seconds * PIANO_RATE) as usize;
+    let once = || {
+        let mut piano = Instrument::new(PIANO_RATE, keys.len().max(1), settings);
+        piano.handle(Event::Sustain { channel: 0, down: true });
+        for &key in keys {
+            piano.handle(Event::NoteOn { channel: 0, key, velocity: 0.7 });
+        }
+        let (mut left, mut right) = (vec![0.0f32; call], vec![0.0f32; call]);
+        let start = std::time::Instant::now();
+        for _ in 0..samples / call {
+            piano.process(&mut left, &mut right);
+        }
+        (start.elapsed().as_secs_f64(), piano.sounding())
+    };
+    once();
+    let mut rtfs = Vec::with_capacity(runs);
+    let mut sounding = 0;
+    for _ in 0..runs.max(1) {
+        let (wall, voices) = once();
+        sounding = voices;
+        rtfs.push(wall / seconds);
+    }
+    rtfs.sort_by(f64::total_cmp);
+    let rtf = rtfs[rtfs.len() / 2];
+    let modes = keys
+        .iter()
+        .map(|&k| {
+            let string = qsa_dsp::instrument::PianoVoice::string_for(k, &settings);
+            qsa_dsp::string::ModalString::band_limited(string, PIANO_RATE, settings.max_frequency).map_or(0, |s| s.modes())
+        })
+        .sum();
+    BenchLine {
+        name: name.to_owned(),
+        method: settings.method.name(),
+        segments: settings.segments,
+        block: settings.block,
+        sample_rate: PIANO_RATE as u32,
+        modes,
+        seconds,
+        rtf,
+        rtf_min: rtfs[0],
+        ns_per_sample: rtf * 1e9 / PIANO_RATE,
+        runs: rtfs.len(),
+        voices: sounding,
+    }
 }
 
 fn string_modes(params: &qsa_dsp::string::StringParams, fs: u32) -> usize {
@@ -128,10 +190,20 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
         cases.push((format!("slide-phrase/nb{block}"), scene));
     }
     let mut lines = Vec::new();
-    for (name, scene) in cases.iter().filter(|(name, _)| name.contains(&args.filter)) {
-        let line = measure(name, scene, args.runs)?;
+    let mut emit = |line: BenchLine, lines: &mut Vec<BenchLine>| {
         writeln!(stdout, "{}", serde_json::to_string(&line).expect("a bench line serialises")).ok();
         lines.push(line);
+    };
+    for (name, scene) in cases.iter().filter(|(name, _)| name.contains(&args.filter)) {
+        emit(measure(name, scene, args.runs)?, &mut lines);
+    }
+    // C3 (48) to C6 (84): 16 keys.
+    let sixteen: Vec<u8> = (0..16).map(|i| 48 + (i * 36 / 15) as u8).collect();
+    let all: Vec<u8> = (21..=108).collect();
+    for (name, keys, call) in [("piano/16-voices", &sixteen, 512), ("piano/88-keys", &all, 64)] {
+        if name.contains(&args.filter) {
+            emit(measure_piano(name, keys, 2.0, call, args.runs), &mut lines);
+        }
     }
     Ok(lines)
 }
