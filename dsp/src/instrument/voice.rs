@@ -208,13 +208,13 @@ impl PianoVoice {
             return;
         }
         let fs = self.core.string().sample_rate();
-        if let Some(strike) = self.pending {
-            if self.fade_left == 0 {
-                self.pending = None;
-                self.sounding = false;
-                self.play(strike, settings, now);
-                self.key_down = !self.pending_released;
-            }
+        if let Some(strike) = self.pending
+            && self.fade_left == 0
+        {
+            self.pending = None;
+            self.sounding = false;
+            self.play(strike, settings, now);
+            self.key_down = !self.pending_released;
         }
         let span = len as f64 / fs;
         if self.pending.is_some() {
