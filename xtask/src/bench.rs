@@ -150,7 +150,8 @@ pub fn measure_piano(name: &str, keys: &[u8], seconds: f64, call: usize, runs: u
         .iter()
         .map(|&k| {
             let string = qsa_dsp::instrument::PianoVoice::string_for(k, &settings);
-            qsa_dsp::string::ModalString::band_limited(string, PIANO_RATE, settings.max_frequency).map_or(0, |s| s.modes())
+            qsa_dsp::string::ModalString::band_limited(string, PIANO_RATE, settings.max_frequency)
+                .map_or(0, |s| s.modes())
         })
         .sum();
     BenchLine {

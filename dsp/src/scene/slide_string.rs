@@ -117,9 +117,66 @@ pub struct SlideStringParams {
 /// The slide–string scene, generic over its contact solver and its control source.
 #[derive(Debug, Clone)]
 pub struct SlideString<S, C> {
-    string: ModalString,
+    core: SlideCore,
     solver: S,
     controls: C,
+    initial_energy: f64,
+}
+
+impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
+    /// Prepare the scene: the string at rest and the slide resting at the hand's height.
+    /// `string` must be prepared at the scene's sample rate and `params.block ≥ 1`.
+    pub fn new(string: ModalString, params: &SlideStringParams, mut solver: S, mut controls: C) -> Self {
+        let block = params.block.max(1);
+        let start = controls.at(0);
+        let target = if C::VARYING { controls.at(block as u64) } else { start };
+        let core = SlideCore::new(string, params, start, target);
+        let (y_prev, y_now) = core.compressions();
+        solver.start(y_prev, y_now);
+        let initial_energy = core.energy() + solver.stored_energy(y_now, y_prev);
+        Self { core, solver, controls, initial_energy }
+    }
+
+    /// The string.
+    pub fn string(&self) -> &ModalString {
+        &self.core.string
+    }
+
+    /// The contact solver.
+    pub fn solver(&self) -> &S {
+        &self.solver
+    }
+
+    /// The control source, to feed it.
+    pub fn controls_mut(&mut self) -> &mut C {
+        &mut self.controls
+    }
+}
+
+impl<S: ContactSolver, C: ControlSource<SlideControls>> Scene for SlideString<S, C> {
+    fn sample_rate(&self) -> f64 {
+        self.core.string.sample_rate()
+    }
+
+    fn initial_energy(&self) -> f64 {
+        self.initial_energy
+    }
+
+    fn process(&mut self, frames: &mut [Frame]) {
+        self.core.run::<S, C, true>(&mut self.solver, &mut self.controls, frames.len(), |i, f| frames[i] = f);
+    }
+
+    fn process_output(&mut self, out: &mut [f64]) {
+        self.core.process_output(&mut self.solver, &mut self.controls, out);
+    }
+}
+
+/// Everything of a slide–string scene except the solver and the control source: string, slide
+/// and hand, fingers, contact vectors and the block ramps. An instrument voice keeps one core and
+/// one solver of each kind and feeds the controls itself.
+#[derive(Debug, Clone)]
+pub struct SlideCore {
+    string: ModalString,
     sho: SlideHand,
     left_window: Vec<f64>,
     right_window: Vec<f64>,
@@ -154,18 +211,15 @@ pub struct SlideString<S, C> {
     y_now: f64,
     out_now: f64,
     losses: f64,
-    initial_energy: f64,
     dt: f64,
 }
 
-impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
-    /// Prepare the scene: the string at rest and the slide resting at the hand's height.
-    /// `string` must be prepared at the scene's sample rate and `params.block ≥ 1`.
-    pub fn new(string: ModalString, params: &SlideStringParams, mut solver: S, mut controls: C) -> Self {
+impl SlideCore {
+    /// A core around `string` (prepared at the scene's sample rate): the string at rest and the
+    /// slide resting at the hand's height, with controls `start` now and `target` one block on.
+    pub fn new(string: ModalString, params: &SlideStringParams, start: SlideControls, target: SlideControls) -> Self {
         let fs = string.sample_rate();
         let block = params.block.max(1);
-        let start = controls.at(0);
-        let target = if C::VARYING { controls.at(block as u64) } else { start };
         let mut pickup = string.vector();
         match params.pickup.kind {
             OutputKind::Displacement | OutputKind::Velocity => {
@@ -174,7 +228,7 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
             OutputKind::BridgeForce => string.bridge_weights(true, &mut pickup),
         }
         let sho = SlideHand::new(params.slide, fs, start.hand_height);
-        let mut scene = Self {
+        let mut core = Self {
             left_window: finger::window_factors(&string, params.left.width),
             right_window: finger::window_factors(&string, params.right.width),
             shapes: [string.vector(), string.vector(), string.vector()],
@@ -198,33 +252,28 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
             y_now: 0.0,
             out_now: 0.0,
             losses: 0.0,
-            initial_energy: 0.0,
             dt: 1.0 / fs,
             string,
-            solver: {
-                solver.start(0.0, 0.0);
-                solver
-            },
-            controls,
             sho,
         };
-        scene.place(start.positions());
-        scene.solver.start(scene.y_prev, scene.y_now);
-        scene.out_now = dot(scene.string.state(), &scene.pickup);
-        scene.initial_energy = scene.string.energy()
-            + scene.sho.energy(start.hand_height, start.hand_height)
-            + scene.solver.stored_energy(scene.y_now, scene.y_prev);
-        scene
+        core.place(start.positions());
+        core.out_now = dot(core.string.state(), &core.pickup);
+        core
+    }
+
+    /// `(y^{n−1}, y^n)` (m), to start a solver from.
+    pub fn compressions(&self) -> (f64, f64) {
+        (self.y_prev, self.y_now)
+    }
+
+    /// String and slide energy of the current state (J), without the contact term.
+    pub fn energy(&self) -> f64 {
+        self.string.energy() + self.sho.energy(self.hand_prev, self.hand.at(self.k))
     }
 
     /// The string.
     pub fn string(&self) -> &ModalString {
         &self.string
-    }
-
-    /// The contact solver.
-    pub fn solver(&self) -> &S {
-        &self.solver
     }
 
     /// Recompute the contact vectors, their Gram matrix and the compressions for new positions.
@@ -253,9 +302,9 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
     }
 
     /// Start a new block: move the targets on and, if a position changed, the vectors.
-    fn begin_block(&mut self) {
+    fn begin_block<C: ControlSource<SlideControls>>(&mut self, controls: &mut C) {
         self.start = self.target;
-        self.target = self.controls.at(self.n + self.block as u64);
+        self.target = controls.at(self.n + self.block as u64);
         let (s, t, len) = (&self.start, &self.target, self.block);
         self.hand = Ramp::new(s.hand_height, t.hand_height, len);
         self.left_force = Ramp::new(s.left_force, t.left_force, len);
@@ -268,7 +317,7 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
     }
 
     #[inline]
-    fn step<const MONITOR: bool>(&mut self) -> Frame {
+    fn step<S: ContactSolver, const MONITOR: bool>(&mut self, solver: &mut S) -> Frame {
         let k = self.k;
         let hand = HandMotion { prev: self.hand_prev, now: self.hand.at(k), next: self.hand.at(k + 1) };
         let (f_le, f_re) = (self.left_force.at(k), self.right_force.at(k));
@@ -306,7 +355,7 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
         let z_sho = self.sho.history(&hand);
         let problem =
             ContactProblem { y_prev: self.y_prev, y_now: self.y_now, z: z_str - z_sho, q: q_str + self.sho.coupling() };
-        let solution = self.solver.solve(&problem);
+        let solution = solver.solve(&problem);
         let force = solution.force;
         let y_next = self.y_prev + solution.s;
         let (s_l, s_r) = (s_l0 + s_l1 * force, s_r0 + s_r1 * force);
@@ -333,14 +382,13 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
             force,
             energy: 0.0,
             losses: 0.0,
-            work: self.solver.last_work(),
+            work: solver.last_work(),
         };
         if MONITOR {
             let fingers = 0.5 * (g_l * s_l * s_l + g_r * s_r * s_r - f_le * s_l - f_re * s_r);
             self.losses += string_energy.dissipated + fingers - exchanged;
-            frame.energy = string_energy.stored
-                + self.sho.energy(hand.now, hand.next)
-                + self.solver.stored_energy(y_next, self.y_now);
+            frame.energy =
+                string_energy.stored + self.sho.energy(hand.now, hand.next) + solver.stored_energy(y_next, self.y_now);
             frame.losses = self.losses;
         }
         self.out_now = out_next;
@@ -352,41 +400,40 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
         frame
     }
 
-    /// Run `count` steps, starting blocks where they fall, handing each frame to `sink`.
+    /// Run `count` steps with `solver`, starting blocks where they fall and asking `controls`
+    /// for their targets, handing each frame to `sink`.
     #[inline]
-    fn run<const MONITOR: bool>(&mut self, count: usize, mut sink: impl FnMut(usize, Frame)) {
+    pub fn run<S: ContactSolver, C: ControlSource<SlideControls>, const MONITOR: bool>(
+        &mut self,
+        solver: &mut S,
+        controls: &mut C,
+        count: usize,
+        mut sink: impl FnMut(usize, Frame),
+    ) {
         let mut done = 0;
         while done < count {
             if self.k == self.block {
                 self.k = 0;
                 if C::VARYING {
-                    self.begin_block();
+                    self.begin_block(controls);
                 }
             }
             let run = (self.block - self.k).min(count - done);
             for i in done..done + run {
-                sink(i, self.step::<MONITOR>());
+                sink(i, self.step::<S, MONITOR>(solver));
             }
             done += run;
         }
     }
-}
 
-impl<S: ContactSolver, C: ControlSource<SlideControls>> Scene for SlideString<S, C> {
-    fn sample_rate(&self) -> f64 {
-        self.string.sample_rate()
-    }
-
-    fn initial_energy(&self) -> f64 {
-        self.initial_energy
-    }
-
-    fn process(&mut self, frames: &mut [Frame]) {
-        self.run::<true>(frames.len(), |i, f| frames[i] = f);
-    }
-
-    fn process_output(&mut self, out: &mut [f64]) {
-        self.run::<false>(out.len(), |i, f| out[i] = f.output);
+    /// Advance `out.len()` samples writing only the output signal.
+    pub fn process_output<S: ContactSolver, C: ControlSource<SlideControls>>(
+        &mut self,
+        solver: &mut S,
+        controls: &mut C,
+        out: &mut [f64],
+    ) {
+        self.run::<S, C, false>(solver, controls, out.len(), |i, f| out[i] = f.output);
     }
 }
 
