@@ -356,18 +356,6 @@ pub fn log_uniform(u: f64, lo: f64, hi: f64) -> f64 {
     (lo.ln() + u * (hi.ln() - lo.ln())).exp()
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn gamma_matches_known_values() {
-        assert!((gamma(1.0) - 1.0).abs() < 1e-14);
-        assert!((gamma(5.0) - 24.0).abs() < 1e-12);
-        assert!((gamma(0.5) - std::f64::consts::PI.sqrt()).abs() < 1e-14);
-    }
-}
-
 /// Fundamental frequency (Hz) of `signal` by autocorrelation: the shortest lag in
 /// `[fs/f_max, fs/f_min]` whose correlation is within 10 % of the largest, refined by a parabola.
 pub fn fundamental(signal: &[f64], fs: f64, f_min: f64, f_max: f64) -> f64 {
@@ -405,4 +393,16 @@ pub fn spectral_peak(signal: &[f64], fs: f64, f_lo: f64, f_hi: f64) -> f64 {
     let best = (1..mags.len() - 1).max_by(|&a, &b| mags[a].total_cmp(&mags[b])).expect("a grid of 3 or more points");
     let (a, b, c) = (mags[best - 1], mags[best], mags[best + 1]);
     grid[best] + 0.5 * step * (a - c) / (a - 2.0 * b + c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gamma_matches_known_values() {
+        assert!((gamma(1.0) - 1.0).abs() < 1e-14);
+        assert!((gamma(5.0) - 24.0).abs() < 1e-12);
+        assert!((gamma(0.5) - std::f64::consts::PI.sqrt()).abs() < 1e-14);
+    }
 }
