@@ -110,6 +110,19 @@ impl<T: Copy> ControlSource<T> for Fixed<T> {
     }
 }
 
+/// Controls that something outside sets before each block (an instrument voice): the value
+/// held when a block starts is that block's target, reached at its end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Live<T>(pub T);
+
+impl<T: Copy> ControlSource<T> for Live<T> {
+    const VARYING: bool = true;
+
+    fn at(&mut self, _n: u64) -> T {
+        self.0
+    }
+}
+
 /// A linear ramp across one block: value `start + slope·k` at sample `k` of the block.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Ramp {

@@ -72,6 +72,13 @@ impl SlideHand {
         Self { params, dt, k, q: xi * norm, norm, xi, w_prev: w0, w_now: w0 }
     }
 
+    /// New slide and hand parameters, keeping the slide's motion.
+    pub fn set_params(&mut self, params: SlideParams) {
+        let (w_prev, w_now) = (self.w_prev, self.w_now);
+        *self = Self::new(params, 1.0 / self.dt, w_now);
+        self.w_prev = w_prev;
+    }
+
     /// `w_o^{n−1}` (m).
     #[inline]
     pub fn previous(&self) -> f64 {

@@ -14,6 +14,13 @@
 //!   the string would. The sustain pedal (CC64 ≥ 64 on the note's channel) holds dampers off.
 //! - Striking a key that still sounds strikes the same string again, which keeps vibrating.
 //!
+//! # Slide mode
+//!
+//! Each note plucks a slide-guitar string ([`SlideVoice`]): the slide position follows the played
+//! key (legato notes glide) or the `slide_position` setting, plus pitch bend; the hand height comes
+//! from the setting or from the mod wheel, channel pressure or poly pressure. Bend and pressure
+//! are kept per channel, so with MPE (a channel per note) every voice glides on its own.
+//!
 //! # Voices
 //!
 //! The pool is sized once ([`Instrument::new`]); nothing allocates after that. A note takes a free
@@ -28,9 +35,11 @@
 //! splits its buffers: rendering in calls of any size gives the same samples.
 
 mod settings;
+mod slide_voice;
 mod voice;
 
-pub use settings::{MAX_BLOCK, MAX_SEGMENTS, Settings, hammer_speed};
+pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, hammer_speed};
+pub use slide_voice::{ChannelState, OPEN_KEY, PLUCK_TIME, REST_FORCE, SlideVoice, TRAIL};
 pub use voice::{PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike};
 
 use crate::string::ModalString;
@@ -38,8 +47,12 @@ use crate::string::ModalString;
 /// Most voices an instrument may have.
 pub const MAX_VOICES: usize = 128;
 
-/// Output scale (1/N): bridge force to full scale. A fortissimo C4 (6 m/s) peaks near 0.5.
+/// Output scale of the piano (1/N): bridge force to full scale. A fortissimo C4 (6 m/s) peaks
+/// near 0.5.
 pub const OUTPUT_SCALE: f64 = 0.016;
+
+/// Output scale of the slide guitar (1/m): string displacement at the pickup to full scale.
+pub const SLIDE_SCALE: f64 = 300.0;
 
 /// A note or controller event, as MIDI delivers them.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,6 +84,41 @@ pub enum Event {
     AllNotesOff,
     /// Silence everything at once (CC120).
     AllSoundOff,
+    /// Pitch bend of a channel, −1..=1 (moves the slide).
+    PitchBend {
+        /// MIDI channel, 0..=15.
+        channel: u8,
+        /// Bend, −1..=1.
+        value: f32,
+    },
+    /// Channel pressure, 0..=1.
+    ChannelPressure {
+        /// MIDI channel, 0..=15.
+        channel: u8,
+        /// Pressure, 0..=1.
+        value: f32,
+    },
+    /// Poly (key) pressure, 0..=1.
+    PolyPressure {
+        /// MIDI channel, 0..=15.
+        channel: u8,
+        /// MIDI key, 0..=127.
+        key: u8,
+        /// Pressure, 0..=1.
+        value: f32,
+    },
+    /// Mod wheel (CC1), 0..=1.
+    ModWheel {
+        /// MIDI channel, 0..=15.
+        channel: u8,
+        /// Position, 0..=1.
+        value: f32,
+    },
+}
+
+/// A controller value from a host, made safe: NaN gives 0, the rest is clamped to `[lo, 1]`.
+fn unit(value: f32, lo: f64) -> f64 {
+    if value.is_nan() { 0.0 } else { f64::from(value).clamp(lo, 1.0) }
 }
 
 /// The instrument engine.
@@ -82,6 +130,11 @@ pub struct Instrument {
     /// Settings in force for the current control block.
     settings: Settings,
     voices: Vec<PianoVoice>,
+    slides: Vec<SlideVoice>,
+    /// Controllers per channel (MPE gives each note its own channel).
+    channels: [ChannelState; 16],
+    /// Pickup position the slide voices were last set to.
+    pickup: f64,
     /// Sustain pedal per channel.
     sustain: [bool; 16],
     /// Samples rendered since the start.
@@ -105,6 +158,9 @@ impl Instrument {
             requested: settings,
             settings,
             voices: (0..count).map(|_| PianoVoice::new(modes, sample_rate)).collect(),
+            slides: (0..count).map(|_| SlideVoice::new(sample_rate, &settings)).collect(),
+            channels: [ChannelState::default(); 16],
+            pickup: settings.pickup_position,
             sustain: [false; 16],
             now: 0,
             in_block: 0,
@@ -139,6 +195,7 @@ impl Instrument {
     /// Voices currently sounding.
     pub fn sounding(&self) -> usize {
         self.voices.iter().filter(|v| v.sounding || v.fading()).count()
+            + self.slides.iter().filter(|v| v.sounding).count()
     }
 
     /// Set what the host controls; takes effect at the next control block. Values out of range
@@ -152,21 +209,41 @@ impl Instrument {
         match event {
             Event::NoteOn { channel, key, velocity } if velocity > 0.0 => {
                 let strike = Strike { channel: channel & 15, key: key & 127, velocity: f64::from(velocity.min(1.0)) };
-                self.note_on(strike);
+                match self.settings.mode {
+                    Mode::Piano => self.note_on(strike),
+                    Mode::Slide => self.slide_on(strike),
+                }
             }
             Event::NoteOn { channel, key, .. } | Event::NoteOff { channel, key } => {
+                let (channel, key) = (channel & 15, key & 127);
                 for v in &mut self.voices {
-                    v.key_up(channel & 15, key & 127);
+                    v.key_up(channel, key);
+                }
+                for v in self.slides.iter_mut().filter(|v| v.strike.channel == channel && v.strike.key == key) {
+                    v.key_up();
+                }
+            }
+            Event::PitchBend { channel, value } => self.channels[usize::from(channel & 15)].bend = unit(value, -1.0),
+            Event::ChannelPressure { channel, value } => {
+                self.channels[usize::from(channel & 15)].pressure = unit(value, 0.0)
+            }
+            Event::ModWheel { channel, value } => self.channels[usize::from(channel & 15)].mod_wheel = unit(value, 0.0),
+            Event::PolyPressure { channel, key, value } => {
+                let (channel, key) = (channel & 15, key & 127);
+                for v in self.slides.iter_mut().filter(|v| v.strike.channel == channel && v.strike.key == key) {
+                    v.poly_pressure = unit(value, 0.0);
                 }
             }
             Event::Sustain { channel, down } => self.sustain[usize::from(channel & 15)] = down,
             Event::AllNotesOff => {
                 self.sustain = [false; 16];
                 self.voices.iter_mut().for_each(PianoVoice::release);
+                self.slides.iter_mut().for_each(SlideVoice::key_up);
             }
             Event::AllSoundOff => {
                 self.sustain = [false; 16];
                 self.voices.iter_mut().for_each(PianoVoice::silence);
+                self.slides.iter_mut().for_each(SlideVoice::silence);
             }
         }
     }
@@ -202,6 +279,28 @@ impl Instrument {
         }
     }
 
+    fn slide_on(&mut self, strike: Strike) {
+        let now = self.now;
+        let settings = self.settings;
+        // Following keys, a new key while another is held on the channel glides there (legato).
+        if settings.follow_key
+            && let Some(v) =
+                self.slides.iter_mut().find(|v| v.sounding && v.key_down && v.strike.channel == strike.channel)
+        {
+            v.play(strike, &settings, true, now);
+            return;
+        }
+        // A free voice, else the oldest: its string keeps its motion, so reuse does not click.
+        let index = self
+            .slides
+            .iter()
+            .position(|v| !v.sounding)
+            .or_else(|| self.slides.iter().enumerate().min_by_key(|(_, v)| v.started).map(|(i, _)| i));
+        if let Some(i) = index {
+            self.slides[i].play(strike, &settings, false, now);
+        }
+    }
+
     /// Render into `left` and `right` (the same length), replacing their contents.
     pub fn process(&mut self, left: &mut [f32], right: &mut [f32]) {
         let n = left.len().min(right.len());
@@ -213,17 +312,16 @@ impl Instrument {
                 self.begin_block();
             }
             let len = (self.settings.block - self.in_block).min(n - done);
-            let scale = OUTPUT_SCALE * self.settings.gain;
+            let (piano_scale, slide_scale) = (OUTPUT_SCALE * self.settings.gain, SLIDE_SCALE * self.settings.gain);
             let scratch = &mut self.scratch[..len];
+            let (l, r) = (&mut left[done..done + len], &mut right[done..done + len]);
             for voice in self.voices.iter_mut().filter(|v| v.sounding) {
                 voice.render(scratch);
-                for ((l, r), &x) in
-                    left[done..done + len].iter_mut().zip(&mut right[done..done + len]).zip(scratch.iter())
-                {
-                    let y = (x * scale) as f32;
-                    *l += y;
-                    *r += y;
-                }
+                mix(scratch, piano_scale, l, r);
+            }
+            for voice in self.slides.iter_mut().filter(|v| v.sounding) {
+                voice.render(scratch);
+                mix(scratch, slide_scale, l, r);
             }
             done += len;
             self.now += len as u64;
@@ -241,5 +339,22 @@ impl Instrument {
             let sustained = self.sustain[usize::from(v.strike.channel)];
             v.begin_block(&self.settings, sustained, len, self.now);
         }
+        let move_pickup = self.pickup != self.settings.pickup_position;
+        self.pickup = self.settings.pickup_position;
+        for v in &mut self.slides {
+            if move_pickup {
+                v.set_pickup(self.pickup);
+            }
+            v.begin_block(&self.settings, &self.channels[usize::from(v.strike.channel)], len);
+        }
+    }
+}
+
+/// Add `x · scale` to both channels.
+fn mix(x: &[f64], scale: f64, left: &mut [f32], right: &mut [f32]) {
+    for ((l, r), &v) in left.iter_mut().zip(right.iter_mut()).zip(x) {
+        let y = (v * scale) as f32;
+        *l += y;
+        *r += y;
     }
 }

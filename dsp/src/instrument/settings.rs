@@ -8,10 +8,40 @@ pub const MAX_SEGMENTS: usize = 64;
 /// Longest control block N_b (samples).
 pub const MAX_BLOCK: usize = 256;
 
+/// Which instrument the engine is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Mode {
+    /// Hammer–string: a piano.
+    #[default]
+    Piano,
+    /// Slide–string: a slide guitar.
+    Slide,
+}
+
+/// Where the slide's hand height comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum HandSource {
+    /// The `hand_height` setting.
+    #[default]
+    Parameter,
+    /// The mod wheel (CC1) of the note's channel: 0 lifts the slide, full presses it.
+    ModWheel,
+    /// Channel pressure of the note's channel (per note with MPE).
+    ChannelPressure,
+    /// Poly pressure of the note's key.
+    PolyPressure,
+}
+
+/// Lowest and highest hand height a controller maps to (m): lifted at 0, pressed at full.
+pub const HAND_RANGE: (f64, f64) = (2e-3, -2e-3);
+
 /// Everything the host can set. Piano quantities are relative to the per-note rule
-/// ([`crate::preset::piano_note`]), so the keyboard keeps its natural variation.
+/// ([`crate::preset::piano_note`]), so the keyboard keeps its natural variation; slide quantities
+/// are absolute.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
+    /// Piano or slide guitar. New notes use the mode in force; sounding ones ring out.
+    pub mode: Mode,
     /// Contact solver of new notes.
     pub method: Method,
     /// QSA segments N of new notes, 1..=[`MAX_SEGMENTS`].
@@ -38,11 +68,40 @@ pub struct Settings {
     pub damper_time: f64,
     /// Output gain (linear), 0..=10.
     pub gain: f64,
+    /// Slide position in semitones above the open string, 0..=24 (when not following the key).
+    pub slide_position: f64,
+    /// Whether the slide follows the played key (legato notes glide there).
+    pub follow_key: bool,
+    /// Time constant of the slide's glide to a new position (s), 0.001..=2.
+    pub glide_time: f64,
+    /// Pitch-bend range (semitones of slide travel), 0..=24.
+    pub bend_range: f64,
+    /// Hand height (m), −3 mm..=3 mm: the slide's rest height; negative presses it on the string.
+    pub hand_height: f64,
+    /// Where the hand height comes from.
+    pub hand_source: HandSource,
+    /// Slide mass (kg), 5 g..=200 g.
+    pub slide_mass: f64,
+    /// Hand stiffness k_H (N/m), 1e2..=1e6.
+    pub hand_stiffness: f64,
+    /// Hand damping r_H (kg/s), 0..=100.
+    pub hand_damping: f64,
+    /// Finger damping r (s/m), 0..=50.
+    pub finger_damping: f64,
+    /// Plucking position, fraction of the length from the nut, 0.5..=0.98.
+    pub pluck_position: f64,
+    /// Pickup position, fraction of the length from the nut, 0.5..=0.98.
+    pub pickup_position: f64,
+    /// Slide contact stiffness κ (N/m^α), 1e6..=1e13.
+    pub slide_kappa: f64,
+    /// Slide contact exponent α, 1..=3.
+    pub slide_alpha: f64,
 }
 
 impl Default for Settings {
     fn default() -> Self {
         Self {
+            mode: Mode::Piano,
             method: Method::Qsa,
             segments: 6,
             block: 64,
@@ -55,6 +114,20 @@ impl Default for Settings {
             damper_rate: 60.0,
             damper_time: 0.01,
             gain: 1.0,
+            slide_position: 5.0,
+            follow_key: true,
+            glide_time: 0.05,
+            bend_range: 2.0,
+            hand_height: -1.5e-3,
+            hand_source: HandSource::Parameter,
+            slide_mass: 0.03,
+            hand_stiffness: 1e4,
+            hand_damping: 5.0,
+            finger_damping: 5.0,
+            pluck_position: 0.9,
+            pickup_position: 0.9,
+            slide_kappa: 1e9,
+            slide_alpha: 1.5,
         }
     }
 }
@@ -82,6 +155,21 @@ impl Settings {
             damper_rate: clamp(self.damper_rate, 1.0, 500.0, d.damper_rate),
             damper_time: clamp(self.damper_time, 0.001, 0.1, d.damper_time),
             gain: clamp(self.gain, 0.0, 10.0, d.gain),
+            mode: self.mode,
+            slide_position: clamp(self.slide_position, 0.0, 24.0, d.slide_position),
+            follow_key: self.follow_key,
+            glide_time: clamp(self.glide_time, 0.001, 2.0, d.glide_time),
+            bend_range: clamp(self.bend_range, 0.0, 24.0, d.bend_range),
+            hand_height: clamp(self.hand_height, -3e-3, 3e-3, d.hand_height),
+            hand_source: self.hand_source,
+            slide_mass: clamp(self.slide_mass, 0.005, 0.2, d.slide_mass),
+            hand_stiffness: clamp(self.hand_stiffness, 1e2, 1e6, d.hand_stiffness),
+            hand_damping: clamp(self.hand_damping, 0.0, 100.0, d.hand_damping),
+            finger_damping: clamp(self.finger_damping, 0.0, 50.0, d.finger_damping),
+            pluck_position: clamp(self.pluck_position, 0.5, 0.98, d.pluck_position),
+            pickup_position: clamp(self.pickup_position, 0.5, 0.98, d.pickup_position),
+            slide_kappa: clamp(self.slide_kappa, 1e6, 1e13, d.slide_kappa),
+            slide_alpha: clamp(self.slide_alpha, 1.0, 3.0, d.slide_alpha),
         }
     }
 }

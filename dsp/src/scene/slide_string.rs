@@ -193,6 +193,8 @@ pub struct SlideCore {
     /// Finger damping parameters r (s/m).
     r: [f64; 2],
     block: usize,
+    /// Block length to use from the next block boundary.
+    next_block: usize,
     /// Sample index of the next step.
     n: u64,
     /// Index of the next step within its block.
@@ -239,6 +241,7 @@ impl SlideCore {
             kind: params.pickup.kind,
             r: [params.left.damping, params.right.damping],
             block,
+            next_block: block,
             n: 0,
             k: 0,
             start,
@@ -264,6 +267,33 @@ impl SlideCore {
     /// `(y^{n−1}, y^n)` (m), to start a solver from.
     pub fn compressions(&self) -> (f64, f64) {
         (self.y_prev, self.y_now)
+    }
+
+    /// New slide-and-hand and finger-damping parameters and control block length N_b (samples),
+    /// taking effect at once (the block length at the next block boundary). Keeps the motion.
+    pub fn set_params(&mut self, slide: SlideParams, finger_damping: [f64; 2], block: usize) {
+        self.sho.set_params(slide);
+        self.r = finger_damping;
+        self.next_block = block.max(1);
+    }
+
+    /// Move the pickup to `pickup` (the string's output weights). Never allocates.
+    pub fn set_pickup(&mut self, pickup: Pickup) {
+        let s = &self.string;
+        s.fit_vector(&mut self.pickup);
+        match pickup.kind {
+            OutputKind::Displacement | OutputKind::Velocity => {
+                s.mode_shapes(pickup.position * s.params().length, &mut self.pickup)
+            }
+            OutputKind::BridgeForce => s.bridge_weights(true, &mut self.pickup),
+        }
+        self.kind = pickup.kind;
+        self.out_now = dot(s.state(), &self.pickup);
+    }
+
+    /// Whether the slide touches the string (now or one step back).
+    pub fn in_contact(&self) -> bool {
+        self.y_now > 0.0 || self.y_prev > 0.0
     }
 
     /// String and slide energy of the current state (J), without the contact term.
@@ -414,6 +444,7 @@ impl SlideCore {
         while done < count {
             if self.k == self.block {
                 self.k = 0;
+                self.block = self.next_block;
                 if C::VARYING {
                     self.begin_block(controls);
                 }

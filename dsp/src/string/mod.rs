@@ -567,6 +567,14 @@ impl ModalString {
         }
     }
 
+    /// Kinetic energy of the latest step, `½ m̃ ‖(ũ^n − ũ^{n−1})/Δt‖²` (J): zero for a string held
+    /// still however far it is deflected.
+    pub fn kinetic_energy(&self) -> f64 {
+        let fs = self.sample_rate;
+        let sum: f64 = self.u_now.iter().zip(&self.u_prev).map(|(a, b)| (a - b) * (a - b)).sum();
+        0.5 * self.modal_mass * sum * fs * fs
+    }
+
     /// The string's energy `H^{n−1/2}` of the current state (J): the stored term between
     /// `ũ^{n−1}` and `ũ^n`.
     pub fn energy(&self) -> f64 {
