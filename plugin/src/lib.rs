@@ -175,3 +175,23 @@ impl Vst3Plugin for QsaStrings {
 
 nice_export_clap!(QsaStrings);
 nice_export_vst3!(QsaStrings);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every channel message becomes the same engine event through the framework's parser and
+    /// this plugin's mapping as through the offline renderer's `event_from_midi`.
+    #[test]
+    fn midi_maps_like_the_offline_renderer() {
+        for status in (0x80..=0xef).step_by(1) {
+            for (d1, d2) in
+                [(0u8, 0u8), (60, 1), (60, 64), (127, 127), (1, 100), (64, 63), (64, 64), (120, 0), (123, 5)]
+            {
+                let via_host = NoteEvent::<()>::from_midi(0, &[status, d1, d2]).ok().and_then(|e| engine_event(&e));
+                let offline = qsa_dsp::instrument::event_from_midi(status, d1, d2);
+                assert_eq!(via_host, offline, "status {status:#x} data {d1} {d2}");
+            }
+        }
+    }
+}

@@ -34,7 +34,7 @@ use std::sync::Arc;
 
 use nice_plug::prelude::*;
 use qsa_dsp::contact::Method;
-use qsa_dsp::instrument::{HandSource, Mode, Settings};
+use qsa_dsp::instrument::{HandSource, Mode, PARAM_IDS, ParamValues, Settings};
 
 /// Instrument mode parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Enum)]
@@ -291,11 +291,9 @@ impl Default for QsaParams {
 }
 
 impl QsaParams {
-    /// The engine settings these parameters describe. Allocation-free (called every process
-    /// call); the engine clamps whatever it gets.
-    pub fn settings(&self) -> Settings {
-        let f = |p: &FloatParam| f64::from(p.value());
-        Settings {
+    /// The plain parameter values, as the shared mapping to engine settings takes them.
+    pub fn values(&self) -> ParamValues {
+        ParamValues {
             mode: match self.mode.value() {
                 ModeParam::Piano => Mode::Piano,
                 ModeParam::Slide => Mode::Slide,
@@ -305,35 +303,56 @@ impl QsaParams {
                 SolverParam::Exp => Method::Exp,
                 SolverParam::Imp => Method::Imp,
             },
-            segments: self.segments.value().max(1) as usize,
-            block: self.block.value().max(1) as usize,
-            hardness: f(&self.hardness),
-            hammer_mass: f(&self.hammer_mass),
-            strike_position: f(&self.strike_position),
-            damping: f(&self.damping),
-            brightness: f(&self.brightness),
-            damper_rate: f(&self.damper),
-            slide_position: f(&self.slide_position),
+            segments: self.segments.value(),
+            block: self.block.value(),
+            voices: self.voices.value(),
+            hardness: self.hardness.value(),
+            hammer_mass: self.hammer_mass.value(),
+            strike_position: self.strike_position.value(),
+            damping: self.damping.value(),
+            brightness: self.brightness.value(),
+            damper: self.damper.value(),
+            slide_position: self.slide_position.value(),
             follow_key: self.follow_key.value(),
-            glide_time: f(&self.glide) * 1e-3,
-            bend_range: f(&self.bend_range),
-            hand_height: f(&self.hand_height) * 1e-3,
+            glide_ms: self.glide.value(),
+            bend_range: self.bend_range.value(),
+            hand_mm: self.hand_height.value(),
             hand_source: match self.hand_source.value() {
                 HandSourceParam::Parameter => HandSource::Parameter,
                 HandSourceParam::ModWheel => HandSource::ModWheel,
                 HandSourceParam::ChannelPressure => HandSource::ChannelPressure,
                 HandSourceParam::PolyPressure => HandSource::PolyPressure,
             },
-            slide_mass: f(&self.slide_mass) * 1e-3,
-            hand_stiffness: f(&self.hand_stiffness),
-            hand_damping: f(&self.hand_damping),
-            finger_damping: f(&self.finger_damping),
-            slide_kappa: f(&self.kappa),
-            slide_alpha: f(&self.alpha),
-            pluck_position: f(&self.pluck_position),
-            pickup_position: f(&self.pickup_position),
-            gain: f(&self.gain),
-            ..Settings::default()
+            slide_mass_g: self.slide_mass.value(),
+            hand_stiffness: self.hand_stiffness.value(),
+            hand_damping: self.hand_damping.value(),
+            finger_damping: self.finger_damping.value(),
+            kappa: self.kappa.value(),
+            alpha: self.alpha.value(),
+            pluck_position: self.pluck_position.value(),
+            pickup_position: self.pickup_position.value(),
+            gain: self.gain.value(),
         }
+    }
+
+    /// The engine settings these parameters describe. Allocation-free (called every process
+    /// call); the engine clamps whatever it gets.
+    pub fn settings(&self) -> Settings {
+        self.values().settings()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The plugin's ids are the shared list, in order, and its defaults are the shared defaults,
+    /// so the offline renderer's `--set ID=VALUE` and a host set the same thing.
+    #[test]
+    fn ids_and_defaults_match_the_engine() {
+        let params = QsaParams::default();
+        let ids: Vec<String> = params.param_map().into_iter().map(|(id, _, _)| id).collect();
+        assert_eq!(ids, PARAM_IDS.map(String::from).to_vec());
+        assert_eq!(params.values(), ParamValues::default());
     }
 }

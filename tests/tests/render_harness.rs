@@ -325,9 +325,15 @@ fn fig4_scene_file_renders_as_is_next_to_a_copy() {
 fn in_process_run_returns_the_summary_it_prints() {
     let dir = TempDir::new().unwrap();
     let scene = write_scene(dir.path(), "s.toml", BASE);
-    let args = RenderArgs { scene: scene.clone(), out: Some(dir.path().join("o.wav")), csv: false, chunk: Some(7) };
+    let args = RenderArgs {
+        scene: Some(scene.clone()),
+        out: Some(dir.path().join("o.wav")),
+        chunk: Some(7),
+        ..RenderArgs::default()
+    };
     let mut stdout = Vec::new();
-    let summary: Summary = xtask::render::run(&args, &mut stdout).expect("the base scene renders");
+    let summary: Summary =
+        xtask::render::run(&args, &mut stdout).expect("the base scene renders").scene().expect("a scene summary");
     let text = String::from_utf8(stdout).unwrap();
     assert_eq!(text.lines().count(), 1);
     let json: Value = serde_json::from_str(text.trim_end()).unwrap();
@@ -710,7 +716,7 @@ fn malformed_scenes_fail_in_process_with_a_scene_error() {
     for case in bad_scenes() {
         let dir = TempDir::new().unwrap();
         let scene = write_scene(dir.path(), "case.toml", &case.text);
-        let args = RenderArgs { scene, out: None, csv: true, chunk: None };
+        let args = RenderArgs { scene: Some(scene), csv: true, ..RenderArgs::default() };
         let mut stdout = Vec::new();
         let err = xtask::render::run(&args, &mut stdout).expect_err(case.what);
         assert!(matches!(err, xtask::render::RenderError::Scene { .. }), "{}: {err:?}", case.what);

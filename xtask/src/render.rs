@@ -1,4 +1,9 @@
 //! `cargo xtask render <scene.toml> [--out PATH.wav] [--csv] [--chunk N]`
+//! `cargo xtask render --midi FILE.mid [--mode piano|slide] [--set ID=VALUE ...] [--rate HZ] [--tail S] [--out PATH.wav]`
+//!
+//! With `--midi` the file plays through the instrument engine as the plugin would (see [`midi`]):
+//! a stereo 32-bit float WAV, not normalised, and the same summary line, with `scene = "midi"`,
+//! `contacts` = notes played, and `null` for what a MIDI render does not measure.
 //!
 //! Renders a scene file through the dsp engine ([`qsa_dsp::render`]) and
 //! - writes a mono 32-bit float WAV (default: next to the scene file, with extension `.wav`),
@@ -25,6 +30,8 @@ use qsa_dsp::render::{Rendered, SceneError, Summary, parse_scene, render};
 use rand::{RngExt, SeedableRng};
 use tempfile::NamedTempFile;
 
+pub mod midi;
+
 /// Seed of the random chunk sizes of `--chunk 0`.
 pub const CHUNK_SEED: u64 = 0x5eed_c4a7;
 
@@ -32,16 +39,68 @@ pub const CHUNK_SEED: u64 = 0x5eed_c4a7;
 #[derive(Debug, Clone, Args)]
 pub struct RenderArgs {
     /// Scene file (TOML).
-    pub scene: PathBuf,
-    /// Output WAV path [default: the scene path with extension .wav].
+    #[arg(required_unless_present = "midi", conflicts_with = "midi")]
+    pub scene: Option<PathBuf>,
+    /// Render a MIDI file through the instrument engine instead of a scene.
+    #[arg(long, value_name = "FILE.mid")]
+    pub midi: Option<PathBuf>,
+    /// Instrument mode for --midi (same as --set mode=...).
+    #[arg(long, value_parser = ["piano", "slide"], requires = "midi")]
+    pub mode: Option<String>,
+    /// Set a plugin parameter for --midi, by its id (see README), e.g. --set hard=2 --set gain=-6.
+    #[arg(long = "set", value_name = "ID=VALUE", requires = "midi")]
+    pub set: Vec<String>,
+    /// Sample rate for --midi (Hz).
+    #[arg(long, default_value_t = 48_000, requires = "midi")]
+    pub rate: u32,
+    /// Seconds rendered after the last MIDI event.
+    #[arg(long, default_value_t = 2.0, requires = "midi")]
+    pub tail: f64,
+    /// Output WAV path [default: the input path with extension .wav].
     #[arg(long, value_name = "PATH.wav")]
     pub out: Option<PathBuf>,
-    /// Also write per-sample signals to a CSV beside the WAV.
-    #[arg(long)]
+    /// Also write per-sample signals to a CSV beside the WAV (scenes only).
+    #[arg(long, conflicts_with = "midi")]
     pub csv: bool,
     /// Render in calls of N samples (0: seeded random sizes) [default: one call].
     #[arg(long, value_name = "N")]
     pub chunk: Option<usize>,
+}
+
+impl Default for RenderArgs {
+    fn default() -> Self {
+        Self {
+            scene: None,
+            midi: None,
+            mode: None,
+            set: Vec::new(),
+            rate: 48_000,
+            tail: 2.0,
+            out: None,
+            csv: false,
+            chunk: None,
+        }
+    }
+}
+
+/// What a render produced: the summary line it printed.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(untagged)]
+pub enum Outcome {
+    /// A scene render.
+    Scene(Summary),
+    /// A MIDI render.
+    Midi(midi::MidiSummary),
+}
+
+impl Outcome {
+    /// The scene summary, if this was a scene render.
+    pub fn scene(self) -> Option<Summary> {
+        match self {
+            Outcome::Scene(s) => Some(s),
+            Outcome::Midi(_) => None,
+        }
+    }
 }
 
 /// Why a render failed.
@@ -66,6 +125,9 @@ pub enum RenderError {
     /// An output path is unusable.
     #[error("{0}")]
     Output(String),
+    /// The MIDI file or a parameter is invalid.
+    #[error("{0}")]
+    Midi(String),
     /// Writing an output failed.
     #[error("cannot write {path}: {source}")]
     Write {
@@ -89,11 +151,22 @@ pub fn chunk_sizes(chunk: Option<usize>) -> Box<dyn Iterator<Item = usize>> {
 }
 
 /// Run `render`, printing the summary line to `stdout`.
-pub fn run(args: &RenderArgs, stdout: &mut dyn Write) -> Result<Summary, RenderError> {
+pub fn run(args: &RenderArgs, stdout: &mut dyn Write) -> Result<Outcome, RenderError> {
+    let summary = match (&args.scene, &args.midi) {
+        (_, Some(midi_path)) => Outcome::Midi(midi::run(args, midi_path)?),
+        (Some(scene_path), None) => Outcome::Scene(run_scene(args, scene_path)?),
+        (None, None) => return Err(RenderError::Output("give a scene file or --midi FILE.mid".into())),
+    };
+    let line = serde_json::to_string(&summary).expect("a summary always serialises");
+    writeln!(stdout, "{line}").map_err(|source| RenderError::Write { path: "<stdout>".into(), source })?;
+    Ok(summary)
+}
+
+fn run_scene(args: &RenderArgs, scene_path: &Path) -> Result<Summary, RenderError> {
     let text =
-        fs::read_to_string(&args.scene).map_err(|source| RenderError::Read { path: args.scene.clone(), source })?;
-    let scene = parse_scene(&text).map_err(|source| RenderError::Scene { path: args.scene.clone(), source })?;
-    let wav_path = args.out.clone().unwrap_or_else(|| args.scene.with_extension("wav"));
+        fs::read_to_string(scene_path).map_err(|source| RenderError::Read { path: scene_path.to_owned(), source })?;
+    let scene = parse_scene(&text).map_err(|source| RenderError::Scene { path: scene_path.to_owned(), source })?;
+    let wav_path = args.out.clone().unwrap_or_else(|| scene_path.with_extension("wav"));
     let csv_path = args.csv.then(|| wav_path.with_extension("csv"));
     if csv_path.as_ref() == Some(&wav_path) {
         return Err(RenderError::Output(format!(
@@ -102,10 +175,10 @@ pub fn run(args: &RenderArgs, stdout: &mut dyn Write) -> Result<Summary, RenderE
         )));
     }
     for path in std::iter::once(&wav_path).chain(csv_path.as_ref()) {
-        check_output_path(path, &args.scene)?;
+        check_output_path(path, scene_path)?;
     }
     let rendered = render(&scene, chunk_sizes(args.chunk))
-        .map_err(|source| RenderError::Scene { path: args.scene.clone(), source })?;
+        .map_err(|source| RenderError::Scene { path: scene_path.to_owned(), source })?;
     let options = scene.common().output;
     let wav = write_temp(&wav_path, |w| {
         write_wav(w, &rendered, scene.common().sample_rate, options.normalize, options.gain)
@@ -118,12 +191,10 @@ pub fn run(args: &RenderArgs, stdout: &mut dyn Write) -> Result<Summary, RenderE
     if let Some((file, path)) = csv {
         persist(file, path)?;
     }
-    let line = serde_json::to_string(&rendered.summary).expect("a summary always serialises");
-    writeln!(stdout, "{line}").map_err(|source| RenderError::Write { path: "<stdout>".into(), source })?;
     Ok(rendered.summary)
 }
 
-fn check_output_path(path: &Path, scene: &Path) -> Result<(), RenderError> {
+pub(crate) fn check_output_path(path: &Path, scene: &Path) -> Result<(), RenderError> {
     let same = match (fs::canonicalize(path), fs::canonicalize(scene)) {
         (Ok(a), Ok(b)) => a == b,
         _ => false,
@@ -152,7 +223,7 @@ fn parent_dir(path: &Path) -> &Path {
 }
 
 /// Write an output into a temporary file beside `path`.
-fn write_temp(
+pub(crate) fn write_temp(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<&std::fs::File>) -> std::io::Result<()>,
 ) -> Result<NamedTempFile, RenderError> {
@@ -170,7 +241,7 @@ fn write_temp(
     Ok(file)
 }
 
-fn persist(file: NamedTempFile, path: &Path) -> Result<(), RenderError> {
+pub(crate) fn persist(file: NamedTempFile, path: &Path) -> Result<(), RenderError> {
     file.persist(path).map_err(|e| RenderError::Write { path: path.to_owned(), source: e.error })?;
     Ok(())
 }

@@ -1,0 +1,91 @@
+//! `cargo xtask render --midi`: MIDI files through the instrument engine (issue 5).
+
+use std::path::PathBuf;
+
+use qsa_tests::fundamental;
+use xtask::render::{Outcome, RenderArgs, run};
+
+fn scene(name: &str) -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes")).join(name)
+}
+
+fn render(args: RenderArgs) -> (Outcome, Vec<f32>, Vec<f32>) {
+    let mut stdout = Vec::new();
+    let outcome = run(&args, &mut stdout).expect("the MIDI file renders");
+    let line = String::from_utf8(stdout).unwrap();
+    assert_eq!(line.lines().count(), 1, "one JSON line");
+    let json: serde_json::Value = serde_json::from_str(line.trim()).unwrap();
+    for key in
+        ["scene", "method", "segments", "sample_rate", "samples", "contacts", "peak_force", "wall_seconds", "rtf"]
+    {
+        assert!(json.get(key).is_some(), "summary has {key}");
+    }
+    let mut reader = hound::WavReader::open(args.out.as_ref().unwrap()).unwrap();
+    assert_eq!(reader.spec().channels, 2);
+    let samples: Vec<f32> = reader.samples::<f32>().map(Result::unwrap).collect();
+    let left = samples.iter().step_by(2).copied().collect();
+    let right = samples.iter().skip(1).step_by(2).copied().collect();
+    (outcome, left, right)
+}
+
+fn midi_args(file: &str, out: PathBuf) -> RenderArgs {
+    RenderArgs { midi: Some(scene(file)), out: Some(out), tail: 1.0, ..RenderArgs::default() }
+}
+
+/// The piano phrase: every note is played (14), the sound is finite, audible and below full
+/// scale, and rendering in calls of 1 or 4096 samples gives the same samples.
+#[test]
+fn piano_phrase_renders_the_same_in_any_calls() {
+    let dir = tempfile::tempdir().unwrap();
+    let (outcome, left, right) =
+        render(RenderArgs { chunk: Some(4096), ..midi_args("piano-phrase.mid", dir.path().join("a.wav")) });
+    let Outcome::Midi(summary) = outcome else { panic!("a MIDI summary") };
+    assert_eq!(summary.contacts, 14);
+    assert_eq!(left, right, "piano mode is mono");
+    let peak = left.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+    assert!(left.iter().all(|v| v.is_finite()) && peak > 0.05 && peak < 1.0, "peak {peak}");
+    let (_, single, _) =
+        render(RenderArgs { chunk: Some(1), ..midi_args("piano-phrase.mid", dir.path().join("b.wav")) });
+    assert!(single.iter().zip(&left).all(|(a, b)| a.to_bits() == b.to_bits()));
+}
+
+/// The slide phrase in slide mode: its first note (E3) sounds at 164.8 Hz within 1 %.
+#[test]
+fn slide_phrase_plays_in_slide_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = RenderArgs { mode: Some("slide".into()), ..midi_args("slide-phrase.mid", dir.path().join("s.wav")) };
+    let (_, left, _) = render(args);
+    let first: Vec<f64> = left[4_800..28_000].iter().map(|&v| f64::from(v)).collect();
+    let f = fundamental(&first, 48_000.0, 130.0, 200.0);
+    assert!((f / 164.81 - 1.0).abs() < 0.01, "E3 at {f} Hz");
+}
+
+/// Bad input is an error naming what is wrong, and writes nothing: not a MIDI file, an unknown
+/// parameter id, a value that is not a number.
+#[test]
+fn bad_midi_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let junk = dir.path().join("junk.mid");
+    std::fs::write(&junk, b"this is not a MIDI file").unwrap();
+    let cases = [
+        (
+            RenderArgs { midi: Some(junk.clone()), out: Some(dir.path().join("1.wav")), ..RenderArgs::default() },
+            "not a MIDI file",
+        ),
+        (RenderArgs { set: vec!["kapa=3".into()], ..midi_args("piano-phrase.mid", dir.path().join("2.wav")) }, "kapa"),
+        (
+            RenderArgs { set: vec!["hard=lots".into()], ..midi_args("piano-phrase.mid", dir.path().join("3.wav")) },
+            "hard",
+        ),
+        (
+            RenderArgs { set: vec!["hard".into()], ..midi_args("piano-phrase.mid", dir.path().join("4.wav")) },
+            "ID=VALUE",
+        ),
+    ];
+    for (args, needle) in cases {
+        let out = args.out.clone().unwrap();
+        let err = run(&args, &mut Vec::new()).expect_err(needle).to_string();
+        assert!(err.contains(needle), "error for {needle}: {err}");
+        assert!(!out.exists(), "no output for {needle}");
+    }
+}

@@ -1,0 +1,213 @@
+//! `cargo xtask render --midi FILE.mid`: a MIDI file through the instrument engine, exactly as
+//! the plugin plays it.
+//!
+//! Every track is merged into one timeline; times follow the file's tempo map (metrical files) or
+//! its SMPTE rate, and land on the nearest sample. Channel messages become engine events with
+//! [`event_from_midi`], the conversion a host and the plugin apply, and the parameters come from
+//! [`ParamValues`] with `--set ID=VALUE` applied, so the samples equal those of the plugin given
+//! the same parameters and events at the same samples. The render runs until the last event
+//! plus `--tail` seconds.
+
+use midly::{MetaMessage, MidiMessage, Smf, Timing, TrackEventKind};
+use qsa_dsp::instrument::{Event, Instrument, ParamValues, event_from_midi};
+
+/// A MIDI file turned into engine events at sample offsets.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Score {
+    /// `(sample, event)`, in time order (file order within a sample).
+    pub events: Vec<(u64, Event)>,
+    /// Notes the file plays.
+    pub notes: usize,
+}
+
+/// Why a MIDI file cannot be rendered.
+#[derive(Debug, thiserror::Error)]
+pub enum MidiError {
+    /// Not a standard MIDI file.
+    #[error("not a MIDI file: {0}")]
+    Parse(String),
+}
+
+/// Read `bytes` (a standard MIDI file) into events at `sample_rate` (Hz).
+pub fn score(bytes: &[u8], sample_rate: f64) -> Result<Score, MidiError> {
+    let smf = Smf::parse(bytes).map_err(|e| MidiError::Parse(e.to_string()))?;
+    // (tick, track, index in track, kind)
+    let mut timeline = Vec::new();
+    for (track, events) in smf.tracks.iter().enumerate() {
+        let mut tick: u64 = 0;
+        for (index, e) in events.iter().enumerate() {
+            tick += u64::from(e.delta.as_int());
+            timeline.push((tick, track, index, e.kind));
+        }
+    }
+    timeline.sort_by_key(|&(tick, track, index, _)| (tick, track, index));
+    let seconds_per_tick_at = |tempo_us: f64| match smf.header.timing {
+        Timing::Metrical(tpb) => tempo_us * 1e-6 / f64::from(tpb.as_int().max(1)),
+        Timing::Timecode(fps, sub) => 1.0 / (f64::from(fps.as_f32()) * f64::from(sub.max(1))),
+    };
+    let mut tempo = 500_000.0;
+    let (mut last_tick, mut seconds) = (0u64, 0.0f64);
+    let mut out = Vec::new();
+    let mut notes = 0;
+    for (tick, _, _, kind) in timeline {
+        seconds += (tick - last_tick) as f64 * seconds_per_tick_at(tempo);
+        last_tick = tick;
+        match kind {
+            TrackEventKind::Meta(MetaMessage::Tempo(t)) => tempo = f64::from(t.as_int()),
+            TrackEventKind::Midi { channel, message } => {
+                let (status, d1, d2) = match message {
+                    MidiMessage::NoteOff { key, vel } => (0x80, key.as_int(), vel.as_int()),
+                    MidiMessage::NoteOn { key, vel } => (0x90, key.as_int(), vel.as_int()),
+                    MidiMessage::Aftertouch { key, vel } => (0xa0, key.as_int(), vel.as_int()),
+                    MidiMessage::Controller { controller, value } => (0xb0, controller.as_int(), value.as_int()),
+                    MidiMessage::ChannelAftertouch { vel } => (0xd0, vel.as_int(), 0),
+                    MidiMessage::PitchBend { bend } => {
+                        let raw = bend.0.as_int();
+                        (0xe0, (raw & 0x7f) as u8, (raw >> 7) as u8)
+                    }
+                    MidiMessage::ProgramChange { .. } => continue,
+                };
+                if let Some(event) = event_from_midi(status | channel.as_int(), d1, d2) {
+                    if matches!(event, Event::NoteOn { .. }) {
+                        notes += 1;
+                    }
+                    out.push(((seconds * sample_rate).round() as u64, event));
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(Score { events: out, notes })
+}
+
+/// Render `score` with `params` at `sample_rate` (Hz) until the last event plus `tail` seconds,
+/// in calls of `chunk` samples (split at every event). Returns left and right channels and the
+/// wall-clock seconds spent in the engine.
+pub fn render(
+    score: &Score,
+    params: &ParamValues,
+    sample_rate: f64,
+    tail: f64,
+    chunk: usize,
+) -> (Vec<f32>, Vec<f32>, f64) {
+    let end = score.events.last().map_or(0, |e| e.0) + (tail.max(0.0) * sample_rate).round() as u64;
+    let samples = end.max(1) as usize;
+    let mut engine = Instrument::new(sample_rate, params.voices.clamp(1, 128) as usize, params.settings());
+    let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
+    let start = std::time::Instant::now();
+    let mut next = 0;
+    let mut t = 0usize;
+    while t < samples {
+        while next < score.events.len() && score.events[next].0 as usize <= t {
+            engine.handle(score.events[next].1);
+            next += 1;
+        }
+        let until_event = score.events.get(next).map_or(samples, |e| (e.0 as usize).min(samples));
+        let n = chunk.max(1).min(until_event - t).min(samples - t).max(1);
+        engine.process(&mut left[t..t + n], &mut right[t..t + n]);
+        t += n;
+    }
+    (left, right, start.elapsed().as_secs_f64())
+}
+
+/// The summary line of a MIDI render: the keys of a scene render's summary, `null` where a MIDI
+/// render does not measure them.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct MidiSummary {
+    /// Always `"midi"`.
+    pub scene: &'static str,
+    /// Solver.
+    pub method: &'static str,
+    /// QSA segments.
+    pub segments: usize,
+    /// Sample rate (Hz).
+    pub sample_rate: u32,
+    /// Samples rendered.
+    pub samples: usize,
+    /// Not measured.
+    pub contact_samples: Option<usize>,
+    /// Notes played.
+    pub contacts: usize,
+    /// Not measured.
+    pub peak_force: Option<f64>,
+    /// Not measured.
+    pub max_compression: Option<f64>,
+    /// Not measured.
+    pub rebound_velocity: Option<f64>,
+    /// Not measured.
+    pub energy_drift_rel: Option<f64>,
+    /// Largest output sample magnitude (full scale 1).
+    pub peak: f64,
+    /// Wall-clock time of the engine (s).
+    pub wall_seconds: f64,
+    /// Wall seconds per simulated second.
+    pub rtf: f64,
+}
+
+/// `render --midi`: read, render, write the WAV; return the summary.
+pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSummary, super::RenderError> {
+    use super::RenderError;
+    let bytes = std::fs::read(path).map_err(|source| RenderError::Read { path: path.to_owned(), source })?;
+    let mut params = ParamValues::default();
+    if let Some(mode) = &args.mode {
+        params.set("mode", mode).map_err(|e| RenderError::Midi(e.to_string()))?;
+    }
+    for assignment in &args.set {
+        let (id, value) = assignment
+            .split_once('=')
+            .ok_or_else(|| RenderError::Midi(format!("--set {assignment}: expected ID=VALUE")))?;
+        params.set(id.trim(), value.trim()).map_err(|e| RenderError::Midi(format!("--set {assignment}: {e}")))?;
+    }
+    if !(1000..=768_000).contains(&args.rate) {
+        return Err(RenderError::Midi(format!("--rate {}: must be 1000 to 768000 Hz", args.rate)));
+    }
+    if !(args.tail.is_finite() && (0.0..=600.0).contains(&args.tail)) {
+        return Err(RenderError::Midi(format!("--tail {}: must be 0 to 600 s", args.tail)));
+    }
+    let fs = f64::from(args.rate);
+    let score = score(&bytes, fs).map_err(|e| RenderError::Midi(format!("{}: {e}", path.display())))?;
+    let seconds = (score.events.last().map_or(0, |e| e.0) as f64) / fs + args.tail;
+    if seconds > 600.0 {
+        return Err(RenderError::Midi(format!("{}: lasts {seconds:.0} s; at most 600 s", path.display())));
+    }
+    let wav_path = args.out.clone().unwrap_or_else(|| path.with_extension("wav"));
+    super::check_output_path(&wav_path, path)?;
+    let (left, right, wall) = render(&score, &params, fs, args.tail, args.chunk.unwrap_or(512).max(1));
+    let spec = hound::WavSpec {
+        channels: 2,
+        sample_rate: args.rate,
+        bits_per_sample: 32,
+        sample_format: hound::SampleFormat::Float,
+    };
+    let wav = super::write_temp(&wav_path, |w| {
+        let mut buffer = std::io::Cursor::new(Vec::with_capacity(44 + 8 * left.len()));
+        {
+            let mut writer = hound::WavWriter::new(&mut buffer, spec).map_err(std::io::Error::other)?;
+            for (l, r) in left.iter().zip(&right) {
+                writer.write_sample(*l).map_err(std::io::Error::other)?;
+                writer.write_sample(*r).map_err(std::io::Error::other)?;
+            }
+            writer.finalize().map_err(std::io::Error::other)?;
+        }
+        std::io::Write::write_all(w, buffer.get_ref())
+    })?;
+    super::persist(wav, &wav_path)?;
+    let settings = params.settings().sanitized();
+    let samples = left.len();
+    Ok(MidiSummary {
+        scene: "midi",
+        method: settings.method.name(),
+        segments: settings.segments,
+        sample_rate: args.rate,
+        samples,
+        contact_samples: None,
+        contacts: score.notes,
+        peak_force: None,
+        max_compression: None,
+        rebound_velocity: None,
+        energy_drift_rel: None,
+        peak: left.iter().chain(&right).fold(0.0f32, |m, v| m.max(v.abs())).into(),
+        wall_seconds: wall,
+        rtf: wall / (samples as f64 / fs),
+    })
+}
