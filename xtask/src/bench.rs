@@ -7,8 +7,9 @@
 //! discarded warm-up run. Cases:
 //! - `hammer-c4/{qsa,exp,imp}`: the Fig. 5 voice (C4 string, 56 modes at 44.1 kHz), QSA N = 6;
 //! - `slide-phrase/nb{1,8,64}`: the slide phrase with control blocks of 1, 8 and 64 samples;
-//! - `piano/16-voices`: the instrument engine at 48 kHz with 16 keys (C3 to C6 in whole tones
-//!   and thirds) struck together, pedal down, rendered in 512-sample calls;
+//! - `piano/16-voices/{64,512}` and `slide/16-voices/{64,512}`: the instrument engine (the
+//!   plugin's process path) at 48 kHz with 16 keys from C3 to C6 played together, pedal down,
+//!   rendered in 64- and 512-sample calls;
 //! - `piano/88-keys`: all 88 keys (A0 to C8) struck together, pedal down, 48 kHz: the whole
 //!   piano at once. Its line also says how many C4 voices fit in real time on one core.
 
@@ -17,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use qsa_dsp::contact::{Method, SolverSettings};
-use qsa_dsp::instrument::{Event, Instrument, Settings};
+use qsa_dsp::instrument::{Event, Instrument, Mode, Settings};
 use qsa_dsp::render::{SceneDescription, parse_scene, render_output};
 use qsa_dsp::string::ModalString;
 use serde::Serialize;
@@ -118,16 +119,18 @@ pub fn measure(name: &str, scene: &SceneDescription, runs: usize) -> Result<Benc
 /// Sample rate of the instrument cases (Hz).
 const PIANO_RATE: f64 = 48_000.0;
 
-/// Time the instrument playing `keys` together with the pedal down, `runs` times, rendering
-/// `seconds` in calls of `call` samples.
-pub fn measure_piano(name: &str, keys: &[u8], seconds: f64, call: usize, runs: usize) -> BenchLine {
-    let settings = Settings::default();
+/// Time the instrument (in `mode`) playing `keys` together with the pedal down, `runs` times,
+/// rendering `seconds` in calls of `call` samples.
+pub fn measure_piano(name: &str, mode: Mode, keys: &[u8], seconds: f64, call: usize, runs: usize) -> BenchLine {
+    let settings = Settings { mode, ..Settings::default() };
     let samples = (seconds * PIANO_RATE) as usize;
     let once = || {
         let mut piano = Instrument::new(PIANO_RATE, keys.len().max(1), settings);
-        piano.handle(Event::Sustain { channel: 0, down: true });
-        for &key in keys {
-            piano.handle(Event::NoteOn { channel: 0, key, velocity: 0.7 });
+        // One channel per note (the MPE way) so that slide notes are separate voices, not glides.
+        for (i, &key) in keys.iter().enumerate() {
+            let channel = if mode == Mode::Slide { (i % 16) as u8 } else { 0 };
+            piano.handle(Event::Sustain { channel, down: true });
+            piano.handle(Event::NoteOn { channel, key, velocity: 0.7 });
         }
         let (mut left, mut right) = (vec![0.0f32; call], vec![0.0f32; call]);
         let start = std::time::Instant::now();
@@ -149,7 +152,10 @@ pub fn measure_piano(name: &str, keys: &[u8], seconds: f64, call: usize, runs: u
     let modes = keys
         .iter()
         .map(|&k| {
-            let string = qsa_dsp::instrument::PianoVoice::string_for(k, &settings);
+            let string = match mode {
+                Mode::Piano => qsa_dsp::instrument::PianoVoice::string_for(k, &settings),
+                Mode::Slide => qsa_dsp::preset::slide_guitar().string,
+            };
             qsa_dsp::string::ModalString::band_limited(string, PIANO_RATE, settings.max_frequency)
                 .map_or(0, |s| s.modes())
         })
@@ -201,9 +207,16 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
     // C3 (48) to C6 (84): 16 keys.
     let sixteen: Vec<u8> = (0..16).map(|i| 48 + (i * 36 / 15) as u8).collect();
     let all: Vec<u8> = (21..=108).collect();
-    for (name, keys, call) in [("piano/16-voices", &sixteen, 512), ("piano/88-keys", &all, 64)] {
+    let cases = [
+        ("piano/16-voices/64", Mode::Piano, &sixteen, 64),
+        ("piano/16-voices/512", Mode::Piano, &sixteen, 512),
+        ("slide/16-voices/64", Mode::Slide, &sixteen, 64),
+        ("slide/16-voices/512", Mode::Slide, &sixteen, 512),
+        ("piano/88-keys", Mode::Piano, &all, 64),
+    ];
+    for (name, mode, keys, call) in cases {
         if name.contains(&args.filter) {
-            emit(measure_piano(name, keys, 2.0, call, args.runs), &mut lines);
+            emit(measure_piano(name, mode, keys, 2.0, call, args.runs), &mut lines);
         }
     }
     Ok(lines)

@@ -207,6 +207,11 @@ impl SlideVoice {
         let span = len as f64 / fs;
         let target = self.target(settings, channel);
         self.position += (target - self.position) * (1.0 - (-span / settings.glide_time).exp());
+        // Arrive: an exponential glide never quite does, and a moving slide costs a recomputation
+        // of the contact vectors every block.
+        if (target - self.position).abs() < 1e-4 {
+            self.position = target;
+        }
         let x_o = (self.length * (1.0 - 2f64.powf(-self.position / 12.0))).clamp(0.005, 0.8 * self.length);
         let pressed = |v: f64| HAND_RANGE.0 + (HAND_RANGE.1 - HAND_RANGE.0) * v.clamp(0.0, 1.0);
         let hand_height = match settings.hand_source {
