@@ -376,3 +376,19 @@ fn slide_mode_is_buffer_invariant_and_allocation_free() {
     assert_eq!(count, 0);
     assert!(left.iter().all(|v| v.is_finite()));
 }
+
+/// The monitor shows the struck string: its shape is finite and moving, the contact position is
+/// the key's striking point, and taking a snapshot allocates nothing.
+#[test]
+fn monitor_shows_the_loudest_voice() {
+    let mut p = piano(4);
+    assert_eq!(p.monitor().sounding, 0);
+    let _ = play(&mut p, &vec![(0, on(48, 0.3)), (0, on(60, 1.0))], 960, || 64);
+    let mut m = qsa_dsp::instrument::Monitor::default();
+    assert_eq!(allocations_in(|| m = p.monitor()), 0);
+    assert_eq!((m.sounding, m.key), (2, 60), "the fortissimo C4 is the loudest");
+    assert!(m.shape.iter().all(|v| v.is_finite()) && m.shape.iter().any(|v| v.abs() > 1e-7));
+    assert_eq!((m.shape[0], m.shape[qsa_dsp::instrument::SHAPE_POINTS - 1].abs() < 1e-9), (0.0, true), "fixed ends");
+    assert!((m.contact_position - 0.12).abs() < 1e-9, "C4 is struck at 0.12 L");
+    assert!(m.energy > 0.0 && m.length > 0.5);
+}

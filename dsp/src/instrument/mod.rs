@@ -35,12 +35,14 @@
 //! splits its buffers: rendering in calls of any size gives the same samples.
 
 mod midi;
+mod monitor;
 mod params;
 mod settings;
 mod slide_voice;
 mod voice;
 
 pub use midi::event_from_midi;
+pub use monitor::{Monitor, SHAPE_POINTS};
 pub use params::{PARAM_IDS, ParamError, ParamValues};
 pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, hammer_speed};
 pub use slide_voice::{ChannelState, OPEN_KEY, PLUCK_TIME, REST_FORCE, SlideVoice, TRAIL};

@@ -254,6 +254,17 @@ impl SlideVoice {
         }
     }
 
+    /// The string, for monitoring.
+    pub fn string(&self) -> &ModalString {
+        self.core.string()
+    }
+
+    /// `(compression (m), latest contact force (N), slide position (fraction of the length))`.
+    pub fn contact(&self) -> (f64, f64, f64) {
+        let (y, f, x) = self.core.contact();
+        (y, f, x / self.length)
+    }
+
     /// Move the pickup (fraction of the length).
     pub fn set_pickup(&mut self, position: f64) {
         self.core.set_pickup(Pickup { kind: OutputKind::Displacement, position });

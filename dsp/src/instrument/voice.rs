@@ -48,6 +48,8 @@ pub struct PianoVoice {
     damper: f64,
     /// Energy of the latest strike (J), the reference for releasing the voice.
     reference_energy: f64,
+    /// Striking position of the latest strike (fraction of the length).
+    position: f64,
     /// Samples of steal fade left before `pending` starts.
     fade_left: usize,
     /// A note waiting for the fade to finish.
@@ -80,6 +82,7 @@ impl PianoVoice {
             started: 0,
             damper: 0.0,
             reference_energy: 0.0,
+            position: note.strike_position,
             fade_left: 0,
             pending: None,
             pending_released: false,
@@ -121,6 +124,7 @@ impl PianoVoice {
         // The felt starts two samples of travel away, so the hammer lands almost at once.
         let hammer = HammerParams { mass, velocity, position, gap: 2.0 * velocity / fs };
         self.core.strike(&hammer);
+        self.position = position;
         let Ok(law) = PowerLaw::new(note.kappa * settings.hardness, note.alpha) else { return };
         self.method = settings.method;
         self.reference_energy = hammer.kinetic_energy().max(f64::MIN_POSITIVE);
@@ -230,6 +234,17 @@ impl PianoVoice {
         if self.pending.is_none() && !self.core.in_contact() && self.energy() < RELEASE_ENERGY * self.reference_energy {
             self.sounding = false;
         }
+    }
+
+    /// The string, for monitoring.
+    pub fn string(&self) -> &ModalString {
+        self.core.string()
+    }
+
+    /// `(compression (m), latest contact force (N), strike position (fraction of the length))`.
+    pub fn contact(&self) -> (f64, f64, f64) {
+        let (y, f) = self.core.contact();
+        (y, f, self.position)
     }
 
     /// Render `out.len()` samples of bridge force (N).

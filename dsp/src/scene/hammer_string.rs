@@ -131,6 +131,8 @@ pub struct HammerCore {
     out_now: f64,
     /// Energy dissipated so far (J).
     losses: f64,
+    /// Contact force of the latest step (N).
+    last_force: f64,
     dt: f64,
 }
 
@@ -150,6 +152,7 @@ impl HammerCore {
             y_now: 0.0,
             out_now: 0.0,
             losses: 0.0,
+            last_force: 0.0,
             dt: 1.0 / fs,
             string,
             hammer,
@@ -232,6 +235,11 @@ impl HammerCore {
         self.string.energy() + self.hammer.energy()
     }
 
+    /// What a monitor shows: `(compression y^n (m), latest contact force (N))`.
+    pub fn contact(&self) -> (f64, f64) {
+        (self.y_now, self.last_force)
+    }
+
     /// Whether the felt is touching or about to: compression above zero now or one step back.
     pub fn in_contact(&self) -> bool {
         self.y_now > 0.0 || self.y_prev > 0.0
@@ -245,6 +253,7 @@ impl HammerCore {
         let problem = ContactProblem { y_prev: self.y_prev, y_now: self.y_now, z: hz - z_h, q: self.q };
         let solution = solver.solve(&problem);
         let y_next = self.y_prev + solution.s;
+        self.last_force = solution.force;
         let forces = [(&self.gain[..], solution.force)];
         let (out_next, string_energy) = if MONITOR {
             self.string.advance_monitored(forces, &self.pickup)

@@ -213,6 +213,8 @@ pub struct SlideCore {
     y_now: f64,
     out_now: f64,
     losses: f64,
+    /// Contact force of the latest step (N).
+    last_force: f64,
     dt: f64,
 }
 
@@ -255,6 +257,7 @@ impl SlideCore {
             y_now: 0.0,
             out_now: 0.0,
             losses: 0.0,
+            last_force: 0.0,
             dt: 1.0 / fs,
             string,
             sho,
@@ -289,6 +292,11 @@ impl SlideCore {
         }
         self.kind = pickup.kind;
         self.out_now = dot(s.state(), &self.pickup);
+    }
+
+    /// What a monitor shows: `(compression y^n (m), latest contact force (N), slide position x_o (m))`.
+    pub fn contact(&self) -> (f64, f64, f64) {
+        (self.y_now, self.last_force, self.positions[0])
     }
 
     /// Whether the slide touches the string (now or one step back).
@@ -387,6 +395,7 @@ impl SlideCore {
             ContactProblem { y_prev: self.y_prev, y_now: self.y_now, z: z_str - z_sho, q: q_str + self.sho.coupling() };
         let solution = solver.solve(&problem);
         let force = solution.force;
+        self.last_force = force;
         let y_next = self.y_prev + solution.s;
         let (s_l, s_r) = (s_l0 + s_l1 * force, s_r0 + s_r1 * force);
         let [g_o, g_lf, g_rf] = &self.gains;

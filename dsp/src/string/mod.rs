@@ -567,6 +567,21 @@ impl ModalString {
         }
     }
 
+    /// String displacement `u(x) = Σ sin(β_i x) ũ_i^n` (m) at `x` (m): one pass over the modes.
+    pub fn displacement_at(&self, x: f64) -> f64 {
+        let theta = std::f64::consts::PI * x / self.params.length;
+        let (s1, c1) = theta.sin_cos();
+        let two_c = 2.0 * c1;
+        let (mut prev, mut now, mut sum) = (0.0, s1, 0.0);
+        for &u in &self.u_now[..self.modes()] {
+            sum += now * u;
+            let next = two_c * now - prev;
+            prev = now;
+            now = next;
+        }
+        sum
+    }
+
     /// Kinetic energy of the latest step, `½ m̃ ‖(ũ^n − ũ^{n−1})/Δt‖²` (J): zero for a string held
     /// still however far it is deflected.
     pub fn kinetic_energy(&self) -> f64 {
