@@ -39,6 +39,7 @@ mod monitor;
 mod params;
 mod settings;
 mod slide_voice;
+mod solvers;
 mod voice;
 
 pub use midi::event_from_midi;
@@ -46,6 +47,7 @@ pub use monitor::{Monitor, SHAPE_POINTS};
 pub use params::{PARAM_IDS, ParamError, ParamValues};
 pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, hammer_speed};
 pub use slide_voice::{ChannelState, OPEN_KEY, PLUCK_TIME, REST_FORCE, SlideVoice, TRAIL};
+pub use solvers::Solvers;
 pub use voice::{PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike};
 
 use crate::string::ModalString;

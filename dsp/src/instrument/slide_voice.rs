@@ -14,10 +14,11 @@
 //!   [`PLUCK_TIME`] to `0.3 + 2.7·velocity` N and is then released; note-off lays the finger on
 //!   with 0.3 N, muting the string.
 
-use crate::contact::{ContactSolver, ExplicitSolver, Method, NewtonSolver, PowerLaw, QsaSolver, QuadSpline};
+use crate::contact::{Method, PowerLaw};
 use crate::control::Live;
 use crate::exciter::SlideParams;
-use crate::instrument::settings::{HAND_RANGE, HandSource, MAX_SEGMENTS, Settings};
+use crate::instrument::settings::{HAND_RANGE, HandSource, Settings};
+use crate::instrument::solvers::Solvers;
 use crate::instrument::voice::{RELEASE_ENERGY, Strike};
 use crate::preset::slide_guitar;
 use crate::scene::{OutputKind, Pickup, SlideControls, SlideCore, SlideStringParams};
@@ -50,10 +51,7 @@ pub struct ChannelState {
 #[derive(Debug, Clone)]
 pub struct SlideVoice {
     core: SlideCore,
-    qsa: QsaSolver,
-    imp: NewtonSolver,
-    exp: ExplicitSolver,
-    method: Method,
+    solvers: Solvers,
     live: Live<SlideControls>,
     length: f64,
     /// The note it plays.
@@ -106,10 +104,7 @@ impl SlideVoice {
         let law = PowerLaw::new(settings.slide_kappa, settings.slide_alpha).expect("clamped settings give a valid law");
         Self {
             core: SlideCore::new(string, &params, rest, rest),
-            qsa: QsaSolver::new(QuadSpline::with_capacity(law, MAX_SEGMENTS)),
-            imp: NewtonSolver::new(law),
-            exp: ExplicitSolver::new(law),
-            method: settings.method,
+            solvers: Solvers::new(law),
             live: Live(rest),
             length,
             strike: Strike { channel: 0, key: OPEN_KEY, velocity: 0.0 },
@@ -141,23 +136,8 @@ impl SlideVoice {
         // (the scene-file rule of `SlideStringDescription::default_v_ref`).
         let push = 2.0 * (settings.hand_stiffness * (-HAND_RANGE.1 + 1e-3) + 3.0 + REST_FORCE);
         let y_ref = (push / law.kappa()).powf(1.0 / law.alpha());
-        self.method = settings.method;
-        let (y_prev, y_now) = self.core.compressions();
-        match self.method {
-            Method::Qsa => {
-                if self.qsa.spline_mut().refit(law, y_ref, settings.segments).is_err() {
-                    return;
-                }
-                self.qsa.start(y_prev, y_now);
-            }
-            Method::Imp => {
-                self.imp.set_law(law);
-                self.imp.start(y_prev, y_now);
-            }
-            Method::Exp => {
-                self.exp.set_law(law);
-                self.exp.start(y_prev, y_now);
-            }
+        if !self.solvers.restart(settings.method, law, y_ref, settings.segments, self.core.compressions()) {
+            return;
         }
         // Static energy of the pluck: ½F² x(L − x)/(T L) for a point force F at x.
         let force = 0.3 + 2.7 * strike.velocity;
@@ -272,10 +252,11 @@ impl SlideVoice {
 
     /// Render `out.len()` samples of string displacement at the pickup (m).
     pub fn render(&mut self, out: &mut [f64]) {
-        match self.method {
-            Method::Qsa => self.core.process_output(&mut self.qsa, &mut self.live, out),
-            Method::Imp => self.core.process_output(&mut self.imp, &mut self.live, out),
-            Method::Exp => self.core.process_output(&mut self.exp, &mut self.live, out),
+        let s = &mut self.solvers;
+        match s.method {
+            Method::Qsa => self.core.process_output(&mut s.qsa, &mut self.live, out),
+            Method::Imp => self.core.process_output(&mut s.imp, &mut self.live, out),
+            Method::Exp => self.core.process_output(&mut s.exp, &mut self.live, out),
         }
     }
 }

@@ -1,8 +1,9 @@
 //! A piano voice: one string with its hammer, damper and solvers, reused note after note.
 
-use crate::contact::{ContactSolver, ExplicitSolver, Method, NewtonSolver, PowerLaw, QsaSolver, QuadSpline};
+use crate::contact::{Method, PowerLaw};
 use crate::exciter::HammerParams;
-use crate::instrument::settings::{MAX_SEGMENTS, Settings, hammer_speed};
+use crate::instrument::settings::{Settings, hammer_speed};
+use crate::instrument::solvers::Solvers;
 use crate::preset::piano_note;
 use crate::scene::{HammerCore, HammerStringParams, OutputKind, Pickup};
 use crate::string::{Damping, ModalString, StringParams};
@@ -32,10 +33,7 @@ pub struct Strike {
 #[derive(Debug, Clone)]
 pub struct PianoVoice {
     core: HammerCore,
-    qsa: QsaSolver,
-    imp: NewtonSolver,
-    exp: ExplicitSolver,
-    method: Method,
+    solvers: Solvers,
     /// The note it plays (valid while sounding).
     pub strike: Strike,
     /// Whether it produces sound.
@@ -72,10 +70,7 @@ impl PianoVoice {
         };
         Self {
             core: HammerCore::new(string, &params),
-            qsa: QsaSolver::new(QuadSpline::with_capacity(law, MAX_SEGMENTS)),
-            imp: NewtonSolver::new(law),
-            exp: ExplicitSolver::new(law),
-            method: Method::Qsa,
+            solvers: Solvers::new(law),
             strike: Strike { channel: 0, key: 60, velocity: 0.0 },
             sounding: false,
             key_down: false,
@@ -126,25 +121,10 @@ impl PianoVoice {
         self.core.strike(&hammer);
         self.position = position;
         let Ok(law) = PowerLaw::new(note.kappa * settings.hardness, note.alpha) else { return };
-        self.method = settings.method;
         self.reference_energy = hammer.kinetic_energy().max(f64::MIN_POSITIVE);
-        let (y_prev, y_now) = self.core.compressions();
-        match self.method {
-            Method::Qsa => {
-                let y_ref = law.compression_at_energy(self.reference_energy);
-                if self.qsa.spline_mut().refit(law, y_ref, settings.segments).is_err() {
-                    return;
-                }
-                self.qsa.start(y_prev, y_now);
-            }
-            Method::Imp => {
-                self.imp.set_law(law);
-                self.imp.start(y_prev, y_now);
-            }
-            Method::Exp => {
-                self.exp.set_law(law);
-                self.exp.start(y_prev, y_now);
-            }
+        let y_ref = law.compression_at_energy(self.reference_energy);
+        if !self.solvers.restart(settings.method, law, y_ref, settings.segments, self.core.compressions()) {
+            return;
         }
         self.strike = strike;
         self.sounding = true;
@@ -249,10 +229,11 @@ impl PianoVoice {
 
     /// Render `out.len()` samples of bridge force (N).
     pub fn render(&mut self, out: &mut [f64]) {
-        match self.method {
-            Method::Qsa => self.core.process_output(&mut self.qsa, out),
-            Method::Imp => self.core.process_output(&mut self.imp, out),
-            Method::Exp => self.core.process_output(&mut self.exp, out),
+        let s = &mut self.solvers;
+        match s.method {
+            Method::Qsa => self.core.process_output(&mut s.qsa, out),
+            Method::Imp => self.core.process_output(&mut s.imp, out),
+            Method::Exp => self.core.process_output(&mut s.exp, out),
         }
     }
 }

@@ -1,0 +1,61 @@
+//! One contact solver of each kind, kept by every voice so that switching schemes between notes
+//! never allocates; the voice picks the chosen one once per block.
+
+use crate::contact::{ContactSolver, ExplicitSolver, Method, NewtonSolver, PowerLaw, QsaSolver, QuadSpline};
+use crate::instrument::settings::MAX_SEGMENTS;
+
+/// The three solvers and which one plays.
+#[derive(Debug, Clone)]
+pub struct Solvers {
+    /// QSA, with room for [`MAX_SEGMENTS`] segments.
+    pub qsa: QsaSolver,
+    /// IMP.
+    pub imp: NewtonSolver,
+    /// EXP.
+    pub exp: ExplicitSolver,
+    /// The one in use.
+    pub method: Method,
+}
+
+impl Solvers {
+    /// Solvers for `law`, QSA chosen.
+    pub fn new(law: PowerLaw) -> Self {
+        Self {
+            qsa: QsaSolver::new(QuadSpline::with_capacity(law, MAX_SEGMENTS)),
+            imp: NewtonSolver::new(law),
+            exp: ExplicitSolver::new(law),
+            method: Method::Qsa,
+        }
+    }
+
+    /// Choose `method` for a new contact with `law` (QSA fitted with `segments` segments over
+    /// `[0, y_ref]`, m) and start it from the compressions `(y^{n−1}, y^n)` (m). Never allocates.
+    /// Returns `false`, leaving the previous choice, if the fit is impossible.
+    pub fn restart(
+        &mut self,
+        method: Method,
+        law: PowerLaw,
+        y_ref: f64,
+        segments: usize,
+        (y_prev, y_now): (f64, f64),
+    ) -> bool {
+        match method {
+            Method::Qsa => {
+                if self.qsa.spline_mut().refit(law, y_ref, segments).is_err() {
+                    return false;
+                }
+                self.qsa.start(y_prev, y_now);
+            }
+            Method::Imp => {
+                self.imp.set_law(law);
+                self.imp.start(y_prev, y_now);
+            }
+            Method::Exp => {
+                self.exp.set_law(law);
+                self.exp.start(y_prev, y_now);
+            }
+        }
+        self.method = method;
+        true
+    }
+}
