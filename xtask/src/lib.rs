@@ -3,11 +3,14 @@
 //! - `render`: render a scene file offline to a WAV (and a CSV of per-sample signals) and print a
 //!   one-line JSON summary. See [`render`].
 //! - `bench`: real-time factors of whole voices, one JSON line per case. See [`bench`].
+//! - `report`: the error-against-run-time and stability report in `docs/report/`, or with
+//!   `--quick` the CI check of its error figures. See [`report`].
 //!
 //! The tasks are a library so the test harness can run them in-process.
 
 pub mod bench;
 pub mod render;
+pub mod report;
 
 use std::ffi::OsString;
 use std::io::Write;
@@ -22,6 +25,9 @@ pub enum Cli {
     Render(render::RenderArgs),
     /// Measure the real-time factor of whole voices: one JSON line per case.
     Bench(bench::BenchArgs),
+    /// Run the error-against-run-time and stability sweeps and write docs/report/ (or, with
+    /// --quick, check the committed error figures against fresh runs).
+    Report(report::ReportArgs),
 }
 
 /// Run the command line `args` (without the program name), writing the task's report to
@@ -37,6 +43,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>, stdout: &mut dyn Write, std
     let result = match cli {
         Cli::Render(args) => render::run(&args, stdout).map(|_| ()).map_err(|e| e.to_string()),
         Cli::Bench(args) => bench::run(&args, stdout).map(|_| ()).map_err(|e| e.to_string()),
+        Cli::Report(args) => report::run(&args, stdout).map_err(|e| e.to_string()),
     };
     match result {
         Ok(()) => 0,

@@ -24,8 +24,11 @@
 //! (the positive root of `¼qψg² + ½zg − ψ = 0`, each sign of z in the form without cancellation:
 //! for `z < 0` and `4qψ² < ε·z²` the first form divides by `z + |z| = 0`). The branch is
 //! - `y^n > 0`: `g = min(dψ/dy(y^n), g_max)`, so the force is never adhesive;
-//! - `y^n ≤ 0`, `ψ > 0`: `g = g_max`, which drains ψ to zero and hands its energy back;
-//! - `y^n ≤ 0`, `ψ = 0`: `g = 0` (free flight).
+//! - `y^n ≤ 0`, `ψ > 0`, bodies moving apart (`z > 0`): `g = g_max`, which drains ψ to zero and
+//!   hands its energy back to the separation;
+//! - `y^n ≤ 0` otherwise: `g = 0` (free flight). In particular ψ left over from rounding is not
+//!   drained while the bodies approach: that would need a force of about `z/q` (it would stop
+//!   them dead, a bounce off nothing); it is drained once they move apart.
 //!
 //! Whenever `g = g_max` the step ends with `ψ^{n+1/2} = 0` exactly, and then
 //! `s = −2ψ^{n−1/2}/g_max`, evaluated as `−(z + √(z² + 4qψ²))/2` (z > 0) or
@@ -82,7 +85,7 @@ impl ContactSolver for ExplicitSolver {
         };
         let g = if y_now > 0.0 {
             self.law.psi_gradient(y_now).min(g_max)
-        } else if psi > 0.0 {
+        } else if psi > 0.0 && z > 0.0 {
             g_max
         } else {
             0.0

@@ -1,0 +1,745 @@
+//! Stability on stiff and extreme cases: a seeded sweep of random parameter sets per scene and
+//! method, plus hand-picked corners.
+//!
+//! # Parameter sets
+//!
+//! Set `i` of scene kind `s` is drawn from its own generator, `Pcg64::seed_from_u64(SEED + s·2⁴⁰ + i)`,
+//! so any set can be rebuilt alone (`cargo xtask report --rerun SCENE/METHOD/i`). Each set is run
+//! with QSA (its own N), IMP and EXP. Ranges (log-uniform unless noted):
+//!
+//! - contact: κ ∈ [1e2, 1e16] N/m^α, α ∈ [1, 4] (uniform); QSA N ∈ [1, 64];
+//! - sample rate fs ∈ [8, 384] kHz (whole Hz);
+//! - `mass-barrier`: mass ∈ [0.1 g, 1 kg], approach speed v0 ∈ [1e-3, 50] m/s, reaching the barrier
+//!   0.5 to 3 samples after the start (uniform); the run lasts the estimated Hertz contact time
+//!   (physics §9.1, `T_c ≤ 3.2·y_max/v0`) plus 20 %, plus 16 samples, between 32 and 4000 samples;
+//! - `hammer-string`: the `piano-note` string of a MIDI key in [21, 108] (uniform), lossless in half
+//!   of the sets; hammer mass ∈ [0.1 g, 1 kg], speed ∈ [1e-3, 50] m/s, striking position ∈
+//!   [0.05, 0.5] L (uniform), gap 0.5 to 3 samples of travel; twice the rigid-barrier contact time,
+//!   between 64 samples and `min(2000, 4e5 / modes)`;
+//! - `slide-string`: the `slide-guitar` string, slide and fingers, lossless in half of the sets
+//!   (no string damping, hand damping r_H = 0, finger damping r = 0; otherwise the preset's string
+//!   and fingers and r_H ∈ [0.5, 50] kg/s); slide mass ∈ [0.1 g, 1 kg], hand stiffness k_H ∈
+//!   [1e2, 1e5] N/m, slide position ∈ [0.1, 0.9] L (uniform), left finger 2 cm behind it, right
+//!   finger at 0.9 L, each finger pressing with a constant force (left ∈ [0, 2] N, right ∈ [0, 3] N,
+//!   each zero in half of the sets); control block N_b ∈ [1, 256]; the hand descends at the drawn
+//!   speed ∈ [1e-3, 50] m/s from 0.5 to 3 samples of travel above the string to a press depth of
+//!   min(v·T/2, 10 mm) (T the run length) and holds; between 64 samples and
+//!   `min(1500, 3e5 / modes)`. Positions are fixed, so the energy balance is exact.
+//!
+//! Corners (see [`corners`]): contacts much shorter than one sample (κ = 1e16, 0.1 g at 50 m/s,
+//! 8 kHz), contacts lasting the whole run (κ = 1e2, 1 kg at 1 mm/s), grazing contacts (v0 = 1e-9
+//! m/s and v0 = 0 at the barrier), the shipped Fig. 5 strike with N = 64, and the report's slide
+//! excerpt (moving slide and fingers) with N_b = 1 and 256.
+//!
+//! # Measures, per run
+//!
+//! With `E^n = H^{n+1/2} + L^n` (numerical energy plus the booked net losses, which is constant in
+//! exact arithmetic for every scene here) and `scale = max(|H^{−1/2}|, max_n |H^{n+1/2}|)`:
+//! - non-finite: any NaN or infinity in any frame (must never happen), or a panic;
+//! - energy drift `max_n |E^n − E^{−1/2}| / scale` in conservative sets (no loss mechanism);
+//! - energy increase `max_n (E^n − E^{−1/2})⁺ / scale` in lossy sets: energy the scheme created;
+//! - compression ratio `max_n y^n / y_ref`, with `y_ref` from the scene's default V_ref;
+//! - work: the largest number of QSA sign tests (bound `2⌈log2(N+1)⌉ + 1`) or IMP Newton
+//!   iterations (cap 100) in one step.
+//!
+//! A run **fails** if it is non-finite or panics, if QSA exceeds its sign-test bound, or if the
+//! energy error exceeds [`ENERGY_LIMIT`].
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+use qsa_dsp::contact::{MAX_ITERATIONS, Method, PowerLaw, SolverSettings};
+use qsa_dsp::control::Breakpoints;
+use qsa_dsp::exciter::{FingerParams, HammerParams, SlideParams};
+use qsa_dsp::preset::{chaigne_askenfelt_c4, piano_note, slide_guitar};
+use qsa_dsp::render::{Common, OutputOptions, SlideStringDescription};
+use qsa_dsp::scene::{
+    Frame, HammerStringParams, MassBarrierParams, OutputKind, Pickup, SlideAutomation, SlideStringParams,
+};
+use qsa_dsp::string::{Damping, ModalString, StringParams};
+use rand::{RngExt, SeedableRng};
+use rand_pcg::Pcg64;
+
+use super::ReportError;
+use super::sim::{CaseScene, Setup};
+
+/// Random parameter sets per scene kind (each run with every method).
+pub const SETS: usize = 10_000;
+
+/// Base seed of the sweep.
+pub const SEED: u64 = 0x5eed_0004_2024;
+
+/// Largest energy error (relative) a run may show: drift in conservative sets, increase in lossy
+/// ones. Rounding alone gives 1e-15 to 1e-13 per step at ordinary stiffness and up to ~1e-8 over a
+/// run at κ ≥ 1e12 (physics §3.5, §9.4); 1e-6 flags anything systematic.
+pub const ENERGY_LIMIT: f64 = 1e-6;
+
+/// Worst cases kept per measure.
+const KEEP: usize = 5;
+
+/// The three scene kinds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// Mass on a rigid barrier.
+    MassBarrier,
+    /// Hammer on a string.
+    HammerString,
+    /// Slide on a string.
+    SlideString,
+}
+
+impl Kind {
+    /// All kinds, in report order.
+    pub const ALL: [Kind; 3] = [Kind::MassBarrier, Kind::HammerString, Kind::SlideString];
+
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::MassBarrier => "mass-barrier",
+            Kind::HammerString => "hammer-string",
+            Kind::SlideString => "slide-string",
+        }
+    }
+
+    fn index(self) -> u64 {
+        match self {
+            Kind::MassBarrier => 0,
+            Kind::HammerString => 1,
+            Kind::SlideString => 2,
+        }
+    }
+}
+
+/// The methods every set runs with.
+pub const METHODS: [Method; 3] = [Method::Qsa, Method::Imp, Method::Exp];
+
+/// One parameter set.
+#[derive(Debug, Clone)]
+pub struct ParamSet {
+    /// Scene kind.
+    pub kind: Kind,
+    /// `i` for random sets, `corner-j` for corners.
+    pub id: String,
+    /// What to run.
+    pub scene: CaseScene,
+    /// QSA segment count.
+    pub segments: usize,
+    /// No loss mechanism: the energy must be conserved.
+    pub conservative: bool,
+    /// The drawn parameters, compactly.
+    pub about: String,
+}
+
+fn log_uniform(rng: &mut Pcg64, lo: f64, hi: f64) -> f64 {
+    (lo.ln() + rng.random::<f64>() * (hi.ln() - lo.ln())).exp()
+}
+
+fn log_int(rng: &mut Pcg64, lo: usize, hi: usize) -> usize {
+    (log_uniform(rng, lo as f64, hi as f64 + 1.0).floor() as usize).clamp(lo, hi)
+}
+
+/// Estimated contact time (s) of a mass `m` at `v` on a rigid barrier (physics §9.1, `I_n ≤ 1.6`).
+fn hertz_time(law: &PowerLaw, mass: f64, v: f64) -> f64 {
+    let n = law.alpha() + 1.0;
+    let y_max = (n * mass * v * v / (2.0 * law.kappa())).powf(1.0 / n);
+    3.2 * y_max / v.max(1e-300)
+}
+
+fn samples_within(seconds: f64, fs: f64, lo: usize, hi: usize) -> usize {
+    let n = (seconds * fs).ceil();
+    if n.is_finite() { (n as usize).clamp(lo, hi.max(lo)) } else { hi.max(lo) }
+}
+
+fn modes(string: StringParams, fs: f64) -> usize {
+    ModalString::new(string, fs).map_or(1, |s| s.modes()).max(1)
+}
+
+fn describe(law: &PowerLaw, fs: u32, segments: usize, rest: &str) -> String {
+    format!("κ {:.3e}, α {:.3}, fs {fs} Hz, N {segments}, {rest}", law.kappa(), law.alpha())
+}
+
+struct Draw {
+    law: PowerLaw,
+    fs: u32,
+    segments: usize,
+    v: f64,
+    mass: f64,
+    lead: f64,
+}
+
+fn draw_common(rng: &mut Pcg64) -> Draw {
+    let law = PowerLaw::new(log_uniform(rng, 1e2, 1e16), rng.random_range(1.0..=4.0)).expect("a valid law");
+    let fs = log_uniform(rng, 8_000.0, 384_000.0).round() as u32;
+    let segments = log_int(rng, 1, 64);
+    let v = log_uniform(rng, 1e-3, 50.0);
+    let mass = log_uniform(rng, 1e-4, 1.0);
+    let lead = rng.random_range(0.5..3.0);
+    Draw { law, fs, segments, v, mass, lead }
+}
+
+fn mass_barrier(id: String, law: PowerLaw, fs: u32, segments: usize, mass: f64, v0: f64, u0: f64) -> ParamSet {
+    let fsf = f64::from(fs);
+    let params = MassBarrierParams { mass, u0, v0, barrier: 0.0 };
+    let seconds = (-u0 / v0.max(1e-300)).max(0.0) + 1.2 * hertz_time(&law, mass, v0);
+    let samples = samples_within(seconds, fsf, 32, 4000 - 16) + 16;
+    let energy = params.max_contact_energy() + law.potential(u0);
+    let v_ref = if energy > 0.0 { energy } else { law.potential(1e-3) };
+    ParamSet {
+        kind: Kind::MassBarrier,
+        id,
+        scene: CaseScene { setup: Setup::MassBarrier(params), law, sample_rate: fs, samples, v_ref },
+        segments,
+        conservative: true,
+        about: describe(&law, fs, segments, &format!("m {mass:.3e} kg, v0 {v0:.3e} m/s, u0 {u0:.3e} m")),
+    }
+}
+
+struct HammerDraw {
+    string: StringParams,
+    lossless: bool,
+    key: u8,
+    mass: f64,
+    v: f64,
+    position: f64,
+    gap: f64,
+}
+
+fn hammer_string(id: String, law: PowerLaw, fs: u32, segments: usize, h: HammerDraw) -> ParamSet {
+    let fsf = f64::from(fs);
+    let string = if h.lossless { StringParams { damping: Damping::LOSSLESS, ..h.string } } else { h.string };
+    let hammer = HammerParams { mass: h.mass, velocity: h.v, position: h.position, gap: h.gap };
+    let params = HammerStringParams { string, hammer, pickup: Pickup { kind: OutputKind::BridgeForce, position: 0.9 } };
+    let cap = (400_000 / modes(string, fsf)).min(2000);
+    let seconds = h.gap / h.v.max(1e-300) + 2.0 * hertz_time(&law, h.mass, h.v);
+    let samples = samples_within(seconds, fsf, 64, cap);
+    let energy = hammer.kinetic_energy();
+    let v_ref = if energy > 0.0 { energy } else { law.potential(1e-3) };
+    let about = format!(
+        "key {}, {}, hammer {:.3e} kg at {:.3e} m/s, x {:.3} L, gap {:.3e} m",
+        h.key,
+        if h.lossless { "lossless" } else { "lossy" },
+        h.mass,
+        h.v,
+        h.position,
+        h.gap
+    );
+    ParamSet {
+        kind: Kind::HammerString,
+        id,
+        scene: CaseScene { setup: Setup::Hammer(params), law, sample_rate: fs, samples, v_ref },
+        segments,
+        conservative: h.lossless,
+        about: describe(&law, fs, segments, &about),
+    }
+}
+
+struct SlideDraw {
+    lossless: bool,
+    mass: f64,
+    stiffness: f64,
+    hand_damping: f64,
+    position: f64,
+    left_force: f64,
+    right_force: f64,
+    block: usize,
+    v: f64,
+    lead: f64,
+}
+
+fn slide_string(id: String, law: PowerLaw, fs: u32, segments: usize, d: SlideDraw) -> ParamSet {
+    let fsf = f64::from(fs);
+    let g = slide_guitar();
+    let string = if d.lossless { StringParams { damping: Damping::LOSSLESS, ..g.string } } else { g.string };
+    let finger_damping = if d.lossless { 0.0 } else { g.left.damping };
+    let length = string.length;
+    let params = SlideStringParams {
+        string,
+        slide: SlideParams { mass: d.mass, stiffness: d.stiffness, damping: d.hand_damping },
+        left: FingerParams { width: g.left.width, damping: finger_damping },
+        right: FingerParams { width: g.right.width, damping: finger_damping },
+        block: d.block,
+        pickup: Pickup { kind: OutputKind::Displacement, position: 0.9 },
+    };
+    let samples = samples_within(300_000.0 / modes(string, fsf) as f64, 1.0, 64, 1500);
+    let run = samples as f64 / fsf;
+    let x_o = d.position * length;
+    let x_l = if x_o > 0.03 { x_o - 0.02 } else { 0.5 * x_o };
+    let h0 = d.lead * d.v / fsf;
+    let depth = (0.5 * d.v * run).min(0.01);
+    let hand = Breakpoints::new(vec![(0.0, h0), ((h0 + depth) / d.v, -depth)]).expect("increasing times");
+    let lanes = [
+        Breakpoints::constant(x_o),
+        hand,
+        Breakpoints::constant(x_l),
+        Breakpoints::constant(d.left_force),
+        Breakpoints::constant(0.9 * length),
+        Breakpoints::constant(d.right_force),
+    ];
+    let controls = SlideAutomation { lanes, sample_rate: fsf };
+    let common = Common {
+        sample_rate: fs,
+        samples,
+        solver: SolverSettings { method: Method::Qsa, segments, v_ref: None },
+        law,
+        output: OutputOptions { normalize: true, gain: 1.0 },
+    };
+    let v_ref = SlideStringDescription { common, params, controls: controls.clone() }.default_v_ref();
+    let about = format!(
+        "{}, slide {:.3e} kg, k_H {:.3e} N/m, r_H {:.3e} kg/s, x_o {:.3} L, fingers {:.3}/{:.3} N, N_b {}, hand {:.3e} m/s to -{:.3e} m",
+        if d.lossless { "lossless" } else { "lossy" },
+        d.mass,
+        d.stiffness,
+        d.hand_damping,
+        d.position,
+        d.left_force,
+        d.right_force,
+        d.block,
+        d.v,
+        depth
+    );
+    ParamSet {
+        kind: Kind::SlideString,
+        id,
+        scene: CaseScene { setup: Setup::Slide(params, controls), law, sample_rate: fs, samples, v_ref },
+        segments,
+        conservative: d.lossless,
+        about: describe(&law, fs, segments, &about),
+    }
+}
+
+/// Random set `index` of `kind`.
+pub fn random_set(kind: Kind, index: usize) -> ParamSet {
+    let mut rng = Pcg64::seed_from_u64(SEED.wrapping_add(kind.index() << 40).wrapping_add(index as u64));
+    let d = draw_common(&mut rng);
+    let id = index.to_string();
+    let fsf = f64::from(d.fs);
+    match kind {
+        Kind::MassBarrier => mass_barrier(id, d.law, d.fs, d.segments, d.mass, d.v, -d.lead * d.v / fsf),
+        Kind::HammerString => {
+            let key = rng.random_range(21..=108u8);
+            let h = HammerDraw {
+                string: piano_note(key).string,
+                lossless: rng.random_bool(0.5),
+                key,
+                mass: d.mass,
+                v: d.v,
+                position: rng.random_range(0.05..=0.5),
+                gap: d.lead * d.v / fsf,
+            };
+            hammer_string(id, d.law, d.fs, d.segments, h)
+        }
+        Kind::SlideString => {
+            let lossless = rng.random_bool(0.5);
+            let s = SlideDraw {
+                lossless,
+                mass: d.mass,
+                stiffness: log_uniform(&mut rng, 1e2, 1e5),
+                hand_damping: if lossless { 0.0 } else { log_uniform(&mut rng, 0.5, 50.0) },
+                position: rng.random_range(0.1..=0.9),
+                left_force: if rng.random_bool(0.5) { 0.0 } else { rng.random_range(0.0..=2.0) },
+                right_force: if rng.random_bool(0.5) { 0.0 } else { rng.random_range(0.0..=3.0) },
+                block: log_int(&mut rng, 1, 256),
+                v: d.v,
+                lead: d.lead,
+            };
+            slide_string(id, d.law, d.fs, d.segments, s)
+        }
+    }
+}
+
+/// The slide excerpt of the error sweep with control block `block` (moving slide and fingers:
+/// the energy the moving contact exchanges is not booked, so it counts as lossy).
+fn excerpt(id: String, block: usize, segments: usize, base: &CaseScene) -> ParamSet {
+    let mut scene = base.clone();
+    if let Setup::Slide(params, _) = &mut scene.setup {
+        params.block = block;
+    }
+    let about = describe(&scene.law, scene.sample_rate, segments, &format!("the report's slide excerpt, N_b {block}"));
+    ParamSet { kind: Kind::SlideString, id, scene, segments, conservative: false, about }
+}
+
+/// The hand-picked corners of `kind`. `excerpt_scene` is the report's slide excerpt.
+pub fn corners(kind: Kind, excerpt_scene: Option<&CaseScene>) -> Vec<ParamSet> {
+    let law = |kappa, alpha| PowerLaw::new(kappa, alpha).expect("a valid law");
+    let id = |j: usize| format!("corner-{j}");
+    match kind {
+        Kind::MassBarrier => vec![
+            // Contact much shorter than one sample: T_c ≈ π√(m/κ) = 3e-10 s at 8 kHz.
+            mass_barrier(id(0), law(1e16, 1.0), 8000, 64, 1e-4, 50.0, -0.5 * 50.0 / 8000.0),
+            mass_barrier(id(1), law(1e16, 4.0), 8000, 1, 1e-4, 50.0, -0.3 * 50.0 / 8000.0),
+            // Contact lasting the whole run: T_c ≈ 0.3 s, run capped at 4000 samples.
+            mass_barrier(id(2), law(1e2, 1.0), 384_000, 64, 1.0, 1e-3, -0.5 * 1e-3 / 384_000.0),
+            mass_barrier(id(3), law(1e2, 4.0), 384_000, 7, 1.0, 1e-3, -0.5 * 1e-3 / 384_000.0),
+            // Grazing: v0 → 0, starting at or just before the barrier.
+            mass_barrier(id(4), law(1e8, 1.3), 44_100, 5, 0.01, 1e-9, -0.5 * 1e-9 / 44_100.0),
+            mass_barrier(id(5), law(1e8, 1.3), 44_100, 5, 0.01, 0.0, 0.0),
+            mass_barrier(id(6), law(1e16, 2.5), 384_000, 64, 1e-4, 1e-9, 0.0),
+        ],
+        Kind::HammerString => {
+            let c4 = chaigne_askenfelt_c4();
+            let h = |mass, v, gap, lossless| HammerDraw {
+                string: c4.string,
+                lossless,
+                key: 60,
+                mass,
+                v,
+                position: c4.strike_position,
+                gap,
+            };
+            vec![
+                hammer_string(id(0), law(1e16, 1.0), 8000, 64, h(1e-4, 50.0, 0.5 * 50.0 / 8000.0, true)),
+                hammer_string(id(1), law(1e16, 4.0), 8000, 3, h(1e-4, 50.0, 0.5 * 50.0 / 8000.0, false)),
+                hammer_string(id(2), law(1e2, 1.0), 384_000, 64, h(1.0, 1e-3, 0.5 * 1e-3 / 384_000.0, true)),
+                hammer_string(id(3), law(4.5e9, 2.5), 44_100, 6, h(2.97e-3, 1e-9, 0.5e-9 / 44_100.0, true)),
+                hammer_string(id(4), law(4.5e9, 2.5), 44_100, 6, h(2.97e-3, 0.0, 1e-12, true)),
+                hammer_string(id(5), law(4.5e9, 2.5), 44_100, 64, h(2.97e-3, 3.5, 2e-4, false)),
+            ]
+        }
+        Kind::SlideString => {
+            let s = |lossless, mass, stiffness, v, block| SlideDraw {
+                lossless,
+                mass,
+                stiffness,
+                hand_damping: if lossless { 0.0 } else { 5.0 },
+                position: 0.25,
+                left_force: 0.3,
+                right_force: 1.5,
+                block,
+                v,
+                lead: 0.5,
+            };
+            let mut out = vec![
+                slide_string(id(0), law(1e16, 1.5), 8000, 64, s(true, 1e-4, 1e5, 50.0, 1)),
+                slide_string(id(1), law(1e2, 1.5), 384_000, 64, s(true, 1.0, 1e2, 1e-3, 256)),
+                slide_string(id(2), law(1e9, 1.5), 44_100, 5, s(true, 0.03, 1e4, 1e-9, 64)),
+                slide_string(id(3), law(1e16, 4.0), 384_000, 1, s(false, 1e-4, 1e5, 50.0, 7)),
+            ];
+            if let Some(base) = excerpt_scene {
+                out.push(excerpt(id(4), 1, 5, base));
+                out.push(excerpt(id(5), 256, 5, base));
+            }
+            out
+        }
+    }
+}
+
+/// What one run measured.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measure {
+    /// A NaN or infinity appeared.
+    pub non_finite: bool,
+    /// The run panicked (with this message).
+    pub panic: Option<String>,
+    /// Largest |E − E0| / scale.
+    pub drift: f64,
+    /// Largest (E − E0)⁺ / scale.
+    pub increase: f64,
+    /// Largest compression / y_ref.
+    pub compression_ratio: f64,
+    /// Largest solver work in one step.
+    pub max_work: u32,
+    /// Samples rendered.
+    pub samples: usize,
+    /// Samples with a non-zero force.
+    pub contact_samples: usize,
+}
+
+fn finite(f: &Frame) -> bool {
+    [f.output, f.displacement, f.velocity, f.compression, f.force, f.energy, f.losses].iter().all(|v| v.is_finite())
+}
+
+/// Run `set` with `method`.
+pub fn measure(set: &ParamSet, method: Method) -> Measure {
+    let settings = SolverSettings { method, segments: set.segments, v_ref: None };
+    let result = catch_unwind(AssertUnwindSafe(|| set.scene.frames_and_energy(settings, 1)));
+    let (frames, e0) = match result {
+        Ok(run) => run,
+        Err(payload) => {
+            let message = payload
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| payload.downcast_ref::<&str>().map(|s| (*s).to_owned()))
+                .unwrap_or_else(|| "panic".to_owned());
+            return Measure {
+                non_finite: false,
+                panic: Some(message),
+                drift: f64::NAN,
+                increase: f64::NAN,
+                compression_ratio: f64::NAN,
+                max_work: 0,
+                samples: 0,
+                contact_samples: 0,
+            };
+        }
+    };
+    let scale = frames.iter().map(|f| f.energy.abs()).fold(e0.abs(), f64::max);
+    let scale = if scale > 0.0 { scale } else { 1.0 };
+    let deviation = |f: &Frame| (f.energy + f.losses - e0) / scale;
+    Measure {
+        non_finite: !e0.is_finite() || !frames.iter().all(finite),
+        panic: None,
+        drift: frames.iter().map(|f| deviation(f).abs()).fold(0.0, f64::max),
+        increase: frames.iter().map(|f| deviation(f).max(0.0)).fold(0.0, f64::max),
+        compression_ratio: frames.iter().map(|f| f.compression).fold(f64::NEG_INFINITY, f64::max) / set.scene.y_ref(),
+        max_work: frames.iter().map(|f| f.work).max().unwrap_or(0),
+        samples: frames.len(),
+        contact_samples: frames.iter().filter(|f| f.force != 0.0).count(),
+    }
+}
+
+/// The QSA sign-test bound of the warm-started search, `2⌈log2(N+1)⌉ + 1`.
+pub fn sign_test_bound(segments: usize) -> u32 {
+    2 * (usize::BITS - segments.leading_zeros()) + 1
+}
+
+/// A worst case: the value, the set and its parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Worst {
+    /// The measured value.
+    pub value: f64,
+    /// Set id.
+    pub id: String,
+    /// Parameters.
+    pub about: String,
+}
+
+/// Keep the `KEEP` largest values.
+fn keep(list: &mut Vec<Worst>, value: f64, set: &ParamSet) {
+    if !value.is_finite() || (list.len() == KEEP && list.last().is_some_and(|w| w.value >= value)) {
+        return;
+    }
+    list.push(Worst { value, id: set.id.clone(), about: set.about.clone() });
+    list.sort_by(|a, b| b.value.total_cmp(&a.value));
+    list.truncate(KEEP);
+}
+
+/// Everything measured for one scene kind and method.
+#[derive(Debug, Clone)]
+pub struct Tally {
+    /// Scene kind.
+    pub kind: Kind,
+    /// Method.
+    pub method: Method,
+    /// Random sets run.
+    pub random: usize,
+    /// Corners run.
+    pub corners: usize,
+    /// Runs with a NaN or infinity.
+    pub non_finite: Vec<Worst>,
+    /// Runs that panicked.
+    pub panics: Vec<Worst>,
+    /// Conservative runs.
+    pub conservative: usize,
+    /// Lossy runs.
+    pub lossy: usize,
+    /// Largest drift in conservative runs.
+    pub drift: Vec<Worst>,
+    /// Largest energy increase in lossy runs.
+    pub increase: Vec<Worst>,
+    /// Largest compression ratios.
+    pub compression: Vec<Worst>,
+    /// Largest work per step.
+    pub work: Vec<Worst>,
+    /// Runs over the QSA sign-test bound.
+    pub over_bound: Vec<Worst>,
+    /// IMP runs that hit the Newton iteration cap.
+    pub newton_cap: usize,
+    /// Runs over [`ENERGY_LIMIT`].
+    pub energy_failures: Vec<Worst>,
+}
+
+impl Tally {
+    fn new(kind: Kind, method: Method) -> Self {
+        Self {
+            kind,
+            method,
+            random: 0,
+            corners: 0,
+            non_finite: Vec::new(),
+            panics: Vec::new(),
+            conservative: 0,
+            lossy: 0,
+            drift: Vec::new(),
+            increase: Vec::new(),
+            compression: Vec::new(),
+            work: Vec::new(),
+            over_bound: Vec::new(),
+            newton_cap: 0,
+            energy_failures: Vec::new(),
+        }
+    }
+
+    fn add(&mut self, set: &ParamSet, m: &Measure) {
+        if set.id.starts_with("corner") {
+            self.corners += 1;
+        } else {
+            self.random += 1;
+        }
+        let record = |list: &mut Vec<Worst>, value: f64| {
+            list.push(Worst { value, id: set.id.clone(), about: set.about.clone() })
+        };
+        if let Some(message) = &m.panic {
+            record(&mut self.panics, f64::NAN);
+            if let Some(last) = self.panics.last_mut() {
+                last.about = format!("{} (panic: {message})", set.about);
+            }
+            return;
+        }
+        if m.non_finite {
+            record(&mut self.non_finite, f64::NAN);
+        }
+        let energy = if set.conservative { m.drift } else { m.increase };
+        if energy > ENERGY_LIMIT {
+            record(&mut self.energy_failures, energy);
+        }
+        if self.method == Method::Qsa && m.max_work > sign_test_bound(set.segments) {
+            record(&mut self.over_bound, f64::from(m.max_work));
+        }
+        if self.method == Method::Imp && m.max_work >= MAX_ITERATIONS {
+            self.newton_cap += 1;
+        }
+        if set.conservative {
+            self.conservative += 1;
+            keep(&mut self.drift, m.drift, set);
+        } else {
+            self.lossy += 1;
+            keep(&mut self.increase, m.increase, set);
+        }
+        keep(&mut self.compression, m.compression_ratio, set);
+        keep(&mut self.work, f64::from(m.max_work), set);
+    }
+
+    /// Runs counted.
+    pub fn runs(&self) -> usize {
+        self.random + self.corners
+    }
+
+    /// The command that reruns set `id`.
+    pub fn command(&self, id: &str) -> String {
+        format!("cargo xtask report --rerun {}/{}/{id}", self.kind.name(), self.method.name())
+    }
+}
+
+/// The whole sweep.
+#[derive(Debug, Clone)]
+pub struct Sweep {
+    /// Random sets per kind.
+    pub sets: usize,
+    /// One tally per kind and method.
+    pub tallies: Vec<Tally>,
+}
+
+impl Sweep {
+    /// Total runs.
+    pub fn runs(&self) -> usize {
+        self.tallies.iter().map(Tally::runs).sum()
+    }
+
+    /// Every failure, one line each, with the command that reruns it.
+    pub fn failures(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for t in &self.tallies {
+            let lists = [
+                ("non-finite", &t.non_finite),
+                ("panic", &t.panics),
+                ("over the sign-test bound", &t.over_bound),
+                ("energy error over the limit", &t.energy_failures),
+            ];
+            for (what, list) in lists {
+                for w in list {
+                    out.push(format!("{what}: {} ({:.3e}; {})", t.command(&w.id), w.value, w.about));
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Run `sets` random sets and the corners of every kind with every method. The slide corners
+/// include the report's slide excerpt when `excerpt_scene` is given.
+pub fn sweep(sets: usize, excerpt_scene: Option<&CaseScene>, tick: &dyn Fn()) -> Sweep {
+    let mut tallies = Vec::new();
+    for kind in Kind::ALL {
+        let mut kind_tallies: Vec<Tally> = METHODS.iter().map(|&m| Tally::new(kind, m)).collect();
+        let corner_sets = corners(kind, excerpt_scene);
+        let all = (0..sets).map(|i| random_set(kind, i)).chain(corner_sets);
+        for set in all {
+            for tally in &mut kind_tallies {
+                let m = measure(&set, tally.method);
+                tally.add(&set, &m);
+            }
+            tick();
+        }
+        tallies.extend(kind_tallies);
+    }
+    Sweep { sets, tallies }
+}
+
+/// Number of sets (random and corners) per kind that [`sweep`] runs, for progress bars.
+pub fn sets_per_kind(sets: usize, with_excerpt: bool) -> [usize; 3] {
+    Kind::ALL.map(|k| sets + corners(k, None).len() + usize::from(with_excerpt && k == Kind::SlideString) * 2)
+}
+
+/// Rerun one set, `SCENE/METHOD/SET`, and describe it as one JSON line.
+pub fn rerun(id: &str, excerpt_scene: Option<&CaseScene>) -> Result<String, ReportError> {
+    let usage = || {
+        ReportError::Stability(format!(
+            "unknown set {id:?}: expected SCENE/METHOD/SET, e.g. hammer-string/qsa/1234 or mass-barrier/imp/corner-2"
+        ))
+    };
+    let parts: Vec<&str> = id.split('/').collect();
+    let [scene, method, set] = parts[..] else { return Err(usage()) };
+    let kind = Kind::ALL.into_iter().find(|k| k.name() == scene).ok_or_else(usage)?;
+    let method = METHODS.into_iter().find(|m| m.name() == method).ok_or_else(usage)?;
+    let param_set = if let Some(j) = set.strip_prefix("corner-") {
+        let j: usize = j.parse().map_err(|_| usage())?;
+        corners(kind, excerpt_scene).into_iter().nth(j).ok_or_else(usage)?
+    } else {
+        random_set(kind, set.parse().map_err(|_| usage())?)
+    };
+    let m = measure(&param_set, method);
+    let value = serde_json::json!({
+        "scene": kind.name(),
+        "method": method.name(),
+        "set": param_set.id,
+        "parameters": param_set.about,
+        "conservative": param_set.conservative,
+        "samples": m.samples,
+        "contact_samples": m.contact_samples,
+        "non_finite": m.non_finite,
+        "panic": m.panic,
+        "energy_drift": m.drift,
+        "energy_increase": m.increase,
+        "compression_ratio": m.compression_ratio,
+        "y_ref": param_set.scene.y_ref(),
+        "max_work": m.max_work,
+        "sign_test_bound": (method == Method::Qsa).then(|| sign_test_bound(param_set.segments)),
+    });
+    Ok(value.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sets_are_reproducible_and_in_range() {
+        for kind in Kind::ALL {
+            for i in [0, 1, 9_999] {
+                let (a, b) = (random_set(kind, i), random_set(kind, i));
+                assert_eq!(a.about, b.about);
+                let law = a.scene.law;
+                assert!((1e2..=1e16).contains(&law.kappa()) && (1.0..=4.0).contains(&law.alpha()));
+                assert!((8000..=384_000).contains(&a.scene.sample_rate));
+                assert!((1..=64).contains(&a.segments));
+            }
+        }
+        assert_ne!(random_set(Kind::MassBarrier, 0).about, random_set(Kind::MassBarrier, 1).about);
+    }
+
+    #[test]
+    fn the_sign_test_bound_follows_the_module_docs() {
+        assert_eq!(sign_test_bound(1), 3);
+        assert_eq!(sign_test_bound(5), 7);
+        assert_eq!(sign_test_bound(64), 15);
+    }
+}

@@ -1,0 +1,52 @@
+//! `cargo xtask report --quick`, run in-process: the committed error figures in
+//! `docs/report/error-vs-runtime.csv` must match fresh runs (within `QUICK_TOLERANCE`, leaving out
+//! the rows the report marks as sensitive to rounding), and a small seeded stability sweep must
+//! show no failure. A tampered copy of the CSV must be caught.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use xtask::report::{QUICK_TOLERANCE, ReportError, quick_check};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+#[test]
+fn committed_error_figures_match_fresh_runs() {
+    let (root, mut out, mut err) = (root(), Vec::new(), Vec::new());
+    let args = ["report", "--quick", "--scenes", "scenes", "--out", "docs/report"];
+    let args: Vec<std::ffi::OsString> = args
+        .iter()
+        .map(|a| if a.contains('/') || *a == "scenes" { root.join(a).into_os_string() } else { a.into() })
+        .collect();
+    let code = xtask::run(args, &mut out, &mut err);
+    let (out, err) = (String::from_utf8_lossy(&out), String::from_utf8_lossy(&err));
+    println!("{out}{err}");
+    assert_eq!(code, 0, "report --quick failed:\n{err}");
+    assert!(out.starts_with("report --quick: "), "{out}");
+}
+
+#[test]
+fn a_changed_error_figure_is_caught() {
+    let root = root();
+    let committed = fs::read_to_string(root.join("docs/report/error-vs-runtime.csv")).expect("the committed CSV");
+    // Move the Fig. 5 QSA N = 6 error against IMP at the base rate by twice the tolerance.
+    let mut lines: Vec<String> = committed.lines().map(str::to_owned).collect();
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let column = header.iter().position(|h| *h == "error_vs_imp").expect("an error_vs_imp column");
+    let row = lines.iter().position(|l| l.starts_with("fig5-hammer,qsa,6,1,")).expect("the Fig. 5 N = 6 row");
+    let mut fields: Vec<String> = lines[row].split(',').map(str::to_owned).collect();
+    let value: f64 = fields[column].parse().expect("a number");
+    fields[column] = format!("{:.4}", value + 2.0 * QUICK_TOLERANCE);
+    lines[row] = fields.join(",");
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    fs::write(dir.path().join("error-vs-runtime.csv"), lines.join("\n") + "\n").expect("write the copy");
+    match quick_check(&root.join("scenes"), dir.path()) {
+        Err(ReportError::Mismatch(1, message)) => {
+            println!("{message}");
+            assert!(message.contains("fig5-hammer qsa N=6 1x: error_vs_imp"), "{message}");
+        }
+        other => panic!("expected exactly one mismatch, got {other:?}"),
+    }
+}
