@@ -34,7 +34,7 @@ use std::sync::Arc;
 
 use nice_plug::prelude::*;
 use qsa_dsp::contact::Method;
-use qsa_dsp::instrument::{HandSource, Mode, PARAM_IDS, ParamValues, Settings};
+use qsa_dsp::instrument::{HandSource, Mode, ParamValues, Settings};
 
 /// Instrument mode parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Enum)]
@@ -344,6 +344,8 @@ impl QsaParams {
 
 #[cfg(test)]
 mod tests {
+    use qsa_dsp::instrument::PARAM_IDS;
+
     use super::*;
 
     /// The plugin's ids are the shared list, in order, and its defaults are the shared defaults,
