@@ -12,18 +12,27 @@
 //! - MIDI: notes; CC64 sustain, CC1 mod wheel, CC120 all sound off, CC123 all notes off; pitch bend
 //!   moves the slide; channel and poly pressure can press it (per channel, so MPE works).
 //!
+//! - The editor ([`editor`]) shows the parameters and the loudest voice. `process` times itself
+//!   and, every 1/30 s of audio while the editor is open, hands the engine's monitor snapshot to
+//!   it through the lock-free [`meter`] path (no allocation, lock or I/O on the audio thread).
+//!
 //! State (parameters) is saved by the framework with the plugin's version, which `filter_state`
 //! sees first: that is where later releases migrate old state.
 
+pub mod editor;
+pub mod meter;
 pub mod params;
 
 use std::num::NonZeroU32;
 use std::sync::Arc;
+use std::time::Instant;
 
 use nice_plug::midi::{Channel, Key};
 use nice_plug::prelude::*;
+use nice_plug_egui::{EguiEditor, EguiEditorState};
 use qsa_dsp::instrument::{Event, Instrument};
 
+use meter::{Shared, Tap};
 use params::QsaParams;
 
 /// The plugin. (No `Debug`: the framework's parameter types do not implement it.)
@@ -32,11 +41,20 @@ pub struct QsaStrings {
     params: Arc<QsaParams>,
     /// The engine, built in `activate`.
     engine: Option<Instrument>,
+    /// The editor's size and open state.
+    editor_state: Arc<EguiEditorState>,
+    /// The audio side of the data path to the editor (load, monitor snapshots).
+    tap: Tap,
 }
 
 impl Default for QsaStrings {
     fn default() -> Self {
-        Self { params: Arc::new(QsaParams::default()), engine: None }
+        Self {
+            params: Arc::new(QsaParams::default()),
+            engine: None,
+            editor_state: editor::default_state(),
+            tap: Tap::new(Arc::new(Shared::default())),
+        }
     }
 }
 
@@ -84,13 +102,20 @@ impl Plugin for QsaStrings {
 
     const MIDI_INPUT: MidiConfig = MidiConfig::MidiCCs;
     const SAMPLE_ACCURATE_AUTOMATION: bool = true;
+    /// Room for a flood of events in one block: the framework's queue grows (allocates) on the
+    /// audio thread past this, and the host tests send 10,000 random events in one block.
+    const INPUT_EVENT_CAPACITY: usize = 16_384;
 
-    type Editor = ();
+    type Editor = EguiEditor<editor::EditorApp>;
     type SysExMessage = ();
     type BackgroundTask = ();
 
     fn params(&self) -> Arc<dyn Params> {
         self.params.clone()
+    }
+
+    fn editor(&mut self, _async_executor: AsyncExecutor<Self>) -> Option<Self::Editor> {
+        editor::create(self.params.clone(), self.tap.shared().clone(), self.editor_state.clone())
     }
 
     fn activate(
@@ -105,6 +130,7 @@ impl Plugin for QsaStrings {
         if !reuse {
             self.engine = Some(Instrument::new(fs, voices, self.params.settings()));
         }
+        self.tap.set_sample_rate(fs);
         true
     }
 
@@ -120,6 +146,7 @@ impl Plugin for QsaStrings {
         _aux: &mut AuxiliaryBuffers,
         context: &mut impl ProcessContext<Self>,
     ) -> ProcessStatus {
+        let start = Instant::now();
         let samples = buffer.samples();
         let channels = buffer.as_slice();
         let Some(engine) = &mut self.engine else {
@@ -154,6 +181,9 @@ impl Plugin for QsaStrings {
             }
             next = context.next_event();
         }
+        // Snapshots only while someone looks at them; the load always.
+        let open = self.editor_state.is_open();
+        self.tap.after_process(samples, start.elapsed(), self.engine.as_ref().filter(|_| open));
         ProcessStatus::KeepAlive
     }
 }

@@ -28,8 +28,9 @@ pub enum MidiError {
     Parse(String),
 }
 
-/// Read `bytes` (a standard MIDI file) into events at `sample_rate` (Hz).
-pub fn score(bytes: &[u8], sample_rate: f64) -> Result<Score, MidiError> {
+/// The channel messages of `bytes` (a standard MIDI file) with their sample offsets at
+/// `sample_rate` (Hz): `(sample, [status, data1, data2])`, in time order (file order within a tick).
+pub fn timed_messages(bytes: &[u8], sample_rate: f64) -> Result<Vec<(u64, [u8; 3])>, MidiError> {
     let smf = Smf::parse(bytes).map_err(|e| MidiError::Parse(e.to_string()))?;
     // (tick, track, index in track, kind)
     let mut timeline = Vec::new();
@@ -48,7 +49,6 @@ pub fn score(bytes: &[u8], sample_rate: f64) -> Result<Score, MidiError> {
     let mut tempo = 500_000.0;
     let (mut last_tick, mut seconds) = (0u64, 0.0f64);
     let mut out = Vec::new();
-    let mut notes = 0;
     for (tick, _, _, kind) in timeline {
         seconds += (tick - last_tick) as f64 * seconds_per_tick_at(tempo);
         last_tick = tick;
@@ -67,17 +67,26 @@ pub fn score(bytes: &[u8], sample_rate: f64) -> Result<Score, MidiError> {
                     }
                     MidiMessage::ProgramChange { .. } => continue,
                 };
-                if let Some(event) = event_from_midi(status | channel.as_int(), d1, d2) {
-                    if matches!(event, Event::NoteOn { .. }) {
-                        notes += 1;
-                    }
-                    out.push(((seconds * sample_rate).round() as u64, event));
-                }
+                out.push(((seconds * sample_rate).round() as u64, [status | channel.as_int(), d1, d2]));
             }
             _ => {}
         }
     }
-    Ok(Score { events: out, notes })
+    Ok(out)
+}
+
+/// Read `bytes` (a standard MIDI file) into engine events at `sample_rate` (Hz).
+pub fn score(bytes: &[u8], sample_rate: f64) -> Result<Score, MidiError> {
+    let mut notes = 0;
+    let events = timed_messages(bytes, sample_rate)?
+        .into_iter()
+        .filter_map(|(sample, [status, d1, d2])| {
+            let event = event_from_midi(status, d1, d2)?;
+            notes += usize::from(matches!(event, Event::NoteOn { .. }));
+            Some((sample, event))
+        })
+        .collect();
+    Ok(Score { events, notes })
 }
 
 /// Render `score` with `params` at `sample_rate` (Hz) until the last event plus `tail` seconds,

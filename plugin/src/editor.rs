@@ -1,0 +1,238 @@
+//! The egui editor: the parameters grouped by section, and live views of the loudest voice (its
+//! string's shape and contact point, contact force and energy histories), the voices sounding
+//! and the DSP load.
+//!
+//! The audio thread never waits for the editor: it publishes snapshots and the load through
+//! [`crate::meter::Shared`] (a lock-free queue and atomics) and sets the repaint flag, which the
+//! editor's window polls. The editor drains the queue each frame into its own [`History`].
+
+mod views;
+
+use std::sync::Arc;
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+
+use egui::{Color32, RichText, Ui, vec2};
+use nice_plug::context::gui::GuiContext;
+use nice_plug::editor::dpi::LogicalSize;
+use nice_plug::prelude::{Param, ParamSetter};
+use nice_plug_egui::baseview::HandlerError;
+use nice_plug_egui::widgets::ParamSlider;
+use nice_plug_egui::{EguiEditor, EguiEditorState, EguiNiceSettings, NiceEguiApp, create_egui_editor};
+use qsa_dsp::instrument::{Mode, Monitor};
+
+use crate::meter::Shared;
+use crate::params::{ModeParam, QsaParams};
+use views::History;
+
+/// Editor window size (logical pixels).
+pub const SIZE: (f64, f64) = (1000.0, 700.0);
+
+/// Width of the parameter sliders (logical pixels).
+const SLIDER_WIDTH: f32 = 100.0;
+
+/// The editor's state (its size and whether it is open), kept by the plugin.
+pub fn default_state() -> Arc<EguiEditorState> {
+    EguiEditorState::from_size(LogicalSize::new(SIZE.0, SIZE.1), 1.0)
+}
+
+/// The editor, for `Plugin::editor`.
+pub fn create(
+    params: Arc<QsaParams>,
+    shared: Arc<Shared>,
+    state: Arc<EguiEditorState>,
+) -> Option<EguiEditor<EditorApp>> {
+    let repaint = shared.repaint.clone();
+    let app = EditorApp {
+        params,
+        shared,
+        gui: None,
+        latest: Monitor::default(),
+        history: History::default(),
+        peak_hold: (0.0, 0.0),
+    };
+    create_egui_editor(state, repaint, EguiNiceSettings::new().with_tile("QSA Strings"), app)
+}
+
+/// The editor's app: parameters, shared meters and the GUI-side history.
+#[allow(missing_debug_implementations)]
+pub struct EditorApp {
+    params: Arc<QsaParams>,
+    shared: Arc<Shared>,
+    /// The host's context, given when the window opens.
+    gui: Option<GuiContext>,
+    /// The latest snapshot.
+    latest: Monitor,
+    history: History,
+    /// Peak load shown and when it was taken (egui time, s).
+    peak_hold: (f32, f64),
+}
+
+impl NiceEguiApp for EditorApp {
+    fn build(
+        &mut self,
+        egui_ctx: egui::Context,
+        nice_gui_ctx: GuiContext,
+        _frame: &mut nice_plug_egui::Frame,
+    ) -> Result<(), HandlerError> {
+        egui_ctx.set_theme(egui::Theme::Dark);
+        self.gui = Some(nice_gui_ctx);
+        Ok(())
+    }
+
+    fn ui(&mut self, ui: &mut Ui, _frame: &mut nice_plug_egui::Frame) {
+        // Snapshots arrive with a repaint request; this keeps the load moving when they do not.
+        ui.ctx().request_repaint_after(Duration::from_millis(250));
+        while let Some(monitor) = self.shared.monitors.pop() {
+            self.history.push(&monitor);
+            self.latest = monitor;
+        }
+        let now = ui.input(|i| i.time);
+        let load = self.shared.load.load(Ordering::Relaxed);
+        let peak = self.shared.peak.swap(0.0, Ordering::Relaxed);
+        if peak >= self.peak_hold.0 || now - self.peak_hold.1 > 1.5 {
+            self.peak_hold = (peak.max(load), now);
+        }
+
+        let Some(gui) = &self.gui else {
+            return;
+        };
+        let setter = gui.param_setter();
+        let (params, latest, history, peak) = (&*self.params, &self.latest, &self.history, self.peak_hold.0);
+        egui::CentralPanel::default().show(ui, |ui| {
+            header(ui, latest, load, peak);
+            ui.add_space(6.0);
+            live_view(ui, latest, history);
+            ui.add_space(6.0);
+            ui.separator();
+            parameters(ui, params, &setter);
+        });
+    }
+
+    fn editor_closed(&mut self) {
+        self.gui = None;
+    }
+}
+
+/// Title, what the loudest voice is, and the DSP load.
+fn header(ui: &mut Ui, m: &Monitor, load: f32, peak: f32) {
+    ui.horizontal(|ui| {
+        ui.label(RichText::new("QSA Strings").size(20.0).strong());
+        ui.add_space(12.0);
+        let voice = if m.sounding == 0 {
+            "no voice sounding".to_owned()
+        } else {
+            let mode = match m.mode {
+                Mode::Piano => "piano",
+                Mode::Slide => "slide",
+            };
+            format!(
+                "{} sounding · loudest: {} ({}), {mode}",
+                plural(m.sounding, "voice"),
+                views::note_name(m.key),
+                m.key
+            )
+        };
+        ui.label(voice);
+        ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+            ui.label(RichText::new(format!("{:5.1} % (peak {:.1} %)", load * 100.0, peak * 100.0)).monospace());
+            views::load_bar(ui, vec2(160.0, 14.0), load, peak);
+            ui.label("DSP load");
+        });
+    });
+}
+
+/// The string shape on the left; force and energy traces on the right.
+fn live_view(ui: &mut Ui, m: &Monitor, history: &History) {
+    let height = 240.0;
+    let gap = ui.spacing().item_spacing.x;
+    let width = ui.available_width();
+    let left = (width * 0.58).floor();
+    let right = width - left - gap;
+    ui.horizontal(|ui| {
+        views::string_shape(ui, vec2(left, height), m, history);
+        ui.vertical(|ui| {
+            let h = (height - ui.spacing().item_spacing.y) / 2.0;
+            views::force_trace(ui, vec2(right, h), m, history);
+            views::energy_trace(ui, vec2(right, h), m, history);
+        });
+    });
+    let compression = if m.compression > 0.0 { views::metres(m.compression) } else { "none".to_owned() };
+    ui.label(
+        RichText::new(format!(
+            "Contact: compression {compression}, force {:.3} N.  Energy: {:.3e} J.",
+            m.force.abs(),
+            m.energy
+        ))
+        .small(),
+    );
+}
+
+/// The parameters in three columns: Engine and Output, Piano, Slide.
+fn parameters(ui: &mut Ui, p: &QsaParams, setter: &ParamSetter) {
+    let mode = p.mode.value();
+    ui.columns(3, |columns| {
+        let ui = &mut columns[0];
+        section(ui, "Engine", None, |ui| {
+            row(ui, &p.mode, setter);
+            row(ui, &p.solver, setter);
+            row(ui, &p.segments, setter);
+            row(ui, &p.block, setter);
+            row(ui, &p.voices, setter);
+        });
+        ui.label(RichText::new("Voices take effect when the plugin is next activated.").small().weak());
+        ui.add_space(10.0);
+        section(ui, "Output", None, |ui| row(ui, &p.gain, setter));
+
+        section(&mut columns[1], "Piano", Some(mode == ModeParam::Piano), |ui| {
+            row(ui, &p.hardness, setter);
+            row(ui, &p.hammer_mass, setter);
+            row(ui, &p.strike_position, setter);
+            row(ui, &p.damping, setter);
+            row(ui, &p.brightness, setter);
+            row(ui, &p.damper, setter);
+        });
+
+        section(&mut columns[2], "Slide", Some(mode == ModeParam::Slide), |ui| {
+            row(ui, &p.slide_position, setter);
+            row(ui, &p.follow_key, setter);
+            row(ui, &p.glide, setter);
+            row(ui, &p.bend_range, setter);
+            row(ui, &p.hand_height, setter);
+            row(ui, &p.hand_source, setter);
+            row(ui, &p.slide_mass, setter);
+            row(ui, &p.hand_stiffness, setter);
+            row(ui, &p.hand_damping, setter);
+            row(ui, &p.finger_damping, setter);
+            row(ui, &p.kappa, setter);
+            row(ui, &p.alpha, setter);
+            row(ui, &p.pluck_position, setter);
+            row(ui, &p.pickup_position, setter);
+        });
+    });
+}
+
+/// A titled grid of parameter rows; `active` marks the section of the current mode.
+fn section(ui: &mut Ui, title: &str, active: Option<bool>, rows: impl FnOnce(&mut Ui)) {
+    ui.horizontal(|ui| {
+        ui.label(RichText::new(title).size(16.0).strong());
+        match active {
+            Some(true) => ui.label(RichText::new("● active mode").color(Color32::from_rgb(90, 200, 90)).small()),
+            Some(false) => ui.label(RichText::new("○ other mode").weak().small()),
+            None => ui.label(""),
+        };
+    });
+    egui::Grid::new(title).num_columns(2).spacing([8.0, 4.0]).show(ui, |ui| rows(ui));
+}
+
+/// A parameter's name and its slider.
+fn row<P: Param>(ui: &mut Ui, param: &P, setter: &ParamSetter) {
+    ui.label(param.name());
+    ui.add(ParamSlider::for_param(param, setter).with_width(SLIDER_WIDTH));
+    ui.end_row();
+}
+
+/// "1 voice", "3 voices".
+fn plural(n: usize, word: &str) -> String {
+    if n == 1 { format!("1 {word}") } else { format!("{n} {word}s") }
+}

@@ -1,0 +1,189 @@
+//! The data path from the audio thread to the editor, lock-free and allocation-free on the audio
+//! side.
+//!
+//! - **DSP load**: each `process` call is timed with [`Instant`]; the load is the time taken over
+//!   the buffer's duration (1.0 = the whole real-time budget). The audio thread keeps a smoothed
+//!   value (time constant [`LOAD_TIME_CONSTANT`]) and a peak; both go to the editor through
+//!   [`AtomicF32`]s. The editor takes the peak with a swap, so it sees the worst call since its
+//!   last frame.
+//! - **Monitor**: every [`SNAPSHOT_PERIOD`] seconds of audio (counted in samples, so it does not
+//!   depend on the host's buffer size) the audio thread takes the engine's
+//!   [`Monitor`](qsa_dsp::instrument::Monitor) and `force_push`es it into a fixed-capacity
+//!   [`ArrayQueue`]: when the editor falls behind, the oldest snapshot is dropped, never the audio
+//!   thread blocked. Then it asks the editor to repaint ([`RepaintNotifier`] is one atomic store).
+//!
+//! Everything shared is allocated once, in the plugin's `Default`. The editor keeps the histories
+//! (energy and force traces) on its own side.
+
+use std::sync::Arc;
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+
+use atomic_float::AtomicF32;
+use crossbeam_queue::ArrayQueue;
+use nice_plug_egui::RepaintNotifier;
+use qsa_dsp::instrument::{Instrument, Monitor};
+
+/// Seconds of audio between two monitor snapshots (about a display frame).
+pub const SNAPSHOT_PERIOD: f64 = 1.0 / 30.0;
+
+/// Snapshots the queue holds before the oldest is dropped.
+pub const QUEUE_CAPACITY: usize = 8;
+
+/// Time constant of the smoothed load (s of audio).
+pub const LOAD_TIME_CONSTANT: f64 = 0.3;
+
+/// What the audio thread shares with the editor.
+#[derive(Debug)]
+pub struct Shared {
+    /// Smoothed DSP load: process time over buffer duration (1.0 = the real-time budget).
+    pub load: AtomicF32,
+    /// Largest unsmoothed load since the editor last took it (with `swap(0.0)`).
+    pub peak: AtomicF32,
+    /// Monitor snapshots, oldest first.
+    pub monitors: ArrayQueue<Monitor>,
+    /// Set when a snapshot arrives; the editor polls it and repaints.
+    pub repaint: RepaintNotifier,
+}
+
+impl Default for Shared {
+    fn default() -> Self {
+        Self {
+            load: AtomicF32::new(0.0),
+            peak: AtomicF32::new(0.0),
+            monitors: ArrayQueue::new(QUEUE_CAPACITY),
+            repaint: RepaintNotifier::new(),
+        }
+    }
+}
+
+/// The audio thread's side of the data path: the sample counter and the load smoother.
+#[derive(Debug)]
+pub struct Tap {
+    shared: Arc<Shared>,
+    sample_rate: f64,
+    /// Samples between snapshots.
+    period: usize,
+    /// Samples until the next snapshot.
+    countdown: usize,
+    /// Smoothed load (the audio thread's copy).
+    load: f64,
+}
+
+impl Tap {
+    /// A tap writing into `shared`, at 48 kHz until [`Tap::set_sample_rate`] is called.
+    pub fn new(shared: Arc<Shared>) -> Self {
+        let mut tap = Self { shared, sample_rate: 48_000.0, period: 1, countdown: 0, load: 0.0 };
+        tap.set_sample_rate(48_000.0);
+        tap
+    }
+
+    /// The shared state this tap writes.
+    pub fn shared(&self) -> &Arc<Shared> {
+        &self.shared
+    }
+
+    /// Set the sample rate (Hz), from `activate`. Restarts the snapshot count.
+    pub fn set_sample_rate(&mut self, sample_rate: f64) {
+        self.sample_rate = if sample_rate.is_finite() && sample_rate > 0.0 { sample_rate } else { 48_000.0 };
+        self.period = ((self.sample_rate * SNAPSHOT_PERIOD).round() as usize).max(1);
+        self.countdown = 0;
+    }
+
+    /// Samples between two snapshots.
+    pub fn period(&self) -> usize {
+        self.period
+    }
+
+    /// Account for one process call of `samples` samples that took `elapsed`: update the load and,
+    /// when a snapshot is due and `engine` is given, push its monitor and request a repaint.
+    /// Returns whether a snapshot was pushed. Allocation-free, lock-free.
+    pub fn after_process(&mut self, samples: usize, elapsed: Duration, engine: Option<&Instrument>) -> bool {
+        if samples == 0 {
+            return false;
+        }
+        let duration = samples as f64 / self.sample_rate;
+        let raw = elapsed.as_secs_f64() / duration;
+        let a = 1.0 - (-duration / LOAD_TIME_CONSTANT).exp();
+        self.load += a * (raw - self.load);
+        self.shared.load.store(self.load as f32, Ordering::Relaxed);
+        self.shared.peak.fetch_max(raw as f32, Ordering::Relaxed);
+
+        if samples < self.countdown {
+            self.countdown -= samples;
+            return false;
+        }
+        // Overshoot carries over, so snapshots keep the audio-time rate for any buffer size.
+        let overshoot = (samples - self.countdown) % self.period;
+        self.countdown = self.period - overshoot;
+        let Some(engine) = engine else {
+            return false;
+        };
+        // A displaced (oldest) snapshot is plain data: dropping it frees nothing.
+        let _ = self.shared.monitors.force_push(engine.monitor());
+        self.shared.repaint.request_repaint();
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use qsa_dsp::instrument::{Event, Settings};
+
+    /// Processing through the engine path pushes one snapshot per period of audio, whatever the
+    /// buffer size, each showing the struck string; and the load follows process time over buffer
+    /// duration.
+    #[test]
+    fn process_path_pushes_snapshots_and_sets_load() {
+        let fs = 48_000.0;
+        let mut engine = Instrument::new(fs, 4, Settings::default());
+        let shared = Arc::new(Shared::default());
+        let mut tap = Tap::new(shared.clone());
+        tap.set_sample_rate(fs);
+        assert_eq!(tap.period(), 1600);
+
+        engine.handle(Event::NoteOn { channel: 0, key: 60, velocity: 0.8 });
+        let (mut left, mut right) = (vec![0.0f32; 1024], vec![0.0f32; 1024]);
+        let mut pushed = 0;
+        let mut rendered = 0;
+        // Uneven buffer sizes, 0.25 s in all.
+        for size in [1usize, 64, 1000, 37, 512, 1024].iter().cycle() {
+            if rendered >= 12_000 {
+                break;
+            }
+            let n = (*size).min(12_000 - rendered);
+            engine.process(&mut left[..n], &mut right[..n]);
+            // Pretend each call took a quarter of its budget.
+            let elapsed = Duration::from_secs_f64(0.25 * n as f64 / fs);
+            pushed += usize::from(tap.after_process(n, elapsed, Some(&engine)));
+            rendered += n;
+        }
+        // A snapshot at the first call, then one every 1600 samples: 0, 1600, ..., 11200.
+        assert_eq!(pushed, 8);
+        assert_eq!(shared.monitors.len(), 8);
+        let mut last = None;
+        while let Some(m) = shared.monitors.pop() {
+            last = Some(m);
+        }
+        let m = last.expect("a snapshot");
+        assert_eq!(m.sounding, 1);
+        assert_eq!(m.key, 60);
+        assert!(m.energy > 0.0, "energy {}", m.energy);
+        assert!(m.shape.iter().any(|&y| y != 0.0));
+
+        // 0.25 s at a constant 0.25 load, smoothed with 0.3 s: within the smoother's rise.
+        let load = shared.load.load(Ordering::Relaxed);
+        let expected = 0.25 * (1.0 - (-0.25f64 / LOAD_TIME_CONSTANT).exp());
+        assert!((f64::from(load) - expected).abs() < 0.01, "load {load}, expected {expected}");
+        assert!((shared.peak.swap(0.0, Ordering::Relaxed) - 0.25).abs() < 1e-4);
+
+        // A full queue drops the oldest, and no engine means no snapshot but still a load.
+        for _ in 0..2 * QUEUE_CAPACITY {
+            tap.after_process(tap.period(), Duration::ZERO, Some(&engine));
+        }
+        assert_eq!(shared.monitors.len(), QUEUE_CAPACITY);
+        assert!(!tap.after_process(4 * tap.period(), Duration::from_millis(1), None));
+        assert!(shared.peak.load(Ordering::Relaxed) > 0.0);
+    }
+}

@@ -1,0 +1,274 @@
+"""The bundled VST3 plugin in a real host: pedalboard (JUCE's VST3 hosting, from PyPI).
+
+Run from the workspace root with ``python3 -m pytest -q tests/hosts/test_vst3.py`` (the Rust test
+``tests/tests/host_vst3.rs`` does, inside ``cargo test``). Needs ``pedalboard mido numpy pytest``
+and ``target/bundled/QSA Strings.vst3`` (``cargo xtask bundle qsa-plugin --release``).
+
+- pedalboard loads the bundle as an instrument and sees the documented parameters under its
+  python names (name + unit: ``mode``, ``slide_position_st``, ...);
+- a MIDI phrase renders in both modes, finite, not silent, every note at its pitch within 1 %;
+- a parameter change (felt hardness) measurably changes the spectrum.
+
+Loading time. Besides its 26 parameters, the VST3 exposes 16 x 130 = 2,080 MIDI proxy parameters
+(``MIDI Ch. N CC M``, pitch bend and channel pressure per channel: VST3 has no controller events,
+so nice-plug maps them to parameters). pedalboard's Python layer probes every parameter with 1,001
+text conversions when it loads a plugin and again on the first attribute access, which takes about
+40 s each here. The fixture below therefore skips that eager probe while loading and wraps only
+the parameters a test uses in pedalboard's own ``AudioProcessorParameter`` (the object its
+attribute access uses, with the same value conversion). Names come from pedalboard's own naming
+function. These are pedalboard 0.9 internals: ``.ci/run`` pins the version.
+"""
+
+import contextlib
+import math
+import os
+import pathlib
+
+import mido
+import numpy as np
+import pedalboard
+import pytest
+from pedalboard import _pedalboard  # pedalboard's Python layer
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+# The Rust wrapper passes the bundle in its target directory; by default the workspace's.
+BUNDLE = pathlib.Path(
+    os.environ.get("QSA_VST3_BUNDLE", ROOT / "target" / "bundled" / "QSA Strings.vst3")
+)
+FS = 48_000
+
+# Documented parameters (plugin/src/params.rs) under pedalboard's python names.
+DOCUMENTED = {
+    "mode": "Mode",
+    "solver": "Solver",
+    "qsa_segments": "QSA segments",
+    "control_block_smp": "Control block",
+    "voices": "Voices",
+    "hardness": "Hardness",
+    "hammer_mass": "Hammer mass",
+    "strike_position": "Strike position",
+    "string_damping": "String damping",
+    "brightness": "Brightness",
+    "damper_1_s": "Damper",
+    "slide_position_st": "Slide position",
+    "slide_follows_key": "Slide follows key",
+    "glide_time_ms": "Glide time",
+    "bend_range_st": "Bend range",
+    "hand_height_mm": "Hand height",
+    "hand_height_from": "Hand height from",
+    "slide_mass_g": "Slide mass",
+    "hand_stiffness_n_m": "Hand stiffness",
+    "hand_damping_kg_s": "Hand damping",
+    "finger_damping_s_m": "Finger damping",
+    "slide_stiffness_n_m_a": "Slide stiffness",
+    "slide_exponent": "Slide exponent",
+    "pluck_position": "Pluck position",
+    "pickup_position": "Pickup position",
+    "output_gain_db": "Output gain",
+}
+
+# Relative pitch error tolerated: 1 %, the issue's requirement (a sixth of a semitone). The
+# estimators resolve far less: the spectral peak is read from a 16x zero-padded FFT (0.2 Hz grid)
+# refined by a parabola; the autocorrelation lag is refined by a parabola (about 0.05 %).
+PITCH_TOLERANCE = 0.01
+
+# "Not silent": a peak above -60 dBFS. A mezzo-forte note peaks between 0.01 and 0.5 of full
+# scale; silence is exactly 0.
+AUDIBLE = 1e-3
+
+
+def key_hz(key):
+    """Equal-tempered frequency of a MIDI key (A4 = 440 Hz)."""
+    return 440.0 * 2.0 ** ((key - 69) / 12)
+
+
+@contextlib.contextmanager
+def _without_eager_parameter_probe():
+    mixin = getattr(_pedalboard, "_PythonExternalPluginMixin", None)
+    original = getattr(mixin, "__set_initial_parameter_values__", None)
+    assert original is not None, (
+        f"pedalboard {pedalboard.__version__} changed its internals; the tests are written for the "
+        "version .ci/run pins"
+    )
+    mixin.__set_initial_parameter_values__ = lambda self, values: None
+    try:
+        yield
+    finally:
+        mixin.__set_initial_parameter_values__ = original
+
+
+class Synth:
+    """A loaded plugin and pedalboard parameter wrappers for the documented parameters."""
+
+    def __init__(self):
+        assert BUNDLE.exists(), (
+            f"{BUNDLE} is missing: run `cargo xtask bundle qsa-plugin --release` first "
+            "(CI builds it before the tests)"
+        )
+        with _without_eager_parameter_probe():
+            self.plugin = pedalboard.load_plugin(str(BUNDLE))
+        # pedalboard's python name of every parameter the plugin reports (its naming function).
+        self.names = {
+            _pedalboard.to_python_parameter_name(p): p.name for p in self.plugin._parameters
+        }
+        self._wrapped = {}
+
+    def param(self, python_name):
+        """pedalboard's wrapper of one parameter (range and value conversion by probing)."""
+        if python_name not in self._wrapped:
+            self._wrapped[python_name] = pedalboard.AudioProcessorParameter(
+                self.plugin, self.names[python_name]
+            )
+        return self._wrapped[python_name]
+
+    def set(self, **values):
+        """Set parameters by python name and value in their unit, as ``plugin.name = value`` does."""
+        for name, value in values.items():
+            p = self.param(name)
+            p.raw_value = p.get_raw_value_for(value)
+
+    def render(self, messages, duration):
+        audio = self.plugin(messages, duration=duration, sample_rate=FS, num_channels=2, reset=True)
+        assert audio.shape == (2, int(duration * FS)), audio.shape
+        assert audio.dtype == np.float32
+        return audio
+
+
+@pytest.fixture(scope="module")
+def synth():
+    return Synth()
+
+
+@pytest.fixture
+def defaults(synth):
+    """The synth with the parameters these tests touch at their documented defaults."""
+    synth.set(
+        mode="Piano",
+        hardness=1.0,
+        brightness=1.0,
+        slide_follows_key=True,
+        output_gain_db=0.0,
+    )
+    return synth
+
+
+def phrase(keys, step, velocity=90):
+    """Separate notes, each ``step`` seconds long (note-off just before the next note-on)."""
+    messages = []
+    for i, key in enumerate(keys):
+        messages.append(mido.Message("note_on", note=key, velocity=velocity, time=i * step))
+        messages.append(mido.Message("note_off", note=key, velocity=0, time=(i + 0.95) * step))
+    return messages
+
+
+def spectral_peak(x, lo, hi):
+    """Frequency (Hz) of the largest spectral peak in [lo, hi] of a Hann-windowed signal."""
+    n = len(x)
+    size = 1 << math.ceil(math.log2(16 * n))
+    spectrum = np.abs(np.fft.rfft((x - x.mean()) * np.hanning(n), size))
+    freqs = np.arange(len(spectrum)) * FS / size
+    band = np.flatnonzero((freqs >= lo) & (freqs <= hi))
+    i = band[np.argmax(spectrum[band])]
+    a, b, c = np.log(spectrum[i - 1 : i + 2])
+    return (i + 0.5 * (a - c) / (a - 2 * b + c)) * FS / size
+
+
+def fundamental(x, f_min, f_max):
+    """Fundamental (Hz) by autocorrelation: the shortest lag in [FS/f_max, FS/f_min] whose
+    correlation is within 10 % of the largest, refined by a parabola (as qsa_tests::fundamental)."""
+    x = x - x.mean()
+    lo, hi = int(FS / f_max), math.ceil(FS / f_min) + 1
+    n = len(x) - hi - 1
+    r = np.array([np.dot(x[:n], x[lag : lag + n]) for lag in range(hi + 2)])
+    peak = r[lo : hi + 1].max()
+    lag = next(
+        l for l in range(lo, hi + 1) if r[l] >= 0.9 * peak and r[l] >= r[l - 1] and r[l] >= r[l + 1]
+    )
+    a, b, c = r[lag - 1 : lag + 2]
+    return FS / (lag + 0.5 * (a - c) / (a - 2 * b + c))
+
+
+def spectral_centroid(x):
+    spectrum = np.abs(np.fft.rfft(x * np.hanning(len(x))))
+    freqs = np.fft.rfftfreq(len(x), 1 / FS)
+    return float((freqs * spectrum).sum() / spectrum.sum())
+
+
+def assert_pitch(measured, expected, what):
+    error = measured / expected - 1
+    print(f"{what}: {measured:.3f} Hz (expected {expected:.3f} Hz, {100 * error:+.3f} %)")
+    assert abs(error) < PITCH_TOLERANCE, f"{what}: {measured} Hz, expected {expected} Hz within 1 %"
+
+
+def test_loads_as_an_instrument_with_the_documented_parameters(synth):
+    assert synth.plugin.is_instrument
+    assert synth.plugin.name == "QSA Strings"
+    ours = sorted(n for n in synth.names if not n.startswith("midi_ch_"))
+    print("parameters:", ours)
+    assert ours == sorted(DOCUMENTED), "python names of the plugin's parameters"
+    for python_name, name in DOCUMENTED.items():
+        assert synth.names[python_name] == name
+    proxies = [n for n in synth.names if n.startswith("midi_ch_")]
+    assert len(proxies) == 16 * 130, "MIDI proxy parameters: 128 CCs, bend and pressure x 16 channels"
+    # The same names through pedalboard's public attribute listing.
+    assert set(DOCUMENTED) <= set(dir(synth.plugin))
+    # Values in their documented units and ranges, through pedalboard's conversions.
+    mode = synth.param("mode")
+    assert mode.valid_values == ["Piano", "Slide"]
+    assert synth.param("solver").valid_values == ["QSA", "EXP", "IMP"]
+    slide = synth.param("slide_position_st")
+    assert (slide.min_value, slide.max_value) == (0.0, 24.0)
+    hand = synth.param("hand_height_mm")
+    assert (hand.min_value, hand.max_value) == (-3.0, 3.0)
+    synth.set(slide_position_st=12.0)
+    assert abs(slide.raw_value - 0.5) < 1e-3, "12 st is the middle of 0..24 st"
+    assert slide.string_value.strip() == "12.00"
+    synth.set(slide_position_st=5.0)
+
+
+def test_piano_phrase_is_at_pitch(defaults):
+    keys, step = [48, 60, 64, 67, 72], 0.2
+    audio = defaults.render(phrase(keys, step), duration=len(keys) * step)
+    assert np.isfinite(audio).all()
+    assert np.array_equal(audio[0], audio[1]), "the engine is mono on both channels"
+    peak = float(np.abs(audio).max())
+    print(f"piano phrase peak {peak:.3f}")
+    assert peak > AUDIBLE
+    for i, key in enumerate(keys):
+        # From 30 ms after the strike to the note-off.
+        segment = audio[0, int((i * step + 0.03) * FS) : int((i + 0.95) * step * FS)]
+        expected = key_hz(key)
+        assert_pitch(spectral_peak(segment, 0.9 * expected, 1.1 * expected), expected, f"piano key {key}")
+
+
+def test_slide_phrase_is_at_pitch(defaults):
+    defaults.set(mode="Slide")
+    keys, step = [52, 57, 64], 1 / 3
+    audio = defaults.render(phrase(keys, step), duration=1.0)
+    assert np.isfinite(audio).all()
+    peak = float(np.abs(audio).max())
+    print(f"slide phrase peak {peak:.3f}")
+    assert peak > AUDIBLE
+    for i, key in enumerate(keys):
+        # From 100 ms after the pluck (the pluck and the previous note's mute are over).
+        segment = audio[0, int((i * step + 0.1) * FS) : int((i + 0.95) * step * FS)]
+        expected = key_hz(key)
+        assert_pitch(fundamental(segment, 0.8 * expected, 1.2 * expected), expected, f"slide key {key}")
+
+
+def test_hardness_changes_the_spectrum(defaults):
+    """A harder felt makes a brighter note: the spectral centroid of a C4 rises by more than a
+    quarter from x0.3 to x3 hardness (measured: see the printed ratio), and the level changes."""
+    note = [
+        mido.Message("note_on", note=60, velocity=100, time=0.0),
+        mido.Message("note_off", note=60, velocity=0, time=0.45),
+    ]
+    centroids = {}
+    for hardness in (0.3, 3.0):
+        defaults.set(hardness=hardness)
+        audio = defaults.render(note, duration=0.5)
+        assert np.isfinite(audio).all()
+        centroids[hardness] = spectral_centroid(audio[0, : int(0.3 * FS)])
+    ratio = centroids[3.0] / centroids[0.3]
+    print(f"spectral centroid: soft {centroids[0.3]:.0f} Hz, hard {centroids[3.0]:.0f} Hz, ratio {ratio:.2f}")
+    assert ratio > 1.25, f"hardness x0.3 -> x3 moved the centroid by only {ratio:.3f}x"

@@ -1,0 +1,908 @@
+//! The bundled CLAP plugin in a real host: clack-host loads `target/bundled/QSA Strings.clap`,
+//! instantiates, activates and processes it on an audio thread, exactly as a DAW would.
+//!
+//! - The host sees an instrument: no audio input, one stereo output, a note input in the CLAP and
+//!   MIDI dialects, and the 26 documented parameters ([`parameters_have_the_documented_ids`]).
+//! - Notes sound at their pitch in both modes; host buffer sizes never change a sample;
+//!   automating `Slide position` moves the pitch as the speaking length says.
+//! - Bad input (non-finite and out-of-range parameter values, 10,000 random MIDI events in one
+//!   block, every channel, extreme keys, velocity 0, stray note-offs, sample rates 22.05 to
+//!   192 kHz, blocks of 1 to 8192 samples, garbage state) never panics, never gives NaN, and
+//!   garbage state is refused with the previous state kept.
+//! - The same notes and random events run against the debug bundle built with
+//!   `assert_process_allocs` (`target/bundled-debug/`), in a child process so that an abort
+//!   (an allocation in `process`) shows as a failing test with the child's output.
+//!
+//! The bundles are built by `cargo xtask bundle qsa-plugin --release` (and `.ci/run`); a missing
+//! or stale bundle fails the tests with that instruction.
+//!
+//! `unsafe` is allowed for one reason: loading a plugin binary (`PluginEntry::load`) runs foreign
+//! code, which no compiler can check.
+#![allow(unsafe_code)] // loading a plugin binary is inherently unsafe (clack-host's `PluginEntry::load`)
+
+use std::ffi::CString;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use clack_extensions::audio_ports::{AudioPortInfoBuffer, PluginAudioPorts};
+use clack_extensions::note_ports::{NoteDialect, NotePortInfoBuffer, PluginNotePorts};
+use clack_extensions::params::{ParamInfoBuffer, ParamInfoFlags, PluginParams};
+use clack_extensions::state::PluginState;
+use clack_host::events::Match;
+use clack_host::events::event_types::{MidiEvent, NoteOffEvent, NoteOnEvent, ParamValueEvent};
+use clack_host::prelude::*;
+use qsa_tests::{fundamental, seeded_rng, spectral_peak};
+use rand::RngExt;
+
+#[path = "support/bundle.rs"]
+mod bundle;
+use bundle::{BUILD_RELEASE, checked_bundle, target_dir};
+
+// ------------------------------------------------------------------------------------------------
+// Bundles
+// ------------------------------------------------------------------------------------------------
+
+/// The plugin's CLAP id (`ClapPlugin::CLAP_ID`).
+const PLUGIN_ID: &str = "org.qsa-strings.qsa-strings";
+
+/// Environment variable naming the bundle the ignored child test runs against.
+const CHILD_BUNDLE_ENV: &str = "QSA_HOST_TEST_BUNDLE";
+
+/// Set (by `.ci/run`) to make a missing debug bundle an error rather than a note.
+const REQUIRE_DEBUG_ENV: &str = "QSA_REQUIRE_DEBUG_BUNDLE";
+
+/// How `.ci/run` builds the debug bundle (debug and release bundles share `target/bundled/`).
+const BUILD_DEBUG: &str = "cargo xtask bundle qsa-plugin --features assert_process_allocs && rm -rf \
+                           target/bundled-debug && cp -r target/bundled target/bundled-debug && cargo xtask bundle \
+                           qsa-plugin --release";
+
+/// The release bundle.
+fn release_bundle() -> PathBuf {
+    checked_bundle(target_dir().join("bundled/QSA Strings.clap"), BUILD_RELEASE)
+}
+
+/// Where `.ci/run` copies the debug `assert_process_allocs` bundle.
+fn debug_bundle_path() -> PathBuf {
+    target_dir().join("bundled-debug/QSA Strings.clap")
+}
+
+// ------------------------------------------------------------------------------------------------
+// The host
+// ------------------------------------------------------------------------------------------------
+
+/// The host's handlers: nothing but a flag for the plugin's main-thread callback requests.
+struct TestHost;
+
+struct Shared {
+    callback_requested: AtomicBool,
+}
+
+impl<'a> SharedHandler<'a> for Shared {
+    fn request_restart(&self) {}
+    fn request_process(&self) {}
+    fn request_callback(&self) {
+        self.callback_requested.store(true, Ordering::SeqCst);
+    }
+}
+
+impl HostHandlers for TestHost {
+    type Shared<'a> = Shared;
+    type MainThread<'a> = ();
+    type AudioProcessor<'a> = ();
+}
+
+/// A parameter's CLAP id: nice-plug derives it from the stable string id with this hash
+/// (`hash_param_id` in nice-plug 0.4.2, `wrapper/util.rs`; VST3 uses the same), so the documented
+/// string ids determine the ids a host stores in its automation.
+fn clap_id(id: &str) -> u32 {
+    id.bytes().fold(0u32, |h, b| h.wrapping_mul(31).wrapping_add(u32::from(b))) & !(1 << 31)
+}
+
+/// One host event.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Ev {
+    /// CLAP note-on (channel, key, velocity 0..1).
+    On(u8, u8, f64),
+    /// CLAP note-off (channel, key).
+    Off(u8, u8),
+    /// A raw MIDI 1.0 message.
+    Midi([u8; 3]),
+    /// A parameter value (CLAP id, CLAP value: normalised 0..1, or the step index of stepped ones).
+    Param(u32, f64),
+}
+
+/// Timed events: (sample from the start of a render, event), in time order.
+type Score = Vec<(usize, Ev)>;
+
+/// A parameter change by string id.
+fn param(id: &str, value: f64) -> Ev {
+    Ev::Param(clap_id(id), value)
+}
+
+/// The CLAP value of `Slide position` `p` semitones (a linear 0..=24 st range).
+fn slide_value(p: f64) -> f64 {
+    p / 24.0
+}
+
+/// Audio of one render: left and right channels.
+struct Audio {
+    left: Vec<f32>,
+    right: Vec<f32>,
+}
+
+impl Audio {
+    fn peak(&self) -> f32 {
+        self.left.iter().chain(&self.right).fold(0.0f32, |m, v| m.max(v.abs()))
+    }
+
+    fn assert_finite(&self, what: &str) {
+        let bad = self.left.iter().chain(&self.right).position(|v| !v.is_finite());
+        assert!(bad.is_none(), "{what}: non-finite sample at index {bad:?}");
+    }
+
+    /// The left channel from `from` samples on, as f64.
+    fn tail(&self, from: usize) -> Vec<f64> {
+        self.left[from..].iter().map(|&v| f64::from(v)).collect()
+    }
+}
+
+/// A plugin instance in clack-host, active and processing.
+struct Plugin {
+    instance: PluginInstance<TestHost>,
+    processor: Option<StartedPluginAudioProcessor<TestHost>>,
+    max_block: usize,
+}
+
+impl Plugin {
+    /// Load `bundle`, instantiate the plugin, set `setup` (by flushing parameter events while
+    /// inactive, as a host restoring a project does), activate at `sample_rate` with blocks of up
+    /// to `max_block` samples and start processing.
+    fn new(bundle: &Path, sample_rate: f64, max_block: usize, setup: &[Ev]) -> Self {
+        // SAFETY: loading a plugin binary runs its initialisation code; the bundle is this
+        // project's own build.
+        let entry =
+            unsafe { PluginEntry::load(bundle) }.unwrap_or_else(|e| panic!("loading {}: {e:?}", bundle.display()));
+        let factory = entry.get_plugin_factory().expect("the entry has a plugin factory");
+        let ids: Vec<String> =
+            factory.plugin_descriptors().filter_map(|d| d.id().map(|id| id.to_string_lossy().into_owned())).collect();
+        assert_eq!(ids, [PLUGIN_ID], "plugins in the bundle");
+        let host_info = HostInfo::new("qsa-tests", "QSA Strings", "https://example.invalid", "0.1.0").expect("host");
+        let id = CString::new(PLUGIN_ID).expect("id");
+        let mut instance = PluginInstance::<TestHost>::new(
+            |_| Shared { callback_requested: AtomicBool::new(false) },
+            |_| (),
+            &entry,
+            &id,
+            &host_info,
+        )
+        .expect("instantiate");
+        if !setup.is_empty() {
+            let params: PluginParams = instance.plugin_handle().get_extension().expect("params extension");
+            let mut events = EventBuffer::new();
+            for ev in setup {
+                let Ev::Param(id, value) = *ev else { panic!("setup takes parameter values only") };
+                events.push(&ParamValueEvent::new(0, ClapId::new(id), Pckn::match_all(), value));
+            }
+            let mut output = EventBuffer::new();
+            let mut handle = instance.inactive_plugin_handle().expect("inactive");
+            params.flush(&mut handle, &events.as_input(), &mut output.as_output());
+        }
+        let config = PluginAudioConfiguration { sample_rate, min_frames_count: 1, max_frames_count: max_block as u32 };
+        let processor = instance.activate(|_, _| (), config).expect("activate").start_processing().expect("start");
+        Self { instance, processor: Some(processor), max_block }
+    }
+
+    /// A 48 kHz instance taking blocks of up to 8192 samples.
+    fn at_48k(bundle: &Path, setup: &[Ev]) -> Self {
+        Self::new(bundle, 48_000.0, 8192, setup)
+    }
+
+    fn params(&mut self) -> PluginParams {
+        self.instance.plugin_handle().get_extension().expect("params extension")
+    }
+
+    /// Current CLAP value of a parameter.
+    fn value(&mut self, id: u32) -> Option<f64> {
+        let params = self.params();
+        params.get_value(&self.instance.plugin_handle(), ClapId::new(id))
+    }
+
+    /// Render `samples` samples with `score`, calling `process` with blocks of the sizes `sizes`
+    /// yields (at most `max_block`), on a separate audio thread. Events go to the block holding
+    /// their sample, with block-relative times.
+    fn render(&mut self, score: &[(usize, Ev)], samples: usize, mut sizes: impl FnMut() -> usize + Send) -> Audio {
+        assert!(score.windows(2).all(|w| w[0].0 <= w[1].0), "score out of order");
+        assert!(score.iter().all(|e| e.0 < samples), "event after the end of the render");
+        let max_block = self.max_block;
+        let processor = self.processor.as_mut().expect("processing");
+        let audio = std::thread::scope(|s| {
+            s.spawn(move || {
+                let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
+                let mut ports = AudioPorts::with_capacity(2, 1);
+                let mut events = EventBuffer::with_capacity(score.len().min(20_000));
+                let mut output_events = EventBuffer::new();
+                let (mut t, mut next) = (0, 0);
+                while t < samples {
+                    let n = sizes().clamp(1, max_block).min(samples - t);
+                    events.clear();
+                    while next < score.len() && score[next].0 < t + n {
+                        push_event(&mut events, (score[next].0 - t) as u32, score[next].1);
+                        next += 1;
+                    }
+                    let (l, r) = (&mut left[t..t + n], &mut right[t..t + n]);
+                    let mut outputs = ports.with_output_buffers([AudioPortBuffer {
+                        latency: 0,
+                        channels: AudioPortBufferType::f32_output_only([l, r].into_iter()),
+                    }]);
+                    output_events.clear();
+                    processor
+                        .process(
+                            &InputAudioBuffers::empty(),
+                            &mut outputs,
+                            &events.as_input(),
+                            &mut output_events.as_output(),
+                            None,
+                            None,
+                        )
+                        .expect("process");
+                    t += n;
+                }
+                Audio { left, right }
+            })
+            .join()
+            .expect("the audio thread panicked")
+        });
+        self.main_thread_callback();
+        audio
+    }
+
+    /// Render with blocks of one size.
+    fn render_blocks(&mut self, score: &[(usize, Ev)], samples: usize, block: usize) -> Audio {
+        self.render(score, samples, || block)
+    }
+
+    /// Run the plugin's main-thread callback if it asked for one.
+    fn main_thread_callback(&mut self) {
+        if self.instance.access_shared_handler(|s| s.callback_requested.swap(false, Ordering::SeqCst)) {
+            self.instance.call_on_main_thread_callback();
+        }
+    }
+
+    /// Saved state (the state extension).
+    fn save(&mut self) -> Vec<u8> {
+        let state: PluginState = self.instance.plugin_handle().get_extension().expect("state extension");
+        let mut bytes = Vec::new();
+        state.save(&self.instance.plugin_handle(), &mut bytes).expect("save state");
+        bytes
+    }
+
+    /// Load state; whether the plugin accepted it.
+    fn load(&mut self, bytes: &[u8]) -> bool {
+        let state: PluginState = self.instance.plugin_handle().get_extension().expect("state extension");
+        let accepted = state.load(&self.instance.plugin_handle(), &mut &bytes[..]).is_ok();
+        self.main_thread_callback();
+        accepted
+    }
+}
+
+impl Drop for Plugin {
+    fn drop(&mut self) {
+        if let Some(processor) = self.processor.take() {
+            self.instance.deactivate(processor.stop_processing());
+        }
+    }
+}
+
+fn push_event(buffer: &mut EventBuffer, time: u32, ev: Ev) {
+    let note = |channel: u8, key: u8| Pckn::new(0u16, u16::from(channel), u16::from(key), Match::All);
+    match ev {
+        Ev::On(channel, key, velocity) => buffer.push(&NoteOnEvent::new(time, note(channel, key), velocity)),
+        Ev::Off(channel, key) => buffer.push(&NoteOffEvent::new(time, note(channel, key), 0.0)),
+        Ev::Midi(data) => buffer.push(&MidiEvent::new(time, 0, data)),
+        Ev::Param(id, value) => buffer.push(&ParamValueEvent::new(time, ClapId::new(id), Pckn::match_all(), value)),
+    }
+}
+
+// ------------------------------------------------------------------------------------------------
+// Measurements
+// ------------------------------------------------------------------------------------------------
+
+/// Equal-tempered frequency of a MIDI key (A4 = 440 Hz), written out here so that the expected
+/// pitches do not come from the code under test.
+fn key_hz(key: u8) -> f64 {
+    440.0 * 2f64.powf((f64::from(key) - 69.0) / 12.0)
+}
+
+/// Relative pitch error tolerated: 1 %, the issue's requirement (a sixth of a semitone). The
+/// estimators are far finer: the spectral peak resolves a small fraction of a 2–4 Hz bin, the
+/// autocorrelation peak is refined by a parabola to about 0.05 % at these lags.
+const PITCH_TOLERANCE: f64 = 0.01;
+
+/// "Not silent": a peak above −60 dBFS. A mezzo-forte note peaks between 0.01 and 0.5 of full
+/// scale (the engine's output scales put a fortissimo C4 near 0.5); silence is exactly 0.
+const AUDIBLE: f32 = 1e-3;
+
+/// Piano pitch: the first partial, the largest spectral peak within ±10 % of the key's frequency,
+/// from 50 ms on (after the hammer). The stiff string's first partial is f0·√(1 + B), at most
+/// 0.1 % sharp for these keys.
+fn piano_pitch(audio: &Audio, fs: f64, key: u8) -> f64 {
+    let expected = key_hz(key);
+    spectral_peak(&audio.tail((0.05 * fs) as usize), fs, 0.9 * expected, 1.1 * expected)
+}
+
+/// Slide pitch: the period by autocorrelation, searched within ±20 % of `expected`, from
+/// `from_s` seconds on. (The slide rides on the hand spring, which pulls the first partial about
+/// 1 % sharp while the harmonic series keeps the speaking length's spacing: the period, like the
+/// ear, follows the series; see `tests/tests/instrument.rs`.)
+fn slide_pitch(signal: &[f64], fs: f64, expected: f64) -> f64 {
+    fundamental(signal, fs, 0.8 * expected, 1.2 * expected)
+}
+
+fn assert_pitch(measured: f64, expected: f64, what: &str) {
+    println!("{what}: {measured:.3} Hz (expected {expected:.3} Hz, {:+.3} %)", 100.0 * (measured / expected - 1.0));
+    assert!(
+        (measured / expected - 1.0).abs() < PITCH_TOLERANCE,
+        "{what}: {measured} Hz, expected {expected} Hz within 1 %"
+    );
+}
+
+fn bit_identical(a: &Audio, b: &Audio) -> Option<usize> {
+    let (x, y) = (a.left.iter().chain(&a.right), b.left.iter().chain(&b.right));
+    if a.left.len() != b.left.len() {
+        return Some(0);
+    }
+    x.zip(y).position(|(p, q)| p.to_bits() != q.to_bits())
+}
+
+// ------------------------------------------------------------------------------------------------
+// Core cases (also run against the debug assert_process_allocs bundle)
+// ------------------------------------------------------------------------------------------------
+
+const FS: f64 = 48_000.0;
+
+/// Notes in both modes: finite, not silent, at their pitch; the two channels carry the same
+/// (mono) signal.
+fn core_notes(bundle: &Path) {
+    for key in [36u8, 60, 84] {
+        let mut p = Plugin::at_48k(bundle, &[]);
+        let audio = p.render_blocks(&[(0, Ev::On(0, key, 0.7)), (19_200, Ev::Off(0, key))], 24_000, 512);
+        audio.assert_finite("piano");
+        assert!(audio.peak() > AUDIBLE, "piano key {key} is silent: peak {}", audio.peak());
+        assert_eq!(audio.left, audio.right, "the engine is mono: both channels carry it");
+        assert_pitch(piano_pitch(&audio, FS, key), key_hz(key), &format!("piano key {key}, peak {:.3}", audio.peak()));
+    }
+    for key in [52u8, 57, 64] {
+        let mut p = Plugin::at_48k(bundle, &[param("mode", 1.0)]);
+        let audio = p.render_blocks(&[(0, Ev::On(0, key, 0.8))], 24_000, 512);
+        audio.assert_finite("slide");
+        assert!(audio.peak() > AUDIBLE, "slide key {key} is silent: peak {}", audio.peak());
+        let f = slide_pitch(&audio.tail(7_200), FS, key_hz(key));
+        assert_pitch(f, key_hz(key), &format!("slide key {key}, peak {:.3}", audio.peak()));
+    }
+}
+
+/// 10,000 random MIDI and note events in one 8192-sample block (every status byte, data bytes
+/// beyond 127, all channels, keys 0..=127, velocity 0, stray note-offs, pedals, all-notes-off),
+/// in both modes: every sample finite, and CC120 (all sound off) afterwards gives exact silence,
+/// so the instrument is still under control.
+fn core_random_events(bundle: &Path) {
+    for (mode, seed) in [(0.0, 11u64), (1.0, 12)] {
+        let mut p = Plugin::at_48k(bundle, &[param("mode", mode)]);
+        let score = random_events(seed, 10_000, 8192);
+        let start = Instant::now();
+        let garbage = p.render_blocks(&score, 8192, 8192);
+        let after = p.render_blocks(&[], 3 * 8192, 8192);
+        println!("mode {mode}: 10,000 events + 0.68 s rendered in {:.2} s", start.elapsed().as_secs_f64());
+        garbage.assert_finite("the block with 10,000 random events");
+        after.assert_finite("after 10,000 random events");
+        assert!(garbage.peak() > AUDIBLE, "the random notes sound (peak {})", garbage.peak());
+        let silenced = p.render_blocks(&[(0, Ev::Midi([0xB0, 120, 0]))], 4096, 4096);
+        assert_eq!(silenced.peak(), 0.0, "all sound off after the random events");
+    }
+}
+
+/// `count` random events at random times in `0..samples`, time-ordered.
+fn random_events(seed: u64, count: usize, samples: usize) -> Score {
+    let mut rng = seeded_rng(seed);
+    let mut score: Score = (0..count)
+        .map(|_| {
+            let t = rng.random_range(0..samples);
+            let ch = rng.random_range(0..16u8);
+            let (a, b) = (rng.random_range(0..=127u8), rng.random_range(0..=127u8));
+            let ev = match rng.random_range(0..12) {
+                0..=2 => Ev::Midi([0x90 | ch, a, [0, b][rng.random_range(0..2)]]),
+                3 => Ev::Midi([0x80 | ch, a, b]),
+                4 => Ev::Midi([0xB0 | ch, [1, 64, 120, 123, a][rng.random_range(0..5)], b]),
+                5 => Ev::Midi([0xE0 | ch, a, b]),
+                6 => Ev::Midi([0xD0 | ch, a, 0]),
+                7 => Ev::Midi([0xA0 | ch, a, b]),
+                8 => Ev::Midi([rng.random(), rng.random(), rng.random()]),
+                9 => Ev::On(
+                    ch,
+                    [0, 127, a][rng.random_range(0..3)],
+                    [0.0, 1.0, f64::NAN, rng.random_range(0.0..1.0)][rng.random_range(0..4)],
+                ),
+                10 => Ev::Off(ch, a),
+                _ => Ev::On(ch, a, rng.random_range(0.0..1.0)),
+            };
+            (t, ev)
+        })
+        .collect();
+    score.sort_by_key(|e| e.0);
+    score
+}
+
+#[test]
+fn notes_sound_at_their_pitch_in_both_modes() {
+    core_notes(&release_bundle());
+}
+
+#[test]
+fn random_midi_flood_is_safe() {
+    core_random_events(&release_bundle());
+}
+
+/// Run by [`debug_bundle_does_not_allocate_in_process`] in a child process, against the bundle
+/// named by `QSA_HOST_TEST_BUNDLE`.
+#[test]
+#[ignore = "run in a child process by debug_bundle_does_not_allocate_in_process"]
+fn debug_bundle_child() {
+    let bundle = PathBuf::from(std::env::var_os(CHILD_BUNDLE_ENV).expect("QSA_HOST_TEST_BUNDLE names the bundle"));
+    let start = Instant::now();
+    core_notes(&bundle);
+    core_random_events(&bundle);
+    println!("debug bundle core cases: {:.1} s", start.elapsed().as_secs_f64());
+}
+
+/// The debug bundle built with `assert_process_allocs` aborts the host on any allocation in
+/// `process`. The core cases run against it in a child process (this test binary, re-invoked
+/// on the ignored [`debug_bundle_child`]); an abort fails here with the child's output. The
+/// framework lets its input-event queue grow on the audio thread (a permitted allocation it
+/// logs as "Input event buffer filled up"), which the child's log must not show either.
+#[test]
+fn debug_bundle_does_not_allocate_in_process() {
+    let path = debug_bundle_path();
+    if !path.is_file() {
+        let required = std::env::var_os(REQUIRE_DEBUG_ENV).is_some();
+        let message = format!(
+            "the debug assert_process_allocs bundle {} is missing: build it with `{BUILD_DEBUG}` (`.ci/run` does)",
+            path.display()
+        );
+        assert!(!required, "{message}");
+        eprintln!("NOTE: {message}; skipping the allocation check");
+        return;
+    }
+    let path = checked_bundle(path, BUILD_DEBUG);
+    let start = Instant::now();
+    let output = Command::new(std::env::current_exe().expect("test binary"))
+        .args(["--ignored", "--exact", "debug_bundle_child", "--nocapture", "--test-threads=1"])
+        .env(CHILD_BUNDLE_ENV, &path)
+        .env("NICE_LOG", "stderr")
+        .output()
+        .expect("run the child test");
+    let (stdout, stderr) = (String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
+    println!("child ran {:.1} s\n{stdout}", start.elapsed().as_secs_f64());
+    assert!(
+        output.status.success(),
+        "the host aborted or failed with the debug assert_process_allocs bundle ({}). \"memory allocation of N \
+         bytes failed\" means `process` allocated; `gdb -batch -ex run -ex bt --args {} --ignored --exact \
+         debug_bundle_child` with {CHILD_BUNDLE_ENV}={} shows where.\n--- stdout\n{stdout}\n--- stderr\n{stderr}",
+        output.status,
+        std::env::current_exe().map(|p| p.display().to_string()).unwrap_or_default(),
+        path.display(),
+    );
+    assert!(stdout.contains("1 passed"), "the child test did not run:\n{stdout}");
+    let grown = stderr.lines().filter(|l| l.contains("Input event buffer filled up")).count();
+    assert_eq!(
+        grown, 0,
+        "nice-plug's input event queue grew on the audio thread (an allocation in process, permitted by the \
+         framework) {grown} times; the plugin's INPUT_EVENT_CAPACITY must hold 10,000 events"
+    );
+}
+
+// ------------------------------------------------------------------------------------------------
+// Parameters
+// ------------------------------------------------------------------------------------------------
+
+/// The documented parameters (plugin/src/params.rs): string id, name, and the step count of the
+/// stepped ones (CLAP value range 0..=steps; continuous ones span 0..=1).
+const PARAMETERS: [(&str, &str, Option<u32>); 26] = [
+    ("mode", "Mode", Some(1)),
+    ("solver", "Solver", Some(2)),
+    ("segs", "QSA segments", Some(63)),
+    ("nb", "Control block", Some(255)),
+    ("voices", "Voices", Some(127)),
+    ("hard", "Hardness", None),
+    ("hmass", "Hammer mass", None),
+    ("strike", "Strike position", None),
+    ("damp", "String damping", None),
+    ("bright", "Brightness", None),
+    ("damper", "Damper", None),
+    ("slide", "Slide position", None),
+    ("follow", "Slide follows key", Some(1)),
+    ("glide", "Glide time", None),
+    ("bend", "Bend range", None),
+    ("hand", "Hand height", None),
+    ("handsrc", "Hand height from", Some(3)),
+    ("smass", "Slide mass", None),
+    ("hstiff", "Hand stiffness", None),
+    ("hdamp", "Hand damping", None),
+    ("fdamp", "Finger damping", None),
+    ("kappa", "Slide stiffness", None),
+    ("alpha", "Slide exponent", None),
+    ("pluck", "Pluck position", None),
+    ("pickup", "Pickup position", None),
+    ("gain", "Output gain", None),
+];
+
+/// The host's view of the plugin: an instrument (no audio input, one stereo main output, one note
+/// input taking CLAP notes and MIDI), and exactly the documented parameters.
+///
+/// What is checkable about the ids: CLAP ids are numbers, hashed from the string ids, so the test
+/// checks that the plugin's ids are exactly the hashes of the documented string ids (a renamed or
+/// missing id changes the set), with the documented names and step counts. Values: the documented
+/// defaults read back; set-by-id (a parameter event) and get-by-id agree; the plugin's own text
+/// conversion maps the documented ranges (`Slide position` 0..=24 st, `Hand height` −3..=3 mm,
+/// enum names); an unknown id is refused.
+#[test]
+fn parameters_have_the_documented_ids() {
+    let mut p = Plugin::at_48k(&release_bundle(), &[]);
+    let handle = p.instance.plugin_handle();
+    let ports: PluginAudioPorts = handle.get_extension().expect("audio-ports extension");
+    assert_eq!(ports.count(&handle, true), 0, "audio inputs");
+    assert_eq!(ports.count(&handle, false), 1, "audio outputs");
+    let mut port_buffer = AudioPortInfoBuffer::new();
+    let out = ports.get(&handle, 0, false, &mut port_buffer).expect("output port info");
+    assert_eq!(out.channel_count, 2, "stereo output");
+    let notes: PluginNotePorts = handle.get_extension().expect("note-ports extension");
+    assert_eq!((notes.count(&handle, true), notes.count(&handle, false)), (1, 0), "note ports in, out");
+    let mut note_buffer = NotePortInfoBuffer::new();
+    let note_port = notes.get(&handle, 0, true, &mut note_buffer).expect("note port info");
+    assert!(note_port.supported_dialects.supports(NoteDialect::Clap), "CLAP note events");
+    assert!(note_port.supported_dialects.supports(NoteDialect::Midi), "MIDI events");
+
+    let params = p.params();
+    let handle = p.instance.plugin_handle();
+    let count = params.count(&handle);
+    let mut listed = Vec::new();
+    for index in 0..count {
+        let mut buffer = ParamInfoBuffer::new();
+        let info = params.get_info(&handle, index, &mut buffer).expect("param info");
+        listed.push((
+            info.id.get(),
+            String::from_utf8_lossy(info.name).into_owned(),
+            info.flags.contains(ParamInfoFlags::IS_STEPPED),
+            info.min_value,
+            info.max_value,
+            info.default_value,
+        ));
+    }
+    println!("{count} parameters:");
+    for (id, name, stepped, min, max, default) in &listed {
+        println!("  {id:>10}  {name:<20} stepped {stepped:<5} {min}..={max} default {default}");
+    }
+    assert_eq!(count as usize, PARAMETERS.len(), "parameter count");
+    for (id, name, steps) in PARAMETERS {
+        let hash = clap_id(id);
+        let Some(info) = listed.iter().find(|l| l.0 == hash) else { panic!("no parameter with the id of {id:?}") };
+        assert_eq!(info.1, name, "name of {id:?}");
+        assert_eq!(info.2, steps.is_some(), "{id:?} stepped");
+        assert_eq!((info.3, info.4), (0.0, f64::from(steps.unwrap_or(1))), "CLAP range of {id:?}");
+        assert_eq!(params.get_value(&handle, ClapId::new(hash)), Some(info.5), "{id:?} starts at its default");
+    }
+    let unknown = (1..).find(|i| !listed.iter().any(|l| l.0 == *i)).expect("a free id");
+    assert_eq!(params.get_value(&handle, ClapId::new(unknown)), None, "an unknown id is refused");
+
+    // Documented defaults and ranges, through the plugin's own conversions.
+    let text = |id: &str, value: f64| {
+        let mut buffer = [0u8; 64];
+        let t = params.value_to_text(&handle, ClapId::new(clap_id(id)), value, &mut buffer).expect("value_to_text");
+        String::from_utf8_lossy(t).into_owned()
+    };
+    let parse = |id: &str, text: &str| {
+        params.text_to_value(&handle, ClapId::new(clap_id(id)), &CString::new(text).expect("text"))
+    };
+    let defaults: Vec<(&str, String)> = PARAMETERS
+        .iter()
+        .map(|(id, ..)| (*id, text(id, params.get_value(&handle, ClapId::new(clap_id(id))).expect("value"))))
+        .collect();
+    println!("defaults: {defaults:?}");
+    let default = |id: &str| defaults.iter().find(|d| d.0 == id).map(|d| d.1.clone()).expect("listed");
+    assert_eq!(default("mode"), "Piano");
+    assert_eq!(default("solver"), "QSA");
+    assert_eq!(default("slide"), "5.00 st");
+    assert_eq!(default("voices"), "32");
+    assert_eq!(text("mode", 1.0), "Slide");
+    assert_eq!(text("solver", 2.0), "IMP");
+    assert_eq!(text("slide", 1.0), "24.00 st", "Slide position tops out at two octaves");
+    assert_eq!(text("hand", 0.0), "-3.00 mm");
+    let twelve = parse("slide", "12").expect("parse 12 st");
+    assert!((twelve - 0.5).abs() < 1e-6, "12 st is half the 0..=24 range: {twelve}");
+    let level = parse("hand", "0").expect("parse 0 mm");
+    assert!((level - 0.5).abs() < 1e-6, "0 mm is the middle of −3..=3 mm: {level}");
+
+    // Set by id (an automation event), get by id.
+    let _ = p.render_blocks(&[(0, param("slide", slide_value(7.0))), (10, param("mode", 1.0))], 64, 64);
+    let slide = p.value(clap_id("slide")).expect("slide value");
+    assert!((slide - slide_value(7.0)).abs() < 1e-6, "slide reads back {slide}");
+    assert_eq!(p.value(clap_id("mode")), Some(1.0), "mode reads back Slide");
+}
+
+// ------------------------------------------------------------------------------------------------
+// Host buffers and automation
+// ------------------------------------------------------------------------------------------------
+
+/// A phrase over both modes: notes, pedal, pitch bend, mod wheel and parameter automation at
+/// fixed sample times (some landing inside a control block).
+fn phrase() -> Score {
+    vec![
+        (0, Ev::On(0, 60, 0.7)),
+        (700, param("hard", 0.8)),
+        (1_000, Ev::Midi([0x90, 64, 90])),
+        (2_345, Ev::Midi([0xB0, 64, 127])),
+        (3_000, param("bright", 0.25)),
+        (5_000, Ev::Off(0, 60)),
+        (6_001, Ev::Midi([0xB0, 64, 0])),
+        (7_777, Ev::On(0, 67, 0.9)),
+        (9_000, param("mode", 1.0)),
+        (9_000, param("follow", 0.0)),
+        (9_000, param("slide", slide_value(3.0))),
+        (9_500, Ev::On(1, 50, 0.8)),
+        (11_111, Ev::Midi([0xE1, 0, 80])),
+        (12_000, param("slide", slide_value(5.5))),
+        (13_000, Ev::Midi([0xB1, 1, 70])),
+        (14_000, Ev::Off(1, 50)),
+        (15_000, param("mode", 0.0)),
+        (15_500, Ev::On(2, 72, 0.5)),
+    ]
+}
+
+/// Host buffer sizes never change the output: blocks of 1, 32 and 512 samples and seeded random
+/// sizes (1..=700) give bit-identical samples to one 8192-sample block at a time, with the events
+/// at the same absolute sample times.
+#[test]
+fn host_block_sizes_give_identical_samples() {
+    let bundle = release_bundle();
+    let (score, samples) = (phrase(), 19_200);
+    let reference = Plugin::at_48k(&bundle, &[]).render_blocks(&score, samples, 8192);
+    reference.assert_finite("reference");
+    assert!(reference.peak() > AUDIBLE, "the phrase sounds");
+    for block in [1usize, 32, 512] {
+        let start = Instant::now();
+        let audio = Plugin::at_48k(&bundle, &[]).render_blocks(&score, samples, block);
+        println!("blocks of {block}: {:.2} s", start.elapsed().as_secs_f64());
+        assert_eq!(bit_identical(&audio, &reference), None, "blocks of {block}: first differing sample");
+    }
+    let mut rng = seeded_rng(5);
+    let audio = Plugin::at_48k(&bundle, &[]).render(&score, samples, move || rng.random_range(1..=700));
+    assert_eq!(bit_identical(&audio, &reference), None, "random blocks: first differing sample");
+}
+
+/// Blocks of every size from 1 to 8192 samples (a sequence mixing 1, primes, powers of two and
+/// the maximum) give the same samples as 8192-sample blocks.
+#[test]
+fn extreme_block_sizes_change_nothing() {
+    let bundle = release_bundle();
+    let score = phrase();
+    let samples = 3 * 8192;
+    let reference = Plugin::at_48k(&bundle, &[]).render_blocks(&score, samples, 8192);
+    let sizes = [1usize, 2, 3, 7, 13, 64, 127, 1000, 4096, 8192, 1, 8191, 256];
+    let mut i = 0;
+    let audio = Plugin::at_48k(&bundle, &[]).render(&score, samples, move || {
+        i += 1;
+        sizes[(i - 1) % sizes.len()]
+    });
+    audio.assert_finite("mixed block sizes");
+    assert_eq!(bit_identical(&audio, &reference), None, "mixed block sizes: first differing sample");
+}
+
+/// Automating `Slide position` (not following keys) moves the pitch as the speaking length says:
+/// the slide at `p` semitones above the open A2 string stops it at `L(1 − 2^(−p/12))`, so the
+/// note sounds at `110 Hz · 2^(p/12)`. One note, the parameter automated from 2 to 9 semitones
+/// at 0.45 s; the pitch is measured before (0.15–0.45 s) and after the glide has settled
+/// (0.75–1.0 s: 6 glide time constants of 50 ms, leaving 0.02 semitones = 0.1 %).
+#[test]
+fn slide_position_automation_moves_the_pitch() {
+    let bundle = release_bundle();
+    let (p1, p2) = (2.0, 9.0);
+    let setup = [param("mode", 1.0), param("follow", 0.0), param("slide", slide_value(p1))];
+    let mut p = Plugin::at_48k(&bundle, &setup);
+    let score = vec![(0, Ev::On(0, 60, 0.9)), ((0.45 * FS) as usize, param("slide", slide_value(p2)))];
+    let audio = p.render_blocks(&score, (1.0 * FS) as usize, 256);
+    audio.assert_finite("slide automation");
+    let window = |a: f64, b: f64| {
+        audio.left[(a * FS) as usize..(b * FS) as usize].iter().map(|&v| f64::from(v)).collect::<Vec<_>>()
+    };
+    let (before, after) = (window(0.15, 0.45), window(0.75, 1.0));
+    let rms = |x: &[f64]| (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt();
+    println!("rms before {:.4}, after {:.4}", rms(&before), rms(&after));
+    assert!(rms(&after) > f64::from(AUDIBLE) * 0.1, "the note still sounds after the move");
+    for (signal, p) in [(&before, p1), (&after, p2)] {
+        let expected = 110.0 * 2f64.powf(p / 12.0);
+        assert_pitch(slide_pitch(signal, FS, expected), expected, &format!("slide at {p} st"));
+    }
+}
+
+// ------------------------------------------------------------------------------------------------
+// Bad input
+// ------------------------------------------------------------------------------------------------
+
+/// Non-finite and out-of-range parameter values, for every parameter, while notes play in both
+/// modes: no NaN. What the host reads back is concrete: a non-finite value is ignored (the
+/// previous value stays), an out-of-range one is clamped to the CLAP range 0..=max.
+#[test]
+fn non_finite_and_out_of_range_parameters_are_safe() {
+    let bundle = release_bundle();
+    let mut p = Plugin::at_48k(&bundle, &[]);
+    let ids: Vec<(u32, f64)> =
+        PARAMETERS.iter().map(|(id, _, steps)| (clap_id(id), f64::from(steps.unwrap_or(1)))).collect();
+    let all = |value: f64| ids.iter().map(move |&(id, max)| Ev::Param(id, value * max));
+    let mut score: Score = Vec::new();
+    let mut t = 0;
+    for value in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e30, -1e30, 1.5, -0.5, 0.0, 1.0, f64::NAN] {
+        score.extend(all(value).map(|e| (t, e)));
+        score.push((t, Ev::On(0, 48 + (t / 2400) as u8, 0.8)));
+        t += 2400;
+    }
+    let audio = p.render_blocks(&score, t + 4800, 512);
+    audio.assert_finite("non-finite and out-of-range parameters");
+    // The last finite values were 1.0 × max (all at maximum); the trailing NaN changed nothing.
+    for &(id, max) in &ids {
+        assert_eq!(p.value(id), Some(max), "parameter {id} after NaN (last finite value: its maximum)");
+    }
+    // Out of range clamps.
+    let _ = p.render_blocks(&all(-7.0).map(|e| (0, e)).collect::<Score>(), 64, 64);
+    for &(id, _) in &ids {
+        assert_eq!(p.value(id), Some(0.0), "parameter {id} after −7 × max");
+    }
+    let _ = p.render_blocks(&all(1e9).map(|e| (0, e)).collect::<Score>(), 64, 64);
+    for &(id, max) in &ids {
+        assert_eq!(p.value(id), Some(max), "parameter {id} after 1e9 × max");
+    }
+    // Every parameter at its extremes, in each mode (voices takes effect at activation).
+    for extreme in [0.0, 1.0] {
+        for mode in [0.0, 1.0] {
+            let setup: Vec<Ev> = all(extreme).chain([param("mode", mode)]).collect();
+            let mut q = Plugin::at_48k(&bundle, &setup);
+            let score = vec![(0, Ev::On(0, 52, 1.0)), (100, Ev::On(0, 57, 0.5)), (9_000, Ev::Off(0, 52))];
+            let audio = q.render_blocks(&score, 14_400, 1024);
+            audio.assert_finite(&format!("all parameters at {extreme}, mode {mode}"));
+            println!("all parameters at {extreme}, mode {mode}: peak {:.4}", audio.peak());
+        }
+    }
+}
+
+/// Notes on all 16 channels sound the same as on channel 1 (only the channel's own pedal, bend
+/// and pressure could differ, and none is set); keys 0 and 127 play and stay finite; a velocity-0
+/// note-on (a note-off by MIDI's rule) and note-offs without note-ons give exact silence.
+#[test]
+fn channels_extreme_keys_and_stray_events() {
+    let bundle = release_bundle();
+    for mode in [0.0, 1.0] {
+        let setup = [param("mode", mode)];
+        let render =
+            |score: &[(usize, Ev)], samples: usize| Plugin::at_48k(&bundle, &setup).render_blocks(score, samples, 480);
+        let reference = render(&[(0, Ev::Midi([0x90, 55, 100]))], 4_800);
+        assert!(reference.peak() > AUDIBLE, "mode {mode}: a note on channel 1 sounds");
+        for channel in 1..16u8 {
+            let audio = render(&[(0, Ev::Midi([0x90 | channel, 55, 100]))], 4_800);
+            assert_eq!(bit_identical(&audio, &reference), None, "mode {mode}: channel {}", channel + 1);
+        }
+        let chord: Score = (0..16u8).map(|c| (0, Ev::Midi([0x90 | c, 40 + 3 * c, 100]))).collect();
+        let audio = render(&chord, 9_600);
+        audio.assert_finite("a note on every channel");
+        println!("mode {mode}: 16-channel chord peak {:.3}", audio.peak());
+        assert!(audio.peak() > reference.peak(), "mode {mode}: 16 notes are louder than one");
+        for key in [0u8, 127] {
+            let audio = render(&[(0, Ev::On(0, key, 1.0)), (4_800, Ev::Off(0, key))], 9_600);
+            audio.assert_finite(&format!("key {key}"));
+            println!("mode {mode}: key {key} peak {:.3e}", audio.peak());
+            assert!(audio.peak() > 0.0, "mode {mode}: key {key} plays");
+        }
+        let stray = vec![
+            (0, Ev::Midi([0x90, 60, 0])),
+            (0, Ev::On(3, 64, 0.0)),
+            (10, Ev::Off(0, 61)),
+            (20, Ev::Midi([0x85, 0, 64])),
+            (30, Ev::Midi([0x8F, 127, 0])),
+            (40, Ev::Off(15, 127)),
+        ];
+        let audio = render(&stray, 4_800);
+        assert_eq!(audio.peak(), 0.0, "mode {mode}: velocity 0 and stray note-offs are silent");
+    }
+}
+
+/// Every sample rate from 22.05 to 192 kHz: a note in each mode is finite and at its pitch (the
+/// engine band-limits every string to 20 kHz, or Nyquist below 40 kHz, so the sound is the same).
+#[test]
+fn sample_rates_from_22_to_192_khz() {
+    let bundle = release_bundle();
+    for fs in [22_050.0, 44_100.0, 48_000.0, 88_200.0, 96_000.0, 176_400.0, 192_000.0] {
+        let samples = (0.4 * fs) as usize;
+        let mut piano = Plugin::new(&bundle, fs, 4096, &[]);
+        let audio = piano.render_blocks(&[(0, Ev::On(0, 69, 0.7))], samples, 1024);
+        audio.assert_finite(&format!("piano at {fs} Hz"));
+        assert!(audio.peak() > AUDIBLE, "piano at {fs} Hz is silent");
+        assert_pitch(piano_pitch(&audio, fs, 69), 440.0, &format!("piano A4 at {fs} Hz"));
+        let mut slide = Plugin::new(&bundle, fs, 4096, &[param("mode", 1.0)]);
+        let audio = slide.render_blocks(&[(0, Ev::On(0, 57, 0.8))], samples, 1024);
+        audio.assert_finite(&format!("slide at {fs} Hz"));
+        assert!(audio.peak() > AUDIBLE, "slide at {fs} Hz is silent");
+        assert_pitch(slide_pitch(&audio.tail((0.15 * fs) as usize), fs, 220.0), 220.0, &format!("slide A3 at {fs} Hz"));
+    }
+}
+
+/// Garbage as saved state (random bytes, a plausible length prefix before random bytes, valid
+/// JSON of the wrong shape, a truncated real state) is refused, and every parameter keeps its
+/// value; a real saved state still loads afterwards and restores its values; the instrument
+/// still plays.
+#[test]
+fn garbage_state_is_refused_and_the_previous_state_kept() {
+    let mut p = Plugin::at_48k(&release_bundle(), &[]);
+    let _ = p.render_blocks(&[(0, param("slide", slide_value(7.0))), (0, param("hard", 0.8))], 64, 64);
+    let saved = p.save();
+    println!("saved state: {} bytes", saved.len());
+    let _ = p.render_blocks(&[(0, param("slide", slide_value(3.0))), (0, param("mode", 1.0))], 64, 64);
+    let ids: Vec<u32> = PARAMETERS.iter().map(|(id, ..)| clap_id(id)).collect();
+    let snapshot = |p: &mut Plugin| ids.iter().map(|&id| p.value(id)).collect::<Vec<_>>();
+    let before = snapshot(&mut p);
+
+    let mut rng = seeded_rng(99);
+    let mut garbage: Vec<Vec<u8>> = vec![Vec::new(), vec![0u8; 3]];
+    for len in [8usize, 64, 1000, 4096] {
+        garbage.push((0..len).map(|_| rng.random()).collect());
+    }
+    let prefixed = |body: &[u8]| [&(body.len() as u64).to_le_bytes()[..], body].concat();
+    let noise: Vec<u8> = (0..500).map(|_| rng.random()).collect();
+    garbage.push(prefixed(&noise));
+    for json in ["null", "[1, 2, 3]", "{\"params\": 5}", "{\"version\": {}, \"params\": []}"] {
+        garbage.push(prefixed(json.as_bytes()));
+    }
+    garbage.push(saved[..saved.len() / 2].to_vec());
+    for (i, bytes) in garbage.iter().enumerate() {
+        assert!(!p.load(bytes), "garbage state {i} ({} bytes) was accepted", bytes.len());
+        assert_eq!(snapshot(&mut p), before, "garbage state {i} changed the parameters");
+    }
+    assert!(p.load(&saved), "a saved state loads");
+    let slide = p.value(clap_id("slide")).expect("slide");
+    assert!((slide - slide_value(7.0)).abs() < 1e-6, "the saved slide position is back: {slide}");
+    assert_eq!(p.value(clap_id("mode")), Some(0.0), "the saved mode (Piano) is back");
+    let audio = p.render_blocks(&[(0, Ev::On(0, 60, 0.7))], 9_600, 512);
+    audio.assert_finite("after garbage state");
+    assert!(audio.peak() > AUDIBLE, "the instrument still plays after garbage state");
+}
+
+/// The same MIDI file through the offline renderer (`cargo xtask render --midi`) and through the
+/// `.clap` in a host gives identical samples: the file's raw MIDI messages go to the plugin at the
+/// sample offsets the renderer uses, every parameter at its default, in 512-sample host blocks.
+/// Checked for the piano phrase in piano mode and the slide phrase in slide mode.
+#[test]
+fn midi_file_renders_the_same_offline_and_in_the_host() {
+    use qsa_dsp::instrument::ParamValues;
+    use xtask::render::midi;
+
+    let fs = 48_000.0;
+    for (file, slide) in [("piano-phrase.mid", false), ("slide-phrase.mid", true)] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes").join(file);
+        let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut params = ParamValues::default();
+        if slide {
+            params.set("mode", "slide").unwrap();
+        }
+        let score = midi::score(&bytes, fs).unwrap();
+        let (left, right, _) = midi::render(&score, &params, fs, 0.5, 512);
+        let samples = left.len();
+        let host_score: Score =
+            midi::timed_messages(&bytes, fs).unwrap().into_iter().map(|(t, m)| (t as usize, Ev::Midi(m))).collect();
+        let setup = if slide { vec![param("mode", 1.0)] } else { Vec::new() };
+        let mut plugin = Plugin::at_48k(&release_bundle(), &setup);
+        let audio = plugin.render_blocks(&host_score, samples, 512);
+        let offline = Audio { left, right };
+        assert!(offline.peak() > 0.01, "{file}: the offline render is not silent");
+        if let Some(n) = bit_identical(&audio, &offline) {
+            panic!("{file}: host and offline renderer differ first at sample {n}");
+        }
+    }
+}
