@@ -408,3 +408,56 @@ fn bad_string_scenes_are_errors_naming_the_key() {
     let err = parse_scene(&bad).expect_err("slide outside").to_string();
     assert!(err.contains("controls.slide.position") && err.contains("outside"), "{err}");
 }
+
+/// The real-time path retires the hammer once the string's energy can no longer reach it
+/// (`scene::hammer_string` module docs) and then steps the string alone: its output must equal
+/// the harness path's, which never retires, sample for sample, for every solver and output kind.
+#[test]
+fn retired_hammer_leaves_the_output_unchanged() {
+    let law = fig5_law();
+    for kind in [OutputKind::Displacement, OutputKind::Velocity, OutputKind::BridgeForce] {
+        let mut params = fig5(3.5);
+        params.pickup.kind = kind;
+        let samples = 8820;
+        let check = |name: &str, retire: &mut dyn FnMut(&mut [f64]) -> bool, frames: &[Frame]| {
+            let mut out = vec![0.0; samples];
+            // Uneven calls: retirement is checked on a fixed sample grid, not per call.
+            let retired = out.chunks_mut(37).fold(false, |_, chunk| retire(chunk));
+            assert!(retired, "{name} {kind:?}: the hammer was never retired");
+            for (i, (o, f)) in out.iter().zip(frames).enumerate() {
+                assert!(*o == f.output, "{name} {kind:?}: sample {i}: {o:e} vs {:e}", f.output);
+            }
+        };
+        let string = || ModalString::new(params.string, FS).unwrap();
+        let (frames, _) = run_hammer(&params, FS, qsa(law, 3.5, 6), samples);
+        let mut scene = HammerString::new(string(), &params, qsa(law, 3.5, 6));
+        check(
+            "qsa",
+            &mut |c| {
+                scene.process_output(c);
+                scene.retired()
+            },
+            &frames,
+        );
+        let (frames, _) = run_hammer(&params, FS, NewtonSolver::new(law), samples);
+        let mut scene = HammerString::new(string(), &params, NewtonSolver::new(law));
+        check(
+            "imp",
+            &mut |c| {
+                scene.process_output(c);
+                scene.retired()
+            },
+            &frames,
+        );
+        let (frames, _) = run_hammer(&params, FS, ExplicitSolver::new(law), samples);
+        let mut scene = HammerString::new(string(), &params, ExplicitSolver::new(law));
+        check(
+            "exp",
+            &mut |c| {
+                scene.process_output(c);
+                scene.retired()
+            },
+            &frames,
+        );
+    }
+}

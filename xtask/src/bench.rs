@@ -10,8 +10,25 @@
 //! - `piano/16-voices/{64,512}` and `slide/16-voices/{64,512}`: the instrument engine (the
 //!   plugin's process path) at 48 kHz with 16 keys from C3 to C6 played together, pedal down,
 //!   rendered in 64- and 512-sample calls;
+//! - `piano/c4`: one C4 voice of the instrument at 48 kHz; its line says how many such voices fit
+//!   in real time on one core (`1/rtf`, rounded down);
 //! - `piano/88-keys`: all 88 keys (A0 to C8) struck together, pedal down, 48 kHz: the whole
-//!   piano at once. Its line also says how many C4 voices fit in real time on one core.
+//!   piano at once.
+//!
+//! Instrument cases also time every process call: for each call the fastest of the runs (which
+//! removes most of the machine's noise), then `call_mean_us`; `first_call_us`, the call that
+//! starts every note; `call_worst_us`, the costliest of the others, with `worst_ratio` (over the
+//! mean) and `worst_in_contact` (voices in contact as it began); `most_in_contact`; and
+//! `worst_rtf`, the costliest call of all against its own duration.
+//!
+//! The `peak` line measures the vector unit's peak (independent multiply–add chains, the
+//! string's arithmetic without fusing) in Gflop/s. Lines of cases that are mostly free string
+//! vibration (the hammer voices and the piano) carry `roofline`: the measured mode updates per
+//! second times [`FREE_STEP_FLOPS`] over that peak, the fraction of one core's arithmetic the
+//! modal loop achieves.
+//!
+//! `--write` also writes `docs/report/bench.md` (the table and the JSON lines) and the table in
+//! README.md between its `bench-table` markers.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -20,7 +37,7 @@ use clap::Args;
 use qsa_dsp::contact::{Method, SolverSettings};
 use qsa_dsp::instrument::{Event, Instrument, Mode, Settings};
 use qsa_dsp::render::{SceneDescription, parse_scene, render_output};
-use qsa_dsp::string::ModalString;
+use qsa_dsp::string::{FREE_STEP_FLOPS, ModalString};
 use serde::Serialize;
 
 /// Arguments of `bench`.
@@ -35,6 +52,9 @@ pub struct BenchArgs {
     /// Only run cases whose name contains this text.
     #[arg(long, default_value = "")]
     pub filter: String,
+    /// Also write docs/report/bench.md and the table in README.md (needs every case).
+    #[arg(long)]
+    pub write: bool,
 }
 
 /// One line of the bench report.
@@ -64,6 +84,51 @@ pub struct BenchLine {
     pub runs: usize,
     /// Voices sounding (instrument cases; 1 for single scenes).
     pub voices: usize,
+    /// Fraction of the measured vector peak the modal loop achieves (free-vibration cases).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub roofline: Option<f64>,
+    /// Voices like this one that fit in real time on one core.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fit: Option<usize>,
+    /// Per-call figures (instrument cases).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub calls: Option<CallStats>,
+}
+
+/// Costs of single process calls, each the fastest over the runs. The first call starts every
+/// note (it prepares each voice's string); the others step the strings and the contacts.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct CallStats {
+    /// Samples per call.
+    pub call: usize,
+    /// Mean cost of a call (µs).
+    pub call_mean_us: f64,
+    /// The first call, which starts every note (µs).
+    pub first_call_us: f64,
+    /// Costliest call after the first (µs).
+    pub call_worst_us: f64,
+    /// `call_worst_us / call_mean_us`.
+    pub worst_ratio: f64,
+    /// Voices in contact when the costliest call after the first began.
+    pub worst_in_contact: usize,
+    /// Most voices in contact at the start of any call.
+    pub most_in_contact: usize,
+    /// RTF of the costliest call of all (the first included) alone.
+    pub worst_rtf: f64,
+}
+
+/// The vector unit's measured peak, in Gflop/s (best of `runs`).
+pub fn peak_gflops(runs: usize) -> f64 {
+    let isa = qsa_dsp::string::Isa::detect();
+    let iterations = 2_000_000;
+    let flops = (iterations * 16 * qsa_dsp::string::LANES * 2) as f64;
+    let mut best = f64::INFINITY;
+    for _ in 0..runs.max(1) + 1 {
+        let start = std::time::Instant::now();
+        std::hint::black_box(qsa_dsp::string::peak_probe(isa, std::hint::black_box(iterations)));
+        best = best.min(start.elapsed().as_secs_f64());
+    }
+    flops / best / 1e9
 }
 
 /// Why the bench could not run.
@@ -72,6 +137,74 @@ pub enum BenchError {
     /// A scene file could not be read or parsed.
     #[error("{0}")]
     Scene(String),
+    /// The documents could not be written.
+    #[error("{0}")]
+    Write(String),
+}
+
+/// Goals of the issues, by case.
+fn goal(name: &str) -> &'static str {
+    match name {
+        "hammer-c4/qsa" => "≤ 0.001",
+        "slide-phrase/nb1" | "slide-phrase/nb64" => "≤ 0.01",
+        "piano/16-voices/64" | "piano/16-voices/512" => "≤ 0.1",
+        "piano/88-keys" => "≤ 0.5",
+        _ => "",
+    }
+}
+
+/// The Markdown table of `lines`.
+pub fn table(lines: &[BenchLine]) -> String {
+    let mut t = String::from(
+        "| case | modes | voices | RTF (median) | goal | roofline | worst call / mean (in contact) | first call / mean | worst call RTF |\n\
+         |---|---|---|---|---|---|---|---|---|\n",
+    );
+    for l in lines {
+        let roofline = l.roofline.map_or(String::new(), |r| format!("{:.0} %", r * 100.0));
+        let (worst, first, worst_rtf) = l.calls.map_or(Default::default(), |c| {
+            (
+                format!("{:.2} ({}/{})", c.worst_ratio, c.worst_in_contact, c.most_in_contact),
+                format!("{:.1}", c.first_call_us / c.call_mean_us),
+                format!("{:.3}", c.worst_rtf),
+            )
+        });
+        let fit = l.fit.map_or(String::new(), |f| format!(" ({f} fit)"));
+        t += &format!(
+            "| {} | {} | {} | {:.2e}{fit} | {} | {roofline} | {worst} | {first} | {worst_rtf} |\n",
+            l.name,
+            l.modes,
+            l.voices,
+            l.rtf,
+            goal(&l.name)
+        );
+    }
+    t
+}
+
+const BEGIN: &str = "<!-- bench-table:begin -->";
+const END: &str = "<!-- bench-table:end -->";
+
+/// Write docs/report/bench.md and the table between README.md's markers.
+fn write_docs(lines: &[BenchLine], peak: f64, isa: &str) -> Result<(), BenchError> {
+    let err = |what: &str, e: std::io::Error| BenchError::Write(format!("{what}: {e}"));
+    let table = table(lines);
+    let head = format!(
+        "One run of `cargo xtask bench --write` on this machine ({} cores, {isa} kernels, measured \
+         peak {peak:.1} Gflop/s for unfused multiply–adds).\n\n",
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    );
+    let json: String = lines.iter().map(|l| serde_json::to_string(l).expect("serialises") + "\n").collect();
+    let doc = format!(
+        "# Benchmarks\n\nWritten by `cargo xtask bench --write`; see `xtask/src/bench.rs` for the cases \
+         and the columns.\n\n{head}{table}\n```json\n{json}```\n"
+    );
+    std::fs::write("docs/report/bench.md", doc).map_err(|e| err("docs/report/bench.md", e))?;
+    let readme = std::fs::read_to_string("README.md").map_err(|e| err("README.md", e))?;
+    let (Some(b), Some(e)) = (readme.find(BEGIN), readme.find(END)) else {
+        return Err(BenchError::Write(format!("README.md has no {BEGIN} … {END} markers")));
+    };
+    let updated = format!("{}{BEGIN}\n{head}{table}{}", &readme[..b], &readme[e..]);
+    std::fs::write("README.md", updated).map_err(|e| err("README.md", e))
 }
 
 fn load(dir: &Path, name: &str) -> Result<SceneDescription, BenchError> {
@@ -113,6 +246,9 @@ pub fn measure(name: &str, scene: &SceneDescription, runs: usize) -> Result<Benc
         ns_per_sample: rtf * 1e9 / f64::from(fs),
         runs: rtfs.len(),
         voices: 1,
+        roofline: None,
+        fit: None,
+        calls: None,
     })
 }
 
@@ -133,20 +269,42 @@ pub fn measure_piano(name: &str, mode: Mode, keys: &[u8], seconds: f64, call: us
             piano.handle(Event::NoteOn { channel, key, velocity: 0.7 });
         }
         let (mut left, mut right) = (vec![0.0f32; call], vec![0.0f32; call]);
+        let mut calls = Vec::with_capacity(samples / call);
         let start = std::time::Instant::now();
         for _ in 0..samples / call {
+            let in_contact = piano.in_contact();
+            let t = std::time::Instant::now();
             piano.process(&mut left, &mut right);
+            calls.push((t.elapsed().as_secs_f64(), in_contact));
         }
-        (start.elapsed().as_secs_f64(), piano.sounding())
+        (start.elapsed().as_secs_f64(), piano.sounding(), calls)
     };
-    once();
+    let (_, _, mut fastest) = once();
     let mut rtfs = Vec::with_capacity(runs);
     let mut sounding = 0;
     for _ in 0..runs.max(1) {
-        let (wall, voices) = once();
+        let (wall, voices, calls) = once();
         sounding = voices;
         rtfs.push(wall / seconds);
+        for (best, (t, _)) in fastest.iter_mut().zip(calls) {
+            best.0 = best.0.min(t);
+        }
     }
+    let mean = fastest.iter().map(|c| c.0).sum::<f64>() / fastest.len().max(1) as f64;
+    let (worst_index, &(worst, worst_in_contact)) =
+        fastest.iter().enumerate().skip(1).max_by(|a, b| a.1.0.total_cmp(&b.1.0)).unwrap_or((0, &fastest[0]));
+    let _ = worst_index;
+    let first = fastest[0].0;
+    let calls = CallStats {
+        call,
+        call_mean_us: mean * 1e6,
+        first_call_us: first * 1e6,
+        call_worst_us: worst * 1e6,
+        worst_ratio: worst / mean,
+        worst_in_contact,
+        most_in_contact: fastest.iter().map(|c| c.1).max().unwrap_or(0),
+        worst_rtf: worst.max(first) / (call as f64 / PIANO_RATE),
+    };
     rtfs.sort_by(f64::total_cmp);
     let rtf = rtfs[rtfs.len() / 2];
     let modes = keys
@@ -173,6 +331,9 @@ pub fn measure_piano(name: &str, mode: Mode, keys: &[u8], seconds: f64, call: us
         ns_per_sample: rtf * 1e9 / PIANO_RATE,
         runs: rtfs.len(),
         voices: sounding,
+        roofline: None,
+        fit: None,
+        calls: Some(calls),
     }
 }
 
@@ -182,6 +343,9 @@ fn string_modes(params: &qsa_dsp::string::StringParams, fs: u32) -> usize {
 
 /// Run every case, printing one JSON line each.
 pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, BenchError> {
+    if args.write && !args.filter.is_empty() {
+        return Err(BenchError::Write("--write documents every case; drop --filter".into()));
+    }
     let hammer = load(&args.scenes, "fig5-hammer-c4.toml")?;
     let slide = load(&args.scenes, "slide-phrase.toml")?;
     let mut cases = Vec::new();
@@ -196,18 +360,29 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
         }
         cases.push((format!("slide-phrase/nb{block}"), scene));
     }
+    let peak = peak_gflops(args.runs);
+    let isa = format!("{:?}", qsa_dsp::string::Isa::detect());
+    writeln!(stdout, "{}", serde_json::json!({ "name": "peak", "isa": isa, "gflops": peak })).ok();
+    // Fraction of the peak reached by `modes × samples` free-step mode updates in `rtf`.
+    let roofline = |modes: usize, fs: u32, rtf: f64| modes as f64 * f64::from(fs) * FREE_STEP_FLOPS / rtf / 1e9 / peak;
     let mut lines = Vec::new();
     let mut emit = |line: BenchLine, lines: &mut Vec<BenchLine>| {
         writeln!(stdout, "{}", serde_json::to_string(&line).expect("a bench line serialises")).ok();
         lines.push(line);
     };
     for (name, scene) in cases.iter().filter(|(name, _)| name.contains(&args.filter)) {
-        emit(measure(name, scene, args.runs)?, &mut lines);
+        let mut line = measure(name, scene, args.runs)?;
+        if name.starts_with("hammer") {
+            line.roofline = Some(roofline(line.modes, line.sample_rate, line.rtf));
+        }
+        emit(line, &mut lines);
     }
     // C3 (48) to C6 (84): 16 keys.
     let sixteen: Vec<u8> = (0..16).map(|i| 48 + (i * 36 / 15) as u8).collect();
     let all: Vec<u8> = (21..=108).collect();
+    let c4 = vec![60u8];
     let cases = [
+        ("piano/c4", Mode::Piano, &c4, 64),
         ("piano/16-voices/64", Mode::Piano, &sixteen, 64),
         ("piano/16-voices/512", Mode::Piano, &sixteen, 512),
         ("slide/16-voices/64", Mode::Slide, &sixteen, 64),
@@ -216,8 +391,18 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
     ];
     for (name, mode, keys, call) in cases {
         if name.contains(&args.filter) {
-            emit(measure_piano(name, mode, keys, 2.0, call, args.runs), &mut lines);
+            let mut line = measure_piano(name, mode, keys, 2.0, call, args.runs);
+            if mode == Mode::Piano {
+                line.roofline = Some(roofline(line.modes, line.sample_rate, line.rtf));
+            }
+            if name == "piano/c4" {
+                line.fit = Some((1.0 / line.rtf) as usize);
+            }
+            emit(line, &mut lines);
         }
+    }
+    if args.write {
+        write_docs(&lines, peak, &isa)?;
     }
     Ok(lines)
 }

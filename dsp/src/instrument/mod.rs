@@ -206,6 +206,14 @@ impl Instrument {
             + self.slides.iter().filter(|v| v.sounding).count()
     }
 
+    /// Voices whose exciter touches the string (or is about to): hammers in contact and slides
+    /// pressed on. Each costs a contact solve per sample; the others step their strings alone
+    /// or, once a hammer is out of reach, without it.
+    pub fn in_contact(&self) -> usize {
+        self.voices.iter().filter(|v| v.in_contact()).count()
+            + self.slides.iter().filter(|v| v.sounding && v.in_contact()).count()
+    }
+
     /// Set what the host controls; takes effect at the next control block. Values out of range
     /// are clamped and NaN replaced by the default.
     pub fn set_settings(&mut self, settings: &Settings) {

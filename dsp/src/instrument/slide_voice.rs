@@ -245,6 +245,11 @@ impl SlideVoice {
         (y, f, x / self.length)
     }
 
+    /// Whether the slide touches the string (now or one step back).
+    pub fn in_contact(&self) -> bool {
+        self.core.in_contact()
+    }
+
     /// Move the pickup (fraction of the length).
     pub fn set_pickup(&mut self, position: f64) {
         self.core.set_pickup(Pickup { kind: OutputKind::Displacement, position });

@@ -175,6 +175,11 @@ impl PianoVoice {
         self.damper = 0.0;
     }
 
+    /// Whether the hammer touches the string (or is about to) in a sounding voice.
+    pub fn in_contact(&self) -> bool {
+        self.sounding && self.core.in_contact()
+    }
+
     /// Whether this voice is being faded out to make room for another note.
     pub fn fading(&self) -> bool {
         self.pending.is_some()

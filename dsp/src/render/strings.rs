@@ -536,6 +536,6 @@ impl SlideStringFile {
             out.push(lane);
         }
         let lanes: [Breakpoints; 6] = out.try_into().expect("six lanes");
-        Ok(SlideAutomation { lanes, sample_rate: f64::from(sample_rate) })
+        Ok(SlideAutomation::new(lanes, f64::from(sample_rate)))
     }
 }

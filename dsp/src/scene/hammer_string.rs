@@ -13,11 +13,31 @@
 //!
 //! Energy (physics §6.3): `H^{n+1/2}` = string + `½ m_h ((w^{n+1} − w^n)/Δt)²` + the solver's
 //! contact term; `H^{n+1/2} − H^{n−1/2} = −Δt (δ_t·ũ)ᵀ R̂ (δ_t·ũ)` exactly.
+//!
+//! # Retiring the hammer
+//!
+//! Once the hammer has rebounded it flies away at constant speed, and the string alone can never
+//! reach it again: with the string's energy `H` (which only decreases once it is free),
+//! Cauchy–Schwarz on `ũ^n = μ_t+ũ − ½δ_t+ũ` bounds the string at the striking point,
+//!
+//! ```text
+//! |hᵀũ^n| ≤ √(2H)·(√(Σ h_i²/K̂_i) + ½Δt·√(Σ h_i²/m̃))  =: √(2H)·ρ_h
+//! ```
+//!
+//! so when the hammer moves away with `w^n > √(2H)·ρ_h` the compression stays negative for ever
+//! and every later force is zero. The real-time path ([`HammerCore::process_output`]) checks this
+//! every [`RETIRE_CHECK`] steps (counted from the strike, so the same in any split into calls)
+//! and then steps the string on its own ([`ModalString::free_step`], the same arithmetic with no
+//! force): no contact projection, no solve. The harness path keeps every step whole, so its
+//! frames still carry the compression.
 
 use crate::contact::{ContactProblem, ContactSolver};
 use crate::exciter::{Hammer, HammerParams};
 use crate::scene::{Frame, Scene};
 use crate::string::{ModalString, StringParams};
+
+/// Steps between checks whether the hammer is out of the string's reach for good.
+pub const RETIRE_CHECK: u32 = 64;
 
 /// Which signal the scene outputs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
@@ -85,6 +105,11 @@ impl<S: ContactSolver> HammerString<S> {
     pub fn coupling(&self) -> f64 {
         self.core.q
     }
+
+    /// Whether the real-time path has retired the hammer (see the module docs).
+    pub fn retired(&self) -> bool {
+        self.core.retired()
+    }
 }
 
 impl<S: ContactSolver> Scene for HammerString<S> {
@@ -124,6 +149,12 @@ pub struct HammerCore {
     kind: OutputKind,
     /// `q = hᵀCh + ξ_h` (m/N).
     q: f64,
+    /// `ρ_h` (m/√J): the string's reach at the striking point per √(2H).
+    reach: f64,
+    /// Whether the hammer is out of the string's reach for good (see the module docs).
+    retired: bool,
+    /// Steps since the strike, modulo [`RETIRE_CHECK`].
+    since_check: u32,
     /// `y^{n−1}`, `y^n` (m).
     y_prev: f64,
     y_now: f64,
@@ -148,6 +179,9 @@ impl HammerCore {
             pickup: string.vector(),
             kind: params.pickup.kind,
             q: 0.0,
+            reach: f64::INFINITY,
+            retired: false,
+            since_check: 0,
             y_prev: 0.0,
             y_now: 0.0,
             out_now: 0.0,
@@ -179,15 +213,39 @@ impl HammerCore {
             OutputKind::BridgeForce => s.bridge_weights(false, &mut self.pickup),
         }
         self.kind = pickup.kind;
-        self.q = dot(&self.shape, &self.gain) + self.hammer.coupling();
+        self.q = s.project(&self.shape, &self.gain) + self.hammer.coupling();
+        let (mut by_stiffness, mut squares) = (0.0, 0.0);
+        for (h, k) in self.shape.iter().zip(s.stiffness()) {
+            by_stiffness += h * h / k;
+            squares += h * h;
+        }
+        let reach = by_stiffness.sqrt() + 0.5 / s.sample_rate() * (squares / s.modal_mass()).sqrt();
+        self.reach = if reach.is_finite() { reach } else { f64::INFINITY };
         self.measure();
     }
 
-    /// Recompute the compressions and the output from the state.
+    /// Recompute the compressions and the output from the state; the hammer is back in play.
     fn measure(&mut self) {
-        self.y_prev = dot(self.string.previous_state(), &self.shape) - self.hammer.previous();
-        self.y_now = dot(self.string.state(), &self.shape) - self.hammer.position();
-        self.out_now = dot(self.string.state(), &self.pickup);
+        let (prev, now) = self.string.project_state(&self.shape);
+        self.y_prev = prev - self.hammer.previous();
+        self.y_now = now - self.hammer.position();
+        self.out_now = self.string.project_state(&self.pickup).1;
+        self.retired = false;
+        self.since_check = 0;
+    }
+
+    /// Whether the hammer moves away and is beyond the reach of the string's energy: then no
+    /// force can ever act again (see the module docs).
+    fn out_of_reach(&self) -> bool {
+        self.hammer.velocity() > 0.0
+            && self.y_now < 0.0
+            && self.y_prev < 0.0
+            && self.hammer.position() > self.reach * (2.0 * self.string.energy()).sqrt()
+    }
+
+    /// Whether the hammer has been retired (see the module docs).
+    pub fn retired(&self) -> bool {
+        self.retired
     }
 
     /// Re-prepare for another string (at rest) and striking point without allocating; see
@@ -237,12 +295,16 @@ impl HammerCore {
 
     /// What a monitor shows: `(compression y^n (m), latest contact force (N))`.
     pub fn contact(&self) -> (f64, f64) {
-        (self.y_now, self.last_force)
+        if self.retired {
+            (self.string.project_state(&self.shape).1 - self.hammer.position(), 0.0)
+        } else {
+            (self.y_now, self.last_force)
+        }
     }
 
     /// Whether the felt is touching or about to: compression above zero now or one step back.
     pub fn in_contact(&self) -> bool {
-        self.y_now > 0.0 || self.y_prev > 0.0
+        !self.retired && (self.y_now > 0.0 || self.y_prev > 0.0)
     }
 
     /// One step with `solver`.
@@ -287,14 +349,38 @@ impl HammerCore {
         frame
     }
 
-    /// Advance `out.len()` samples with `solver`, writing only the output.
+    /// Advance `out.len()` samples with `solver`, writing only the output; once the hammer is
+    /// out of reach for good, without it (see the module docs).
     pub fn process_output<S: ContactSolver>(&mut self, solver: &mut S, out: &mut [f64]) {
-        for o in out {
-            *o = self.step::<S, false>(solver).output;
+        let mut done = 0;
+        while done < out.len() && !self.retired {
+            out[done] = self.step::<S, false>(solver).output;
+            done += 1;
+            self.since_check += 1;
+            if self.since_check == RETIRE_CHECK {
+                self.since_check = 0;
+                self.retired = self.out_of_reach();
+            }
         }
+        let free = &mut out[done..];
+        if free.is_empty() {
+            return;
+        }
+        self.last_force = 0.0;
+        self.string.free_steps(&self.pickup, free);
+        for _ in 0..free.len() {
+            self.hammer.advance(0.0);
+        }
+        // `free` holds the projections of ũ^{n+1}, ũ^{n+2}, …; turn them into the outputs.
+        let mut before = self.out_now;
+        for o in free {
+            let next = *o;
+            *o = match self.kind {
+                OutputKind::Velocity => (next - before) / self.dt,
+                OutputKind::Displacement | OutputKind::BridgeForce => before,
+            };
+            before = next;
+        }
+        self.out_now = before;
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }

@@ -263,7 +263,7 @@ impl SlideCore {
             sho,
         };
         core.place(start.positions());
-        core.out_now = dot(core.string.state(), &core.pickup);
+        core.out_now = core.string.project_state(&core.pickup).1;
         core
     }
 
@@ -291,7 +291,7 @@ impl SlideCore {
             OutputKind::BridgeForce => s.bridge_weights(true, &mut self.pickup),
         }
         self.kind = pickup.kind;
-        self.out_now = dot(s.state(), &self.pickup);
+        self.out_now = s.project_state(&self.pickup).1;
     }
 
     /// What a monitor shows: `(compression y^n (m), latest contact force (N), slide position x_o (m))`.
@@ -314,29 +314,43 @@ impl SlideCore {
         &self.string
     }
 
-    /// Recompute the contact vectors, their Gram matrix and the compressions for new positions.
+    /// Recompute the contact vectors that moved (the slide's always, a finger's only while it
+    /// touches the string), the entries of their Gram matrix, and the compressions. A finger left
+    /// out keeps its old vector and θ entries, which only ever meet its zero force.
     fn place(&mut self, positions: [f64; 3]) {
         let s = &self.string;
+        let left = matches!(self.fingers, Fingers::Left | Fingers::Both);
+        let right = matches!(self.fingers, Fingers::Right | Fingers::Both);
+        let needed = [true, left, right];
         let windows = [None, Some(&self.left_window), Some(&self.right_window)];
-        for ((shape, gain), (x, window)) in
-            self.shapes.iter_mut().zip(&mut self.gains).zip(positions.into_iter().zip(windows))
-        {
-            s.mode_shapes(x, shape);
-            if let Some(w) = window {
+        let mut moved = [false; 3];
+        for z in 0..3 {
+            if !needed[z] || positions[z] == self.positions[z] {
+                continue;
+            }
+            let (shape, gain) = (&mut self.shapes[z], &mut self.gains[z]);
+            s.mode_shapes(positions[z], shape);
+            if let Some(w) = windows[z] {
                 shape.iter_mut().zip(w).for_each(|(h, w)| *h *= w);
             }
             gain.iter_mut().zip(shape.iter()).zip(s.input_gains()).for_each(|((g, h), c)| *g = c * h);
+            self.positions[z] = positions[z];
+            moved[z] = true;
         }
         for a in 0..3 {
             for b in a..3 {
-                let t = dot(&self.shapes[a], &self.gains[b]);
-                self.theta[a][b] = t;
-                self.theta[b][a] = t;
+                if (moved[a] || moved[b]) && needed[a] && needed[b] {
+                    let t = s.project(&self.shapes[a], &self.gains[b]);
+                    self.theta[a][b] = t;
+                    self.theta[b][a] = t;
+                }
             }
         }
-        self.y_prev = dot(s.previous_state(), &self.shapes[0]) - self.sho.previous();
-        self.y_now = dot(s.state(), &self.shapes[0]) - self.sho.position();
-        self.positions = positions;
+        if moved[0] {
+            let (prev, now) = s.project_state(&self.shapes[0]);
+            self.y_prev = prev - self.sho.previous();
+            self.y_now = now - self.sho.position();
+        }
     }
 
     /// Start a new block: move the targets on and, if a position changed, the vectors.
@@ -348,10 +362,7 @@ impl SlideCore {
         self.left_force = Ramp::new(s.left_force, t.left_force, len);
         self.right_force = Ramp::new(s.right_force, t.right_force, len);
         self.fingers = Fingers::touching(s, t);
-        let positions = self.start.positions();
-        if positions != self.positions {
-            self.place(positions);
-        }
+        self.place(self.start.positions());
     }
 
     #[inline]
@@ -477,10 +488,6 @@ impl SlideCore {
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
 /// The control target names used by scene files and automation.
 pub const CONTROL_TARGETS: [&str; 6] = [
     "slide.position",
@@ -499,9 +506,16 @@ pub struct SlideAutomation {
     pub lanes: [crate::control::Breakpoints; 6],
     /// Sample rate (Hz).
     pub sample_rate: f64,
+    /// Each lane's segment at the latest sample asked for (see `Breakpoints::at_cursor`).
+    cursors: [usize; 6],
 }
 
 impl SlideAutomation {
+    /// Automation from its lanes (in [`CONTROL_TARGETS`] order) at `sample_rate` (Hz).
+    pub fn new(lanes: [crate::control::Breakpoints; 6], sample_rate: f64) -> Self {
+        Self { lanes, sample_rate, cursors: [0; 6] }
+    }
+
     /// The values at time `t` (s).
     pub fn at_time(&self, t: f64) -> SlideControls {
         let [a, b, c, d, e, f] = &self.lanes;
@@ -525,6 +539,12 @@ impl ControlSource<SlideControls> for SlideAutomation {
     const VARYING: bool = true;
 
     fn at(&mut self, n: u64) -> SlideControls {
-        self.at_time(n as f64 / self.sample_rate)
+        let t = n as f64 / self.sample_rate;
+        let mut v = [0.0; 6];
+        for ((v, lane), cursor) in v.iter_mut().zip(&self.lanes).zip(&mut self.cursors) {
+            *v = lane.at_cursor(t, cursor);
+        }
+        let [slide_position, hand_height, left_position, left_force, right_position, right_force] = v;
+        SlideControls { slide_position, hand_height, left_position, left_force, right_position, right_force }
     }
 }

@@ -1,47 +1,57 @@
-//! The per-mode loops of a string step, written for SIMD.
+//! The per-mode loops of a string step, written once over [`Lanes`] (see `simd`).
 //!
 //! Every array has a length that is a multiple of [`LANES`] (the string pads its modes with inert
-//! zero modes). Each pass is a plain element-wise loop over equal-length slices (which the loop
-//! vectoriser turns into full-width SIMD) followed by dot products that keep one partial sum per
-//! lane, so there are no tail loops, no per-element bounds checks, and no loop-carried
-//! dependency longer than one chunk. (Fusing the projections into the element-wise loop, one
-//! loop per pass, was measured 1.5 times slower: the vectoriser then emits 128-bit code.) The partial sums are combined in a fixed order
-//! ([`lane_sum`]), and Rust never contracts `a*b + c` into a fused multiply-add, so every
-//! instruction set gives bit-identical results. The kernels are compiled for several x86-64
-//! levels and the best one the CPU supports is picked at run time (`multiversion`); the
-//! distributed binary needs no particular CPU.
+//! zero modes), so each loop runs over whole chunks with no tail and no bounds checks inside.
+//! A dot product keeps two partial sums per lane, one for the even chunks and one for the odd
+//! (two independent addition chains, so the loop is not bound by the latency of one), adds the
+//! two and sums the lanes in a fixed order; with no fused multiply-adds anywhere, every
+//! instruction set gives bit-identical results.
 
-use multiversion::multiversion;
+use super::simd::{Chunk, Isa, Kernel, LANES, Lanes, lane_sum};
 
-/// Modes per chunk; arrays are padded to a multiple of it.
-pub const LANES: usize = 8;
-
-/// Sum of the lane partial sums, in a fixed order: the halving tree of a vector reduction
-/// (lanes `i` and `i+4`, then `i` and `i+2`, then the last two), which SIMD code can follow
-/// without shuffling lanes inside the loop.
-#[inline(always)]
-pub fn lane_sum(acc: [f64; LANES]) -> f64 {
-    ((acc[0] + acc[4]) + (acc[2] + acc[6])) + ((acc[1] + acc[5]) + (acc[3] + acc[7]))
+fn chunks(x: &[f64]) -> &[Chunk] {
+    let (chunks, rest) = x.as_chunks::<LANES>();
+    debug_assert!(rest.is_empty(), "per-mode arrays hold whole chunks");
+    chunks
 }
 
-/// `aᵀb` with [`LANES`] partial sums combined in a fixed order. The slices have equal length,
-/// a multiple of [`LANES`].
-#[inline(always)]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut acc = [0.0; LANES];
-    for c in (0..a.len()).step_by(LANES) {
-        let x: [f64; LANES] = a[c..c + LANES].try_into().expect("whole chunks");
-        let y: [f64; LANES] = b[c..c + LANES].try_into().expect("whole chunks");
-        for l in 0..LANES {
-            acc[l] += x[l] * y[l];
+fn chunks_mut(x: &mut [f64]) -> &mut [Chunk] {
+    let (chunks, rest) = x.as_chunks_mut::<LANES>();
+    debug_assert!(rest.is_empty(), "per-mode arrays hold whole chunks");
+    chunks
+}
+
+/// Run `$body` for every chunk index `$c` in `0..$n` with `$acc` bound to the even or the odd
+/// accumulator, two chunks per iteration, so the two stay in registers.
+macro_rules! paired {
+    ($n:expr, $acc0:ident, $acc1:ident, |$c:ident, $acc:ident| $body:block) => {{
+        let n = $n;
+        let mut pair = 0;
+        while pair + 2 <= n {
+            {
+                let $c = pair;
+                let $acc = &mut $acc0;
+                $body
+            }
+            {
+                let $c = pair + 1;
+                let $acc = &mut $acc1;
+                $body
+            }
+            pair += 2;
         }
-    }
-    lane_sum(acc)
+        if pair < n {
+            let $c = pair;
+            let $acc = &mut $acc0;
+            $body
+        }
+    }};
 }
 
 /// Pass 1: `zt = b∘up − a∘un`; returns the projections `vectors_kᵀ zt`.
-#[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma", "x86_64+avx"))]
+#[inline]
 pub fn history<const K: usize>(
+    isa: Isa,
     a: &[f64],
     b: &[f64],
     up: &[f64],
@@ -49,41 +59,302 @@ pub fn history<const K: usize>(
     zt: &mut [f64],
     vectors: [&[f64]; K],
 ) -> [f64; K] {
-    let n = zt.len();
-    let (a, b, up, un) = (&a[..n], &b[..n], &up[..n], &un[..n]);
-    for i in 0..n {
-        zt[i] = b[i] * up[i] - a[i] * un[i];
+    struct History<'a, const K: usize> {
+        a: &'a [Chunk],
+        b: &'a [Chunk],
+        up: &'a [Chunk],
+        un: &'a [Chunk],
+        zt: &'a mut [Chunk],
+        vectors: [&'a [Chunk]; K],
     }
-    let mut sums = [0.0; K];
-    for k in 0..K {
-        sums[k] = dot(&vectors[k][..n], zt);
+    impl<const K: usize> Kernel for History<'_, K> {
+        type Output = [f64; K];
+        #[inline(always)]
+        fn run<L: Lanes>(self, s: L) -> [f64; K] {
+            let n = self.zt.len();
+            let (a, b, up, un) = (&self.a[..n], &self.b[..n], &self.up[..n], &self.un[..n]);
+            let mut vectors = self.vectors;
+            for v in &mut vectors {
+                *v = &v[..n];
+            }
+            let zts = self.zt;
+            let (mut even, mut odd) = ([s.splat(0.0); K], [s.splat(0.0); K]);
+            paired!(n, even, odd, |c, acc| {
+                let z = s.sub(s.mul(s.load(&b[c]), s.load(&up[c])), s.mul(s.load(&a[c]), s.load(&un[c])));
+                s.store(&mut zts[c], z);
+                for k in 0..K {
+                    acc[k] = s.add(acc[k], s.mul(s.load(&vectors[k][c]), z));
+                }
+            });
+            // Plain loops, not closures: a closure would be compiled outside the target feature.
+            let mut sums = [0.0; K];
+            for k in 0..K {
+                sums[k] = s.sum(s.add(even[k], odd[k]));
+            }
+            sums
+        }
     }
-    sums
+    isa.run(History {
+        a: chunks(a),
+        b: chunks(b),
+        up: chunks(up),
+        un: chunks(un),
+        zt: chunks_mut(zt),
+        vectors: vectors.map(chunks),
+    })
 }
 
 /// Pass 2: `up = up − zt + Σ_k g_k F_k`; returns `outᵀ up`.
-#[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma", "x86_64+avx"))]
-pub fn advance<const K: usize>(up: &mut [f64], zt: &[f64], forces: [(&[f64], f64); K], out: &[f64]) -> f64 {
-    let n = up.len();
-    let zt = &zt[..n];
-    let mut gains = [&[][..]; K];
-    let mut f = [0.0; K];
-    for k in 0..K {
-        gains[k] = &forces[k].0[..n];
-        f[k] = forces[k].1;
+#[inline]
+pub fn advance<const K: usize>(isa: Isa, up: &mut [f64], zt: &[f64], forces: [(&[f64], f64); K], out: &[f64]) -> f64 {
+    struct Advance<'a, const K: usize> {
+        up: &'a mut [Chunk],
+        zt: &'a [Chunk],
+        gains: [&'a [Chunk]; K],
+        forces: [f64; K],
+        out: &'a [Chunk],
     }
-    for i in 0..n {
-        let mut next = up[i] - zt[i];
-        for k in 0..K {
-            next += gains[k][i] * f[k];
+    impl<const K: usize> Kernel for Advance<'_, K> {
+        type Output = f64;
+        #[inline(always)]
+        fn run<L: Lanes>(self, s: L) -> f64 {
+            let n = self.up.len();
+            let (zt, out) = (&self.zt[..n], &self.out[..n]);
+            let mut gains = self.gains;
+            let mut forces = [s.splat(0.0); K];
+            for k in 0..K {
+                gains[k] = &gains[k][..n];
+                forces[k] = s.splat(self.forces[k]);
+            }
+            let ups = self.up;
+            let (mut even, mut odd) = (s.splat(0.0), s.splat(0.0));
+            paired!(n, even, odd, |c, acc| {
+                let mut next = s.sub(s.load(&ups[c]), s.load(&zt[c]));
+                for k in 0..K {
+                    next = s.add(next, s.mul(s.load(&gains[k][c]), forces[k]));
+                }
+                s.store(&mut ups[c], next);
+                *acc = s.add(*acc, s.mul(s.load(&out[c]), next));
+            });
+            s.sum(s.add(even, odd))
         }
-        up[i] = next;
     }
-    dot(&out[..n], up)
+    isa.run(Advance {
+        up: chunks_mut(up),
+        zt: chunks(zt),
+        gains: forces.map(|(g, _)| chunks(g)),
+        forces: forces.map(|(_, f)| f),
+        out: chunks(out),
+    })
+}
+
+/// Both passes of a step without forces, in one: `up = up − (b∘up − a∘un)`; returns `outᵀ up`.
+/// The arithmetic is that of [`history`] then [`advance`] with every force zero.
+#[inline]
+pub fn free(isa: Isa, a: &[f64], b: &[f64], up: &mut [f64], un: &[f64], out: &[f64]) -> f64 {
+    struct Free<'a> {
+        a: &'a [Chunk],
+        b: &'a [Chunk],
+        up: &'a mut [Chunk],
+        un: &'a [Chunk],
+        out: &'a [Chunk],
+    }
+    impl Kernel for Free<'_> {
+        type Output = f64;
+        #[inline(always)]
+        fn run<L: Lanes>(self, s: L) -> f64 {
+            let n = self.up.len();
+            let (a, b, un, out) = (&self.a[..n], &self.b[..n], &self.un[..n], &self.out[..n]);
+            let ups = self.up;
+            let (mut even, mut odd) = (s.splat(0.0), s.splat(0.0));
+            paired!(n, even, odd, |c, acc| {
+                let previous = s.load(&ups[c]);
+                let z = s.sub(s.mul(s.load(&b[c]), previous), s.mul(s.load(&a[c]), s.load(&un[c])));
+                let next = s.sub(previous, z);
+                s.store(&mut ups[c], next);
+                *acc = s.add(*acc, s.mul(s.load(&out[c]), next));
+            });
+            s.sum(s.add(even, odd))
+        }
+    }
+    isa.run(Free { a: chunks(a), b: chunks(b), up: chunks_mut(up), un: chunks(un), out: chunks(out) })
+}
+
+/// Most steps [`free_run`] takes per call.
+pub const RUN: usize = 64;
+
+/// `outputs.len()` (at most [`RUN`]) steps without forces, each exactly a [`free`] step, with
+/// the state kept in registers: `up`, `un` hold `ũ^{n−1}`, `ũ^n` on entry and the last two states
+/// on return (no swap needed), and `outputs[t]` receives `outᵀũ^{n+1+t}`.
+///
+/// The loops run over groups of up to four chunks, and within a group over the samples: the
+/// four chunks' recursions are independent, so their latencies overlap, and nothing goes
+/// through memory but the per-sample partial sums. Those are added chunk after chunk in the same
+/// order as [`free`]'s, so the outputs are bit-identical to it.
+#[inline]
+pub fn free_run(isa: Isa, a: &[f64], b: &[f64], up: &mut [f64], un: &mut [f64], out: &[f64], outputs: &mut [f64]) {
+    struct FreeRun<'a> {
+        a: &'a [Chunk],
+        b: &'a [Chunk],
+        up: &'a mut [Chunk],
+        un: &'a mut [Chunk],
+        out: &'a [Chunk],
+        outputs: &'a mut [f64],
+    }
+    #[inline(always)]
+    fn group<L: Lanes, const G: usize>(s: L, run: &mut FreeRun<'_>, first: usize, sums: &mut [[Chunk; 2]]) {
+        let zero = s.splat(0.0);
+        let (mut a, mut b, mut w, mut prev, mut now) = ([zero; G], [zero; G], [zero; G], [zero; G], [zero; G]);
+        for i in 0..G {
+            let c = first + i;
+            (a[i], b[i], w[i]) = (s.load(&run.a[c]), s.load(&run.b[c]), s.load(&run.out[c]));
+            (prev[i], now[i]) = (s.load(&run.up[c]), s.load(&run.un[c]));
+        }
+        // `first` is a multiple of four, so chunk `first + i` has the parity of `i`.
+        for sum in sums.iter_mut() {
+            let (mut even, mut odd) = (s.load(&sum[0]), s.load(&sum[1]));
+            paired!(G, even, odd, |i, acc| {
+                let z = s.sub(s.mul(b[i], prev[i]), s.mul(a[i], now[i]));
+                let next = s.sub(prev[i], z);
+                *acc = s.add(*acc, s.mul(w[i], next));
+                (prev[i], now[i]) = (now[i], next);
+            });
+            s.store(&mut sum[0], even);
+            s.store(&mut sum[1], odd);
+        }
+        for i in 0..G {
+            s.store(&mut run.up[first + i], prev[i]);
+            s.store(&mut run.un[first + i], now[i]);
+        }
+    }
+    impl Kernel for FreeRun<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn run<L: Lanes>(mut self, s: L) {
+            let steps = self.outputs.len().min(RUN);
+            let mut sums = [[[0.0; LANES]; 2]; RUN];
+            let sums = &mut sums[..steps];
+            let n = self.up.len().min(self.un.len()).min(self.a.len()).min(self.b.len()).min(self.out.len());
+            let mut first = 0;
+            while first + 4 <= n {
+                group::<L, 4>(s, &mut self, first, sums);
+                first += 4;
+            }
+            match n - first {
+                3 => group::<L, 3>(s, &mut self, first, sums),
+                2 => group::<L, 2>(s, &mut self, first, sums),
+                1 => group::<L, 1>(s, &mut self, first, sums),
+                _ => {}
+            }
+            for (o, sum) in self.outputs.iter_mut().zip(sums.iter()) {
+                *o = s.sum(s.add(s.load(&sum[0]), s.load(&sum[1])));
+            }
+        }
+    }
+    isa.run(FreeRun { a: chunks(a), b: chunks(b), up: chunks_mut(up), un: chunks_mut(un), out: chunks(out), outputs })
+}
+
+/// `xᵀy` over whole chunks, summed lane by lane.
+#[inline]
+pub fn dot(isa: Isa, x: &[f64], y: &[f64]) -> f64 {
+    struct Dot<'a> {
+        x: &'a [Chunk],
+        y: &'a [Chunk],
+    }
+    impl Kernel for Dot<'_> {
+        type Output = f64;
+        #[inline(always)]
+        fn run<L: Lanes>(self, s: L) -> f64 {
+            let n = self.x.len().min(self.y.len());
+            let (x, y) = (&self.x[..n], &self.y[..n]);
+            let (mut even, mut odd) = (s.splat(0.0), s.splat(0.0));
+            paired!(n, even, odd, |c, acc| {
+                *acc = s.add(*acc, s.mul(s.load(&x[c]), s.load(&y[c])));
+            });
+            s.sum(s.add(even, odd))
+        }
+    }
+    isa.run(Dot { x: chunks(x), y: chunks(y) })
+}
+
+/// `out_i = sin((i+1)θ)` for whole chunks, from `sin θ` and `cos θ`.
+///
+/// The first chunk (with the cosines beside it) comes from rotating `(cos θ, sin θ)` by `θ` seven
+/// times; every later chunk from rotating the one before by `8θ` (the last lane of the first):
+///
+/// ```text
+/// sin((i+8)θ) = sin(iθ) cos 8θ + cos(iθ) sin 8θ,   cos((i+8)θ) = cos(iθ) cos 8θ − sin(iθ) sin 8θ
+/// ```
+///
+/// The dependency chain is M/8 rotations long instead of M. A rotation is orthogonal, so each
+/// step adds a rounding error without amplifying earlier ones, at every angle (the three-term
+/// recurrence `2cos φ·s_n − s_{n−1}` turns an error `ε` in `cos φ` into a phase error `√(2ε)`
+/// when `φ` is near a multiple of π, which a stride of 8 makes common).
+#[inline]
+pub fn sines(isa: Isa, sin: f64, cos: f64, out: &mut [f64]) {
+    struct Sines<'a> {
+        sin: f64,
+        cos: f64,
+        out: &'a mut [Chunk],
+    }
+    impl Kernel for Sines<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn run<L: Lanes>(self, s: L) {
+            let Some((first, rest)) = self.out.split_first_mut() else { return };
+            let mut cosines = [0.0; LANES];
+            let (mut sn, mut cs) = (self.sin, self.cos);
+            for (o, c) in first.iter_mut().zip(&mut cosines) {
+                (*o, *c) = (sn, cs);
+                (sn, cs) = (sn * self.cos + cs * self.sin, cs * self.cos - sn * self.sin);
+            }
+            let (sin8, cos8) = (s.splat(first[LANES - 1]), s.splat(cosines[LANES - 1]));
+            let (mut sn, mut cs) = (s.load(first), s.load(&cosines));
+            for chunk in rest {
+                (sn, cs) = (s.add(s.mul(sn, cos8), s.mul(cs, sin8)), s.sub(s.mul(cs, cos8), s.mul(sn, sin8)));
+                s.store(chunk, sn);
+            }
+        }
+    }
+    isa.run(Sines { sin, cos, out: chunks_mut(out) })
+}
+
+/// Flops per mode and sample of a [`free`] step (two products, two differences, and the output's
+/// product and sum), for roofline estimates.
+pub const FREE_STEP_FLOPS: f64 = 6.0;
+
+/// A measure of the vector unit's peak: `iterations` steps of 16 independent chains
+/// `x ← x·m + c` (a multiply and an add, as in the string's loops, never fused) on chunks of
+/// [`LANES`], so `iterations · 16 · LANES · 2` flops. Returns a checksum to keep the work.
+pub fn peak_probe(isa: Isa, iterations: usize) -> f64 {
+    struct Probe(usize);
+    impl Kernel for Probe {
+        type Output = f64;
+        #[inline(always)]
+        fn run<L: Lanes>(self, s: L) -> f64 {
+            let (m, c) = (s.splat(0.999_999), s.splat(1e-9));
+            let mut x = [s.splat(1.0); 16];
+            for j in 0..16 {
+                x[j] = s.splat(1.0 + j as f64 * 1e-3);
+            }
+            for _ in 0..self.0 {
+                for v in &mut x {
+                    *v = s.add(s.mul(*v, m), c);
+                }
+            }
+            let mut sum = 0.0;
+            for v in x {
+                sum += s.sum(v);
+            }
+            sum
+        }
+    }
+    isa.run(Probe(iterations))
 }
 
 /// Pass 2 with the energy terms: as [`advance`], and also returns
-/// `(Σ (u' − un)², Σ K̂ (u' + un)², Σ R̂ (u' − up)²)` with `u'` the new state.
+/// `(Σ (u' − un)², Σ K̂ (u' + un)², Σ R̂ (u' − up)²)` with `u'` the new state. Not dispatched: it
+/// serves the offline harness, which wants the energy, not the speed.
 #[allow(clippy::too_many_arguments)]
 pub fn advance_monitored<const K: usize>(
     up: &mut [f64],
@@ -110,5 +381,92 @@ pub fn advance_monitored<const K: usize>(
             up[i] = next;
         }
     }
-    (dot(&out[..n], up), [lane_sum(sums[0]), lane_sum(sums[1]), lane_sum(sums[2])])
+    let output = dot(Isa::Portable, &out[..n], up);
+    (output, [lane_sum(sums[0]), lane_sum(sums[1]), lane_sum(sums[2])])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Deterministic values in (−1, 1) with varied exponents.
+    fn data(n: usize, seed: u64) -> Vec<f64> {
+        let mut x = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (0..n)
+            .map(|_| {
+                x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let unit = (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0;
+                unit * 10f64.powi((x % 7) as i32 - 3)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn every_instruction_set_gives_the_same_bits() {
+        let n = 7 * LANES;
+        let [a, b, up0, un, v0, v1, g0, g1, out] = [0, 1, 2, 3, 4, 5, 6, 7, 8].map(|s| data(n, s));
+        let run = |isa: Isa| {
+            let (mut up, mut zt) = (up0.clone(), vec![0.0; n]);
+            let h = history(isa, &a, &b, &up, &un, &mut zt, [&v0, &v1]);
+            let o = advance(isa, &mut up, &zt, [(&g0, 0.3), (&g1, -1.7)], &out);
+            let mut free_up = up0.clone();
+            let f = free(isa, &a, &b, &mut free_up, &un, &out);
+            let mut shapes = vec![0.0; n];
+            sines(isa, 0.3f64.sin(), 0.3f64.cos(), &mut shapes);
+            let d = dot(isa, &v0, &v1);
+            (h, o, up, f, free_up, shapes, d)
+        };
+        let reference = run(Isa::Portable);
+        for isa in Isa::available() {
+            let got = run(isa);
+            assert_eq!(format!("{got:?}"), format!("{reference:?}"), "{isa:?}");
+        }
+    }
+
+    #[test]
+    fn free_step_is_history_then_advance_without_forces() {
+        let n = 3 * LANES;
+        let [a, b, up0, un, out] = [10, 11, 12, 13, 14].map(|s| data(n, s));
+        let (mut up, mut zt) = (up0.clone(), vec![0.0; n]);
+        history::<0>(Isa::detect(), &a, &b, &up, &un, &mut zt, []);
+        let o = advance::<0>(Isa::detect(), &mut up, &zt, [], &out);
+        let mut free_up = up0;
+        let f = free(Isa::detect(), &a, &b, &mut free_up, &un, &out);
+        assert_eq!(o.to_bits(), f.to_bits());
+        assert_eq!(up, free_up);
+    }
+
+    #[test]
+    fn free_run_is_repeated_free_steps() {
+        for chunks in [1, 3, 4, 7, 9] {
+            let n = chunks * LANES;
+            let [a, b, up0, un0, out] = [20, 21, 22, 23, 24].map(|s| data(n, s));
+            for isa in Isa::available() {
+                let (mut up, mut un) = (up0.clone(), un0.clone());
+                let mut want = vec![0.0; 37];
+                for w in &mut want {
+                    *w = free(isa, &a, &b, &mut up, &un, &out);
+                    std::mem::swap(&mut up, &mut un);
+                }
+                let (mut run_up, mut run_un) = (up0.clone(), un0.clone());
+                let mut got = vec![0.0; 37];
+                free_run(isa, &a, &b, &mut run_up, &mut run_un, &out, &mut got);
+                assert_eq!(got, want, "{isa:?}, {chunks} chunks");
+                assert_eq!((run_up, run_un), (up, un), "{isa:?}, {chunks} chunks");
+            }
+        }
+    }
+
+    #[test]
+    fn strided_sines_match_the_sine() {
+        let pi = std::f64::consts::PI;
+        for theta in [1e-4, 0.05, 0.3, 1.0, 1.57, 2.9, pi / 8.0, pi / 4.0, pi / 2.0, 3.0 * pi / 8.0, pi - 1e-4] {
+            let mut out = vec![0.0; 512];
+            sines(Isa::detect(), f64::sin(theta), f64::cos(theta), &mut out);
+            for (i, &got) in out.iter().enumerate() {
+                let want = ((i + 1) as f64 * theta).sin();
+                assert!((got - want).abs() < 1e-11, "θ = {theta}, i = {i}: {got} vs {want}");
+            }
+        }
+    }
 }

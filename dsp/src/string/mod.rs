@@ -45,10 +45,12 @@
 //! on and projects the new state on the output vector in the second.
 
 mod kernel;
+mod simd;
 
 use serde::Serialize;
 
-use kernel::LANES;
+pub use kernel::{FREE_STEP_FLOPS, peak_probe};
+pub use simd::{Isa, LANES};
 
 /// Most modes a string may have (bounds memory and cost for extreme parameters).
 pub const MAX_MODES: usize = 4096;
@@ -267,6 +269,8 @@ pub struct ModalString {
     history: Vec<f64>,
     /// Steps since the last flush of tiny amplitudes.
     since_flush: u32,
+    /// The vector unit the kernels run on.
+    isa: Isa,
 }
 
 /// Energy terms of one string step (J), returned by [`ModalString::advance_monitored`].
@@ -331,6 +335,7 @@ impl ModalString {
             u_now: v(),
             history: v(),
             since_flush: 0,
+            isa: Isa::detect(),
         }
     }
 
@@ -424,6 +429,11 @@ impl ModalString {
         v.resize(self.padded_len(), 0.0);
     }
 
+    /// Per-mode stiffness `K̂_i` of the scheme (N/m), M entries.
+    pub fn stiffness(&self) -> &[f64] {
+        &self.stiffness[..self.modes()]
+    }
+
     /// Modal mass m̃ = ρAL/2 (kg).
     pub fn modal_mass(&self) -> f64 {
         self.modal_mass
@@ -483,22 +493,23 @@ impl ModalString {
     }
 
     /// Write the mode shapes at `x` (m), `sin(β_i x)`, into `out` (dimensionless; entries past M
-    /// are zeroed). Uses the
-    /// recurrence `sin((i+1)θ) = 2cos θ·sin(iθ) − sin((i−1)θ)` with `θ = πx/L`, so costs one
-    /// sine and one cosine for all modes.
+    /// are zeroed). One sine and one cosine for all modes: the rest by rotations (see
+    /// `kernel::sines`), eight modes at a time when `out` holds whole chunks.
     pub fn mode_shapes(&self, x: f64, out: &mut [f64]) {
         let theta = std::f64::consts::PI * x / self.params.length;
         let (s1, c1) = theta.sin_cos();
-        let two_c = 2.0 * c1;
-        let (mut prev, mut now) = (0.0, s1);
-        let (shapes, padding) = out.split_at_mut(self.modes().min(out.len()));
-        for o in shapes {
-            *o = now;
-            let next = two_c * now - prev;
-            prev = now;
-            now = next;
+        let m = self.modes().min(out.len());
+        let whole = m.div_ceil(LANES) * LANES;
+        if whole <= out.len() {
+            kernel::sines(self.isa, s1, c1, &mut out[..whole]);
+        } else {
+            let (mut sn, mut cs) = (s1, c1);
+            for o in &mut out[..m] {
+                *o = sn;
+                (sn, cs) = (sn * c1 + cs * s1, cs * c1 - sn * s1);
+            }
         }
-        padding.fill(0.0);
+        out[m..].fill(0.0);
     }
 
     /// The weights that turn the modal state into the transverse force on the support (N/m):
@@ -517,7 +528,7 @@ impl ModalString {
     /// each of the `K` vectors (m). Vectors have [`padded_len`](Self::padded_len) entries.
     #[inline]
     pub fn history<const K: usize>(&mut self, vectors: [&[f64]; K]) -> [f64; K] {
-        kernel::history(&self.coef_a, &self.coef_b, &self.u_prev, &self.u_now, &mut self.history, vectors)
+        kernel::history(self.isa, &self.coef_a, &self.coef_b, &self.u_prev, &self.u_now, &mut self.history, vectors)
     }
 
     /// Second pass: `ũ^{n+1} = ũ^{n−1} − z̃ + Σ_k gains_k · F_k`, where `gains_k = C∘h_k` (m/N,
@@ -525,9 +536,50 @@ impl ModalString {
     /// vector; then step the state on. Returns `outputᵀ ũ^{n+1}`.
     #[inline]
     pub fn advance<const K: usize>(&mut self, forces: [(&[f64], f64); K], output: &[f64]) -> f64 {
-        let projection = kernel::advance(&mut self.u_prev, &self.history, forces, output);
+        let projection = kernel::advance(self.isa, &mut self.u_prev, &self.history, forces, output);
         self.finish_step();
         projection
+    }
+
+    /// A whole step with no force on the string, [`history`](Self::history) and
+    /// [`advance`](Self::advance) in one pass with the same arithmetic: `ũ^{n+1} = ũ^{n−1} − z̃`.
+    /// Returns `outputᵀ ũ^{n+1}`.
+    #[inline]
+    pub fn free_step(&mut self, output: &[f64]) -> f64 {
+        let projection = kernel::free(self.isa, &self.coef_a, &self.coef_b, &mut self.u_prev, &self.u_now, output);
+        self.finish_step();
+        projection
+    }
+
+    /// [`free_step`](Self::free_step) `outputs.len()` times, writing each step's
+    /// `outputᵀ ũ^{n+1}` into `outputs`, bit-identically but faster (the state stays in registers
+    /// between steps; see `kernel::free_run`).
+    pub fn free_steps(&mut self, output: &[f64], outputs: &mut [f64]) {
+        let mut done = 0;
+        while done < outputs.len() {
+            let until_flush = (FLUSH_INTERVAL - self.since_flush) as usize;
+            let n = (outputs.len() - done).min(until_flush).min(kernel::RUN);
+            let (a, b) = (&self.coef_a, &self.coef_b);
+            kernel::free_run(self.isa, a, b, &mut self.u_prev, &mut self.u_now, output, &mut outputs[done..done + n]);
+            // `free_run` leaves the last state in `u_now`; `finish_step` swaps, so undo that.
+            std::mem::swap(&mut self.u_prev, &mut self.u_now);
+            self.since_flush += n as u32 - 1;
+            self.finish_step();
+            done += n;
+        }
+    }
+
+    /// `xᵀy` for two per-mode vectors of [`padded_len`](Self::padded_len) entries, with the
+    /// kernels' fixed summation order.
+    #[inline]
+    pub fn project(&self, x: &[f64], y: &[f64]) -> f64 {
+        kernel::dot(self.isa, x, y)
+    }
+
+    /// `(vᵀũ^{n−1}, vᵀũ^n)` for a per-mode vector `v` of [`padded_len`](Self::padded_len) entries.
+    #[inline]
+    pub fn project_state(&self, v: &[f64]) -> (f64, f64) {
+        (kernel::dot(self.isa, &self.u_prev, v), kernel::dot(self.isa, &self.u_now, v))
     }
 
     /// [`advance`](Self::advance), also returning the string's energy terms for this step.

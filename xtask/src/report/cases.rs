@@ -91,7 +91,7 @@ fn slide(description: &SceneDescription) -> Result<CaseScene, ReportError> {
         return Err(ReportError::Scene("expected a slide-string scene".into()));
     };
     let fs = d.common.sample_rate;
-    let controls = SlideAutomation { lanes: excerpt_lanes(&d.controls)?, sample_rate: f64::from(fs) };
+    let controls = SlideAutomation::new(excerpt_lanes(&d.controls)?, f64::from(fs));
     let excerpt = SlideStringDescription { common: d.common, params: d.params, controls: controls.clone() };
     Ok(CaseScene {
         setup: Setup::Slide(d.params, controls),

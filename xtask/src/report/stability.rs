@@ -274,7 +274,7 @@ fn slide_string(id: String, law: PowerLaw, fs: u32, segments: usize, d: SlideDra
         Breakpoints::constant(0.9 * length),
         Breakpoints::constant(d.right_force),
     ];
-    let controls = SlideAutomation { lanes, sample_rate: fsf };
+    let controls = SlideAutomation::new(lanes, fsf);
     let common = Common {
         sample_rate: fs,
         samples,

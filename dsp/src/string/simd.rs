@@ -1,0 +1,267 @@
+//! Eight `f64` lanes on whatever vector unit the CPU has, picked at run time.
+//!
+//! The string's per-mode loops work on chunks of [`LANES`] modes. [`Lanes`] is the arithmetic
+//! they need on one chunk (load, store, add, subtract, multiply, and the sum of the lanes), and it
+//! has three implementations: one 512-bit register (AVX-512F), two 256-bit registers (AVX), and a
+//! plain array that any CPU runs. Every one performs exactly the same IEEE operations on every
+//! lane (never a fused multiply-add) and sums the lanes in the same order, so the three give
+//! bit-identical results and the distributed binary needs no particular CPU.
+//!
+//! A kernel is written once, generic over [`Lanes`], as a [`Kernel`]; [`Isa::run`] calls it
+//! through a function compiled for the detected instruction set, into which everything is inlined.
+//!
+//! This is the one module of the workspace allowed `unsafe`: calling vector intrinsics outside a
+//! function compiled for their feature, and loading from pointers. Each use says why it holds.
+
+#![allow(unsafe_code)]
+
+/// Modes per chunk; per-mode arrays are padded to a multiple of it.
+pub const LANES: usize = 8;
+
+/// One chunk of modes.
+pub type Chunk = [f64; LANES];
+
+/// Sum of the lanes in a fixed order: the halving tree of a vector reduction (lanes `i` and
+/// `i+4`, then `i` and `i+2`, then the last two).
+#[inline(always)]
+pub fn lane_sum(acc: Chunk) -> f64 {
+    ((acc[0] + acc[4]) + (acc[2] + acc[6])) + ((acc[1] + acc[5]) + (acc[3] + acc[7]))
+}
+
+/// Arithmetic on one chunk of [`LANES`] values.
+pub trait Lanes: Copy {
+    /// A chunk in registers.
+    type V: Copy;
+    /// Load a chunk.
+    fn load(self, x: &Chunk) -> Self::V;
+    /// Store a chunk.
+    fn store(self, x: &mut Chunk, v: Self::V);
+    /// Every lane `x`.
+    fn splat(self, x: f64) -> Self::V;
+    /// `a + b` per lane.
+    fn add(self, a: Self::V, b: Self::V) -> Self::V;
+    /// `a − b` per lane.
+    fn sub(self, a: Self::V, b: Self::V) -> Self::V;
+    /// `a · b` per lane.
+    fn mul(self, a: Self::V, b: Self::V) -> Self::V;
+    /// The lanes summed in the order of [`lane_sum`].
+    fn sum(self, v: Self::V) -> f64;
+}
+
+/// A computation over chunks, written once for every [`Lanes`].
+pub trait Kernel {
+    /// What it returns.
+    type Output;
+    /// Run on `lanes`.
+    fn run<L: Lanes>(self, lanes: L) -> Self::Output;
+}
+
+/// The vector unit to run kernels on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Isa {
+    /// One 512-bit register per chunk.
+    #[cfg(target_arch = "x86_64")]
+    Avx512,
+    /// Two 256-bit registers per chunk.
+    #[cfg(target_arch = "x86_64")]
+    Avx,
+    /// Plain arrays (the compiler vectorises what it can for the baseline target).
+    Portable,
+}
+
+impl Isa {
+    /// The widest unit this CPU has.
+    pub fn detect() -> Isa {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                return Isa::Avx512;
+            }
+            if std::arch::is_x86_feature_detected!("avx") {
+                return Isa::Avx;
+            }
+        }
+        Isa::Portable
+    }
+
+    /// Every unit this CPU can run, widest first (for tests that compare them).
+    pub fn available() -> Vec<Isa> {
+        let mut all = Vec::new();
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                all.push(Isa::Avx512);
+            }
+            if std::arch::is_x86_feature_detected!("avx") {
+                all.push(Isa::Avx);
+            }
+        }
+        all.push(Isa::Portable);
+        all
+    }
+
+    /// Run `kernel` on this unit.
+    #[inline]
+    pub fn run<K: Kernel>(self, kernel: K) -> K::Output {
+        match self {
+            // SAFETY: an `Isa` other than `Portable` comes from `detect` or `available`, which
+            // return it only when the CPU has the feature.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => unsafe { x86::run_avx512(kernel) },
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx => unsafe { x86::run_avx(kernel) },
+            Isa::Portable => kernel.run(Portable),
+        }
+    }
+}
+
+/// Plain arrays.
+#[derive(Debug, Clone, Copy)]
+pub struct Portable;
+
+impl Lanes for Portable {
+    type V = Chunk;
+
+    #[inline(always)]
+    fn load(self, x: &Chunk) -> Chunk {
+        *x
+    }
+    #[inline(always)]
+    fn store(self, x: &mut Chunk, v: Chunk) {
+        *x = v;
+    }
+    #[inline(always)]
+    fn splat(self, x: f64) -> Chunk {
+        [x; LANES]
+    }
+    #[inline(always)]
+    fn add(self, a: Chunk, b: Chunk) -> Chunk {
+        std::array::from_fn(|l| a[l] + b[l])
+    }
+    #[inline(always)]
+    fn sub(self, a: Chunk, b: Chunk) -> Chunk {
+        std::array::from_fn(|l| a[l] - b[l])
+    }
+    #[inline(always)]
+    fn mul(self, a: Chunk, b: Chunk) -> Chunk {
+        std::array::from_fn(|l| a[l] * b[l])
+    }
+    #[inline(always)]
+    fn sum(self, v: Chunk) -> f64 {
+        lane_sum(v)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    //! The x86-64 units. Their tokens are created only inside functions compiled for the feature,
+    //! which [`Isa::run`](super::Isa::run) calls only when the CPU has it.
+
+    use std::arch::x86_64::*;
+
+    use super::{Chunk, Kernel, Lanes};
+
+    /// AVX-512F: one `zmm` register per chunk.
+    #[derive(Debug, Clone, Copy)]
+    pub struct Avx512(());
+
+    /// AVX: two `ymm` registers per chunk, lanes 0–3 and 4–7.
+    #[derive(Debug, Clone, Copy)]
+    pub struct Avx(());
+
+    /// # Safety
+    /// The CPU must have AVX-512F.
+    #[target_feature(enable = "avx512f")]
+    pub unsafe fn run_avx512<K: Kernel>(kernel: K) -> K::Output {
+        kernel.run(Avx512(()))
+    }
+
+    /// # Safety
+    /// The CPU must have AVX.
+    #[target_feature(enable = "avx")]
+    pub unsafe fn run_avx<K: Kernel>(kernel: K) -> K::Output {
+        kernel.run(Avx(()))
+    }
+
+    // SAFETY (every block below): an `Avx512` token exists only inside `run_avx512`, so the CPU has
+    // AVX-512F; pointers come from references to whole chunks of eight `f64`.
+    impl Lanes for Avx512 {
+        type V = __m512d;
+
+        #[inline(always)]
+        fn load(self, x: &Chunk) -> __m512d {
+            unsafe { _mm512_loadu_pd(x.as_ptr()) }
+        }
+        #[inline(always)]
+        fn store(self, x: &mut Chunk, v: __m512d) {
+            unsafe { _mm512_storeu_pd(x.as_mut_ptr(), v) }
+        }
+        #[inline(always)]
+        fn splat(self, x: f64) -> __m512d {
+            unsafe { _mm512_set1_pd(x) }
+        }
+        #[inline(always)]
+        fn add(self, a: __m512d, b: __m512d) -> __m512d {
+            unsafe { _mm512_add_pd(a, b) }
+        }
+        #[inline(always)]
+        fn sub(self, a: __m512d, b: __m512d) -> __m512d {
+            unsafe { _mm512_sub_pd(a, b) }
+        }
+        #[inline(always)]
+        fn mul(self, a: __m512d, b: __m512d) -> __m512d {
+            unsafe { _mm512_mul_pd(a, b) }
+        }
+        #[inline(always)]
+        fn sum(self, v: __m512d) -> f64 {
+            unsafe {
+                // [a0+a4, a1+a5, a2+a6, a3+a7], then [(a0+a4)+(a2+a6), (a1+a5)+(a3+a7)].
+                let quarter = _mm256_add_pd(_mm512_castpd512_pd256(v), _mm512_extractf64x4_pd::<1>(v));
+                let half = _mm_add_pd(_mm256_castpd256_pd128(quarter), _mm256_extractf128_pd::<1>(quarter));
+                _mm_cvtsd_f64(_mm_add_sd(half, _mm_unpackhi_pd(half, half)))
+            }
+        }
+    }
+
+    // SAFETY (every block below): an `Avx` token exists only inside `run_avx`, so the CPU has
+    // AVX; pointers come from references to whole chunks of eight `f64` (two halves of four).
+    impl Lanes for Avx {
+        type V = (__m256d, __m256d);
+
+        #[inline(always)]
+        fn load(self, x: &Chunk) -> Self::V {
+            unsafe { (_mm256_loadu_pd(x.as_ptr()), _mm256_loadu_pd(x.as_ptr().add(4))) }
+        }
+        #[inline(always)]
+        fn store(self, x: &mut Chunk, v: Self::V) {
+            unsafe {
+                _mm256_storeu_pd(x.as_mut_ptr(), v.0);
+                _mm256_storeu_pd(x.as_mut_ptr().add(4), v.1);
+            }
+        }
+        #[inline(always)]
+        fn splat(self, x: f64) -> Self::V {
+            unsafe { (_mm256_set1_pd(x), _mm256_set1_pd(x)) }
+        }
+        #[inline(always)]
+        fn add(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { (_mm256_add_pd(a.0, b.0), _mm256_add_pd(a.1, b.1)) }
+        }
+        #[inline(always)]
+        fn sub(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { (_mm256_sub_pd(a.0, b.0), _mm256_sub_pd(a.1, b.1)) }
+        }
+        #[inline(always)]
+        fn mul(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { (_mm256_mul_pd(a.0, b.0), _mm256_mul_pd(a.1, b.1)) }
+        }
+        #[inline(always)]
+        fn sum(self, v: Self::V) -> f64 {
+            unsafe {
+                let quarter = _mm256_add_pd(v.0, v.1);
+                let half = _mm_add_pd(_mm256_castpd256_pd128(quarter), _mm256_extractf128_pd::<1>(quarter));
+                _mm_cvtsd_f64(_mm_add_sd(half, _mm_unpackhi_pd(half, half)))
+            }
+        }
+    }
+}
