@@ -24,18 +24,17 @@ pub struct FingerParams {
     pub damping: f64,
 }
 
-/// The window factors `π² cos(β_i W/2)/(π² − β_i² W²)` for every mode of `string`.
+/// The window factors `π² cos(β_i W/2)/(π² − β_i² W²)` for every mode of `string`, as a vector of
+/// the string's [`padded_len`](ModalString::padded_len) (zero past M).
 pub fn window_factors(string: &ModalString, width: f64) -> Vec<f64> {
     let pi2 = std::f64::consts::PI.powi(2);
-    string
-        .wavenumbers()
-        .iter()
-        .map(|&beta| {
-            let bw = beta * width;
-            let den = pi2 - bw * bw;
-            if den.abs() < 1e-8 * pi2 { std::f64::consts::FRAC_PI_4 } else { pi2 * (0.5 * bw).cos() / den }
-        })
-        .collect()
+    let mut factors = string.vector();
+    for (f, &beta) in factors.iter_mut().zip(string.wavenumbers()) {
+        let bw = beta * width;
+        let den = pi2 - bw * bw;
+        *f = if den.abs() < 1e-8 * pi2 { std::f64::consts::FRAC_PI_4 } else { pi2 * (0.5 * bw).cos() / den };
+    }
+    factors
 }
 
 #[cfg(test)]

@@ -48,7 +48,7 @@ use crate::contact::{ContactProblem, ContactSolver};
 use crate::control::{ControlSource, Ramp};
 use crate::exciter::{FingerParams, HandMotion, SlideHand, SlideParams, finger};
 use crate::scene::{Frame, OutputKind, Pickup, Scene};
-use crate::string::{ModalString, StringParams};
+use crate::string::{GramVector, ModalString, StringParams};
 
 /// The slide scene's control inputs at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -315,41 +315,55 @@ impl SlideCore {
     }
 
     /// Recompute the contact vectors that moved (the slide's always, a finger's only while it
-    /// touches the string), the entries of their Gram matrix, and the compressions. A finger left
-    /// out keeps its old vector and θ entries, which only ever meet its zero force.
+    /// touches the string), the Gram matrix of the touching ones, and the compressions: the new
+    /// mode shapes by rotations, then one pass for windows, gains, θ and the slide's projections.
+    /// A finger left out keeps its old vector and θ entries, which only ever meet its zero force.
     fn place(&mut self, positions: [f64; 3]) {
         let s = &self.string;
         let left = matches!(self.fingers, Fingers::Left | Fingers::Both);
         let right = matches!(self.fingers, Fingers::Right | Fingers::Both);
         let needed = [true, left, right];
-        let windows = [None, Some(&self.left_window), Some(&self.right_window)];
         let mut moved = [false; 3];
         for z in 0..3 {
-            if !needed[z] || positions[z] == self.positions[z] {
-                continue;
-            }
-            let (shape, gain) = (&mut self.shapes[z], &mut self.gains[z]);
-            s.mode_shapes(positions[z], shape);
-            if let Some(w) = windows[z] {
-                shape.iter_mut().zip(w).for_each(|(h, w)| *h *= w);
-            }
-            gain.iter_mut().zip(shape.iter()).zip(s.input_gains()).for_each(|((g, h), c)| *g = c * h);
-            self.positions[z] = positions[z];
-            moved[z] = true;
-        }
-        for a in 0..3 {
-            for b in a..3 {
-                if (moved[a] || moved[b]) && needed[a] && needed[b] {
-                    let t = s.project(&self.shapes[a], &self.gains[b]);
-                    self.theta[a][b] = t;
-                    self.theta[b][a] = t;
-                }
+            if needed[z] && positions[z] != self.positions[z] {
+                s.mode_shapes(positions[z], &mut self.shapes[z]);
+                self.positions[z] = positions[z];
+                moved[z] = true;
             }
         }
+        if moved == [false; 3] {
+            return;
+        }
+        let [sh_o, sh_l, sh_r] = &mut self.shapes;
+        let [g_o, g_l, g_r] = &mut self.gains;
+        let o = GramVector { shape: sh_o, gain: g_o, window: None, fresh: moved[0] };
+        let l = GramVector { shape: sh_l, gain: g_l, window: Some(&self.left_window), fresh: moved[1] };
+        let r = GramVector { shape: sh_r, gain: g_r, window: Some(&self.right_window), fresh: moved[2] };
+        let state = match self.fingers {
+            Fingers::None => {
+                let (t, state) = s.gram([o]);
+                self.theta[0][0] = t[0][0];
+                state
+            }
+            Fingers::Left => {
+                let (t, state) = s.gram([o, l]);
+                set_gram(&mut self.theta, &t, [0, 1]);
+                state
+            }
+            Fingers::Right => {
+                let (t, state) = s.gram([o, r]);
+                set_gram(&mut self.theta, &t, [0, 2]);
+                state
+            }
+            Fingers::Both => {
+                let (t, state) = s.gram([o, l, r]);
+                set_gram(&mut self.theta, &t, [0, 1, 2]);
+                state
+            }
+        };
         if moved[0] {
-            let (prev, now) = s.project_state(&self.shapes[0]);
-            self.y_prev = prev - self.sho.previous();
-            self.y_now = now - self.sho.position();
+            self.y_prev = state.0 - self.sho.previous();
+            self.y_now = state.1 - self.sho.position();
         }
     }
 
@@ -485,6 +499,17 @@ impl SlideCore {
         out: &mut [f64],
     ) {
         self.run::<S, C, false>(solver, controls, out.len(), |i, f| out[i] = f.output);
+    }
+}
+
+/// Write the Gram matrix `t` of the vectors `index` (upper triangle) into θ, symmetrically.
+fn set_gram<const K: usize>(theta: &mut [[f64; 3]; 3], t: &[[f64; K]; K], index: [usize; K]) {
+    for a in 0..K {
+        for b in a..K {
+            let (i, j) = (index[a], index[b]);
+            theta[i][j] = t[a][b];
+            theta[j][i] = t[a][b];
+        }
     }
 }
 

@@ -104,12 +104,27 @@ pub fn history<const K: usize>(
     })
 }
 
-/// Pass 2: `up = up − zt + Σ_k g_k F_k`; returns `outᵀ up`.
+/// Pass 2: `up = up − zt + Σ_k g_k F_k`; returns `outᵀ up`. In the same pass, the next step's
+/// pass 1 without its projections: `zt = b∘un − a∘up` with the new `up` (the state moves on by a
+/// swap, so this is exactly what [`history`] would compute next), for [`projections`].
 #[inline]
-pub fn advance<const K: usize>(isa: Isa, up: &mut [f64], zt: &[f64], forces: [(&[f64], f64); K], out: &[f64]) -> f64 {
+#[allow(clippy::too_many_arguments)]
+pub fn advance<const K: usize>(
+    isa: Isa,
+    a: &[f64],
+    b: &[f64],
+    up: &mut [f64],
+    un: &[f64],
+    zt: &mut [f64],
+    forces: [(&[f64], f64); K],
+    out: &[f64],
+) -> f64 {
     struct Advance<'a, const K: usize> {
+        a: &'a [Chunk],
+        b: &'a [Chunk],
         up: &'a mut [Chunk],
-        zt: &'a [Chunk],
+        un: &'a [Chunk],
+        zt: &'a mut [Chunk],
         gains: [&'a [Chunk]; K],
         forces: [f64; K],
         out: &'a [Chunk],
@@ -119,7 +134,8 @@ pub fn advance<const K: usize>(isa: Isa, up: &mut [f64], zt: &[f64], forces: [(&
         #[inline(always)]
         fn run<L: Lanes>(self, s: L) -> f64 {
             let n = self.up.len();
-            let (zt, out) = (&self.zt[..n], &self.out[..n]);
+            let (a, b, un, out) = (&self.a[..n], &self.b[..n], &self.un[..n], &self.out[..n]);
+            let zts = &mut self.zt[..n];
             let mut gains = self.gains;
             let mut forces = [s.splat(0.0); K];
             for k in 0..K {
@@ -129,23 +145,63 @@ pub fn advance<const K: usize>(isa: Isa, up: &mut [f64], zt: &[f64], forces: [(&
             let ups = self.up;
             let (mut even, mut odd) = (s.splat(0.0), s.splat(0.0));
             paired!(n, even, odd, |c, acc| {
-                let mut next = s.sub(s.load(&ups[c]), s.load(&zt[c]));
+                let mut next = s.sub(s.load(&ups[c]), s.load(&zts[c]));
                 for k in 0..K {
                     next = s.add(next, s.mul(s.load(&gains[k][c]), forces[k]));
                 }
                 s.store(&mut ups[c], next);
                 *acc = s.add(*acc, s.mul(s.load(&out[c]), next));
+                let z = s.sub(s.mul(s.load(&b[c]), s.load(&un[c])), s.mul(s.load(&a[c]), next));
+                s.store(&mut zts[c], z);
             });
             s.sum(s.add(even, odd))
         }
     }
     isa.run(Advance {
+        a: chunks(a),
+        b: chunks(b),
         up: chunks_mut(up),
-        zt: chunks(zt),
+        un: chunks(un),
+        zt: chunks_mut(zt),
         gains: forces.map(|(g, _)| chunks(g)),
         forces: forces.map(|(_, f)| f),
         out: chunks(out),
     })
+}
+
+/// The projections `vectors_kᵀ zt` of a `zt` already computed by [`advance`]: the sums
+/// [`history`] returns for the same `zt`, bit for bit.
+#[inline]
+pub fn projections<const K: usize>(isa: Isa, zt: &[f64], vectors: [&[f64]; K]) -> [f64; K] {
+    struct Projections<'a, const K: usize> {
+        zt: &'a [Chunk],
+        vectors: [&'a [Chunk]; K],
+    }
+    impl<const K: usize> Kernel for Projections<'_, K> {
+        type Output = [f64; K];
+        #[inline(always)]
+        fn run<L: Lanes>(self, s: L) -> [f64; K] {
+            let n = self.zt.len();
+            let zt = self.zt;
+            let mut vectors = self.vectors;
+            for v in &mut vectors {
+                *v = &v[..n];
+            }
+            let (mut even, mut odd) = ([s.splat(0.0); K], [s.splat(0.0); K]);
+            paired!(n, even, odd, |c, acc| {
+                let z = s.load(&zt[c]);
+                for k in 0..K {
+                    acc[k] = s.add(acc[k], s.mul(s.load(&vectors[k][c]), z));
+                }
+            });
+            let mut sums = [0.0; K];
+            for k in 0..K {
+                sums[k] = s.sum(s.add(even[k], odd[k]));
+            }
+            sums
+        }
+    }
+    isa.run(Projections { zt: chunks(zt), vectors: vectors.map(chunks) })
 }
 
 /// Both passes of a step without forces, in one: `up = up − (b∘up − a∘un)`; returns `outᵀ up`.
@@ -277,19 +333,126 @@ pub fn dot(isa: Isa, x: &[f64], y: &[f64]) -> f64 {
     isa.run(Dot { x: chunks(x), y: chunks(y) })
 }
 
-/// `out_i = sin((i+1)θ)` for whole chunks, from `sin θ` and `cos θ`.
-///
-/// The first chunk (with the cosines beside it) comes from rotating `(cos θ, sin θ)` by `θ` seven
-/// times; every later chunk from rotating the one before by `8θ` (the last lane of the first):
+/// One contact vector of [`gram`]. If `fresh`, `shape` holds bare mode shapes on entry: they are
+/// multiplied by `window` (if any) and written back, and `gain = c∘shape` is written. Otherwise
+/// `shape` and `gain` already hold the vector and its gain, and are only read.
+#[derive(Debug)]
+pub struct GramVector<'a> {
+    /// The vector `h` (dimensionless), whole chunks.
+    pub shape: &'a mut [f64],
+    /// `C∘h` (m/N), whole chunks.
+    pub gain: &'a mut [f64],
+    /// Per-mode window factors for a fresh vector (whole chunks, zero past M), or none.
+    pub window: Option<&'a [f64]>,
+    /// Whether `shape` holds bare mode shapes to finish.
+    pub fresh: bool,
+}
+
+/// One pass that finishes the fresh vectors and returns their Gram matrix in the C metric,
+/// `θ_ab = h_aᵀ(C∘h_b)` for `a ≤ b` (entries below the diagonal are zero), and the projections
+/// `(h_0ᵀup, h_0ᵀun)` of the state on the first vector. Each sum is the one [`dot`] would give.
+#[inline]
+pub fn gram<const K: usize>(
+    isa: Isa,
+    c: &[f64],
+    up: &[f64],
+    un: &[f64],
+    vectors: [GramVector<'_>; K],
+) -> ([[f64; K]; K], [f64; 2]) {
+    struct Vector<'a> {
+        shape: &'a mut [Chunk],
+        gain: &'a mut [Chunk],
+        window: Option<&'a [Chunk]>,
+        fresh: bool,
+    }
+    struct Gram<'a, const K: usize> {
+        c: &'a [Chunk],
+        up: &'a [Chunk],
+        un: &'a [Chunk],
+        vectors: [Vector<'a>; K],
+    }
+    impl<const K: usize> Kernel for Gram<'_, K> {
+        type Output = ([[f64; K]; K], [f64; 2]);
+        #[inline(always)]
+        fn run<L: Lanes>(self, s: L) -> Self::Output {
+            let mut n = self.c.len().min(self.up.len()).min(self.un.len());
+            for v in &self.vectors {
+                n = n.min(v.shape.len()).min(v.gain.len());
+                if let Some(w) = v.window {
+                    n = n.min(w.len());
+                }
+            }
+            let (c, up, un) = (&self.c[..n], &self.up[..n], &self.un[..n]);
+            let mut vectors = self.vectors;
+            let zero = s.splat(0.0);
+            // Each accumulator: the Gram entries and the two state projections.
+            let (mut even, mut odd) = (([[zero; K]; K], [zero; 2]), ([[zero; K]; K], [zero; 2]));
+            paired!(n, even, odd, |i, acc| {
+                let (mut h, mut g) = ([zero; K], [zero; K]);
+                for k in 0..K {
+                    let v = &mut vectors[k];
+                    h[k] = s.load(&v.shape[i]);
+                    if v.fresh {
+                        if let Some(w) = v.window {
+                            h[k] = s.mul(h[k], s.load(&w[i]));
+                            s.store(&mut v.shape[i], h[k]);
+                        }
+                        g[k] = s.mul(s.load(&c[i]), h[k]);
+                        s.store(&mut v.gain[i], g[k]);
+                    } else {
+                        g[k] = s.load(&v.gain[i]);
+                    }
+                }
+                for a in 0..K {
+                    for b in a..K {
+                        acc.0[a][b] = s.add(acc.0[a][b], s.mul(h[a], g[b]));
+                    }
+                }
+                if K > 0 {
+                    acc.1[0] = s.add(acc.1[0], s.mul(s.load(&up[i]), h[0]));
+                    acc.1[1] = s.add(acc.1[1], s.mul(s.load(&un[i]), h[0]));
+                }
+            });
+            let mut gram = [[0.0; K]; K];
+            for a in 0..K {
+                for b in a..K {
+                    gram[a][b] = s.sum(s.add(even.0[a][b], odd.0[a][b]));
+                }
+            }
+            let mut state = [0.0; 2];
+            for i in 0..2 {
+                state[i] = s.sum(s.add(even.1[i], odd.1[i]));
+            }
+            (gram, state)
+        }
+    }
+    isa.run(Gram {
+        c: chunks(c),
+        up: chunks(up),
+        un: chunks(un),
+        vectors: vectors.map(|v| Vector {
+            shape: chunks_mut(v.shape),
+            gain: chunks_mut(v.gain),
+            window: v.window.map(chunks),
+            fresh: v.fresh,
+        }),
+    })
+}
+
+/// `out_i = sin((i+1)θ)` for whole chunks, from `sin θ` and `cos θ`, by rotations:
 ///
 /// ```text
-/// sin((i+8)θ) = sin(iθ) cos 8θ + cos(iθ) sin 8θ,   cos((i+8)θ) = cos(iθ) cos 8θ − sin(iθ) sin 8θ
+/// sin((i+k)θ) = sin(iθ) cos kθ + cos(iθ) sin kθ,   cos((i+k)θ) = cos(iθ) cos kθ − sin(iθ) sin kθ
 /// ```
 ///
-/// The dependency chain is M/8 rotations long instead of M. A rotation is orthogonal, so each
-/// step adds a rounding error without amplifying earlier ones, at every angle (the three-term
-/// recurrence `2cos φ·s_n − s_{n−1}` turns an error `ε` in `cos φ` into a phase error `√(2ε)`
-/// when `φ` is near a multiple of π, which a stride of 8 makes common).
+/// The first chunk comes from doubling (lanes `[0, w)` rotated by `wθ` give lanes `[w, 2w)`,
+/// for w = 1, 2, 4), the next three the same way a chunk at a time (by 8θ, then 16θ), and every
+/// later chunk from the chunk four before it, rotated by 32θ: four independent chains, so the
+/// dependency chain is about 6 + M/32 rotations long instead of M and the loop is bound by
+/// throughput, not latency. A rotation is orthogonal, so each one adds a rounding error without
+/// amplifying earlier ones, at every angle (the three-term recurrence `2cos φ·s_n − s_{n−1}`
+/// turns an error `ε` in `cos φ` into a phase error `√(2ε)` when `φ` is near a multiple of π,
+/// which a stride of 32 makes common).
 #[inline]
 pub fn sines(isa: Isa, sin: f64, cos: f64, out: &mut [f64]) {
     struct Sines<'a> {
@@ -297,22 +460,59 @@ pub fn sines(isa: Isa, sin: f64, cos: f64, out: &mut [f64]) {
         cos: f64,
         out: &'a mut [Chunk],
     }
+    /// `(sin(a + b), cos(a + b))` from `(sin a, cos a)` and `(sin b, cos b)`.
+    #[inline(always)]
+    fn rotate((sa, ca): (f64, f64), (sb, cb): (f64, f64)) -> (f64, f64) {
+        (sa * cb + ca * sb, ca * cb - sa * sb)
+    }
+    #[inline(always)]
+    fn rotate_chunk<L: Lanes>(s: L, (sn, cs): (L::V, L::V), (sb, cb): (f64, f64)) -> (L::V, L::V) {
+        let (sb, cb) = (s.splat(sb), s.splat(cb));
+        (s.add(s.mul(sn, cb), s.mul(cs, sb)), s.sub(s.mul(cs, cb), s.mul(sn, sb)))
+    }
     impl Kernel for Sines<'_> {
         type Output = ();
         #[inline(always)]
         fn run<L: Lanes>(self, s: L) {
-            let Some((first, rest)) = self.out.split_first_mut() else { return };
-            let mut cosines = [0.0; LANES];
-            let (mut sn, mut cs) = (self.sin, self.cos);
-            for (o, c) in first.iter_mut().zip(&mut cosines) {
-                (*o, *c) = (sn, cs);
-                (sn, cs) = (sn * self.cos + cs * self.sin, cs * self.cos - sn * self.sin);
+            let out = self.out;
+            if out.is_empty() {
+                return;
             }
-            let (sin8, cos8) = (s.splat(first[LANES - 1]), s.splat(cosines[LANES - 1]));
-            let (mut sn, mut cs) = (s.load(first), s.load(&cosines));
-            for chunk in rest {
-                (sn, cs) = (s.add(s.mul(sn, cos8), s.mul(cs, sin8)), s.sub(s.mul(cs, cos8), s.mul(sn, sin8)));
-                s.store(chunk, sn);
+            let (mut first_sin, mut first_cos) = ([0.0; LANES], [0.0; LANES]);
+            (first_sin[0], first_cos[0]) = (self.sin, self.cos);
+            let mut width = 1;
+            while width < LANES {
+                let step = (first_sin[width - 1], first_cos[width - 1]);
+                for l in 0..width {
+                    (first_sin[width + l], first_cos[width + l]) = rotate((first_sin[l], first_cos[l]), step);
+                }
+                width *= 2;
+            }
+            let by8 = (first_sin[LANES - 1], first_cos[LANES - 1]);
+            let by16 = rotate(by8, by8);
+            let by32 = rotate(by16, by16);
+            let zero = s.splat(0.0);
+            let mut chains = [(zero, zero); 4];
+            chains[0] = (s.load(&first_sin), s.load(&first_cos));
+            chains[1] = rotate_chunk(s, chains[0], by8);
+            chains[2] = rotate_chunk(s, chains[0], by16);
+            chains[3] = rotate_chunk(s, chains[1], by16);
+            let n = out.len();
+            let head = n.min(4);
+            for j in 0..head {
+                s.store(&mut out[j], chains[j].0);
+            }
+            let mut k = head;
+            while k + 4 <= n {
+                for j in 0..4 {
+                    chains[j] = rotate_chunk(s, chains[j], by32);
+                    s.store(&mut out[k + j], chains[j].0);
+                }
+                k += 4;
+            }
+            for j in 0..n - k {
+                chains[j] = rotate_chunk(s, chains[j], by32);
+                s.store(&mut out[k + j], chains[j].0);
             }
         }
     }
@@ -408,13 +608,14 @@ mod tests {
         let run = |isa: Isa| {
             let (mut up, mut zt) = (up0.clone(), vec![0.0; n]);
             let h = history(isa, &a, &b, &up, &un, &mut zt, [&v0, &v1]);
-            let o = advance(isa, &mut up, &zt, [(&g0, 0.3), (&g1, -1.7)], &out);
+            let o = advance(isa, &a, &b, &mut up, &un, &mut zt, [(&g0, 0.3), (&g1, -1.7)], &out);
+            let p = projections(isa, &zt, [&v0, &v1]);
             let mut free_up = up0.clone();
             let f = free(isa, &a, &b, &mut free_up, &un, &out);
             let mut shapes = vec![0.0; n];
             sines(isa, 0.3f64.sin(), 0.3f64.cos(), &mut shapes);
             let d = dot(isa, &v0, &v1);
-            (h, o, up, f, free_up, shapes, d)
+            (h, o, up, zt, p, f, free_up, shapes, d)
         };
         let reference = run(Isa::Portable);
         for isa in Isa::available() {
@@ -429,11 +630,69 @@ mod tests {
         let [a, b, up0, un, out] = [10, 11, 12, 13, 14].map(|s| data(n, s));
         let (mut up, mut zt) = (up0.clone(), vec![0.0; n]);
         history::<0>(Isa::detect(), &a, &b, &up, &un, &mut zt, []);
-        let o = advance::<0>(Isa::detect(), &mut up, &zt, [], &out);
+        let o = advance::<0>(Isa::detect(), &a, &b, &mut up, &un, &mut zt, [], &out);
         let mut free_up = up0;
         let f = free(Isa::detect(), &a, &b, &mut free_up, &un, &out);
         assert_eq!(o.to_bits(), f.to_bits());
         assert_eq!(up, free_up);
+    }
+
+    /// The next step's `z̃` that `advance` leaves behind, and its projections, are those of a
+    /// separate first pass.
+    #[test]
+    fn advance_leaves_the_next_history() {
+        let n = 5 * LANES;
+        let [a, b, up0, un, v0, v1, g0] = [30, 31, 32, 33, 34, 35, 36].map(|s| data(n, s));
+        for isa in Isa::available() {
+            let (mut up, mut zt) = (up0.clone(), vec![0.0; n]);
+            history(isa, &a, &b, &up, &un, &mut zt, [&v0]);
+            advance(isa, &a, &b, &mut up, &un, &mut zt, [(&g0, 0.7)], &data(n, 37));
+            let got = projections(isa, &zt, [&v0, &v1]);
+            // The state moves on: ũ^n becomes ũ^{n−1}, the new state ũ^{n+1}.
+            let mut want_zt = vec![0.0; n];
+            let want = history(isa, &a, &b, &un, &up, &mut want_zt, [&v0, &v1]);
+            assert_eq!(zt, want_zt, "{isa:?}");
+            assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "{isa:?}");
+        }
+    }
+
+    /// One `gram` pass finishes fresh vectors and gives the sums that separate window, gain and
+    /// `dot` passes give, bit for bit, on every instruction set.
+    #[test]
+    fn gram_is_the_separate_passes() {
+        let n = 6 * LANES;
+        let [c, up, un, bare0, bare1, kept, kept_gain, window] = [40, 41, 42, 43, 44, 45, 46, 47].map(|s| data(n, s));
+        for isa in Isa::available() {
+            let (mut s0, mut s1, mut s2) = (bare0.clone(), bare1.clone(), kept.clone());
+            let (mut g0, mut g1, mut g2) = (vec![0.0; n], vec![0.0; n], kept_gain.clone());
+            let (t, state) = gram(
+                isa,
+                &c,
+                &up,
+                &un,
+                [
+                    GramVector { shape: &mut s0, gain: &mut g0, window: None, fresh: true },
+                    GramVector { shape: &mut s1, gain: &mut g1, window: Some(&window), fresh: true },
+                    GramVector { shape: &mut s2, gain: &mut g2, window: Some(&window), fresh: false },
+                ],
+            );
+            let w1: Vec<f64> = bare1.iter().zip(&window).map(|(h, w)| h * w).collect();
+            let shapes = [bare0.clone(), w1, kept.clone()];
+            let gains: Vec<Vec<f64>> = vec![
+                c.iter().zip(&shapes[0]).map(|(c, h)| c * h).collect(),
+                c.iter().zip(&shapes[1]).map(|(c, h)| c * h).collect(),
+                kept_gain.clone(),
+            ];
+            assert_eq!([&s0, &s1, &s2], [&shapes[0], &shapes[1], &shapes[2]], "{isa:?}");
+            assert_eq!([&g0, &g1, &g2], [&gains[0], &gains[1], &gains[2]], "{isa:?}");
+            for a in 0..3 {
+                for b in a..3 {
+                    assert_eq!(t[a][b].to_bits(), dot(isa, &shapes[a], &gains[b]).to_bits(), "{isa:?} θ[{a}][{b}]");
+                }
+            }
+            assert_eq!(state[0].to_bits(), dot(isa, &up, &shapes[0]).to_bits(), "{isa:?}");
+            assert_eq!(state[1].to_bits(), dot(isa, &un, &shapes[0]).to_bits(), "{isa:?}");
+        }
     }
 
     #[test]

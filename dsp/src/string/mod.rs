@@ -49,7 +49,7 @@ mod simd;
 
 use serde::Serialize;
 
-pub use kernel::{FREE_STEP_FLOPS, peak_probe};
+pub use kernel::{FREE_STEP_FLOPS, GramVector, peak_probe};
 pub use simd::{Isa, LANES};
 
 /// Most modes a string may have (bounds memory and cost for extreme parameters).
@@ -265,8 +265,12 @@ pub struct ModalString {
     u_prev: Vec<f64>,
     /// `ũ^n` (m).
     u_now: Vec<f64>,
-    /// `z̃` of the current step (m), from [`ModalString::history`].
+    /// `z̃` of the current step (m), from [`ModalString::history`] or left by
+    /// [`ModalString::advance`].
     history: Vec<f64>,
+    /// Whether `history` holds `z̃ = B ũ^{n−1} − A ũ^n` for the current state. Everything that
+    /// changes the state otherwise clears it.
+    history_ready: bool,
     /// Steps since the last flush of tiny amplitudes.
     since_flush: u32,
     /// The vector unit the kernels run on.
@@ -334,6 +338,7 @@ impl ModalString {
             u_prev: v(),
             u_now: v(),
             history: v(),
+            history_ready: false,
             since_flush: 0,
             isa: Isa::detect(),
         }
@@ -390,6 +395,7 @@ impl ModalString {
         self.sample_rate = sample_rate;
         self.modal_mass = modal_mass;
         self.since_flush = 0;
+        self.history_ready = false;
         Ok(())
     }
 
@@ -475,6 +481,7 @@ impl ModalString {
         let m = self.modes();
         self.u_prev[..m].copy_from_slice(previous);
         self.u_now[..m].copy_from_slice(now);
+        self.history_ready = false;
     }
 
     /// Multiply the modal state by `factor` (0..=1): an extra decay of the free vibration by that
@@ -483,6 +490,7 @@ impl ModalString {
         for u in self.u_prev.iter_mut().chain(self.u_now.iter_mut()) {
             *u *= factor;
         }
+        self.history_ready = false;
     }
 
     /// Bring the string to rest.
@@ -490,6 +498,7 @@ impl ModalString {
         self.u_prev.fill(0.0);
         self.u_now.fill(0.0);
         self.since_flush = 0;
+        self.history_ready = false;
     }
 
     /// Write the mode shapes at `x` (m), `sin(β_i x)`, into `out` (dimensionless; entries past M
@@ -526,17 +535,27 @@ impl ModalString {
 
     /// First pass of a step: compute `z̃ = B ũ^{n−1} − A ũ^n` and return its projections on
     /// each of the `K` vectors (m). Vectors have [`padded_len`](Self::padded_len) entries.
+    /// When the previous step was an [`advance`](Self::advance), `z̃` is already there and this
+    /// pass only projects it.
     #[inline]
     pub fn history<const K: usize>(&mut self, vectors: [&[f64]; K]) -> [f64; K] {
+        if self.history_ready {
+            return kernel::projections(self.isa, &self.history, vectors);
+        }
+        self.history_ready = true;
         kernel::history(self.isa, &self.coef_a, &self.coef_b, &self.u_prev, &self.u_now, &mut self.history, vectors)
     }
 
     /// Second pass: `ũ^{n+1} = ũ^{n−1} − z̃ + Σ_k gains_k · F_k`, where `gains_k = C∘h_k` (m/N,
     /// see [`input_gains`](Self::input_gains)) and `F_k` (N) are the modal forces along each contact
-    /// vector; then step the state on. Returns `outputᵀ ũ^{n+1}`.
+    /// vector; then step the state on. Returns `outputᵀ ũ^{n+1}`. The same pass computes the next
+    /// step's `z̃`, so that the next [`history`](Self::history) only projects it.
     #[inline]
     pub fn advance<const K: usize>(&mut self, forces: [(&[f64], f64); K], output: &[f64]) -> f64 {
-        let projection = kernel::advance(self.isa, &mut self.u_prev, &self.history, forces, output);
+        debug_assert!(self.history_ready, "advance follows history");
+        let (a, b) = (&self.coef_a, &self.coef_b);
+        let projection =
+            kernel::advance(self.isa, a, b, &mut self.u_prev, &self.u_now, &mut self.history, forces, output);
         self.finish_step();
         projection
     }
@@ -548,6 +567,7 @@ impl ModalString {
     pub fn free_step(&mut self, output: &[f64]) -> f64 {
         let projection = kernel::free(self.isa, &self.coef_a, &self.coef_b, &mut self.u_prev, &self.u_now, output);
         self.finish_step();
+        self.history_ready = false;
         projection
     }
 
@@ -567,6 +587,7 @@ impl ModalString {
             self.finish_step();
             done += n;
         }
+        self.history_ready = false;
     }
 
     /// `xᵀy` for two per-mode vectors of [`padded_len`](Self::padded_len) entries, with the
@@ -574,6 +595,17 @@ impl ModalString {
     #[inline]
     pub fn project(&self, x: &[f64], y: &[f64]) -> f64 {
         kernel::dot(self.isa, x, y)
+    }
+
+    /// Finish the contact vectors marked fresh (window and gain, see [`GramVector`]) and return, in
+    /// one pass, their Gram matrix in the C metric `θ_ab = h_aᵀ(C∘h_b)` for `a ≤ b` (m/N; zero
+    /// below the diagonal) and the projections `(h_0ᵀũ^{n−1}, h_0ᵀũ^n)` (m) of the state on the
+    /// first. Every sum equals the [`project`](Self::project) or
+    /// [`project_state`](Self::project_state) of the same vectors.
+    #[inline]
+    pub fn gram<const K: usize>(&self, vectors: [GramVector<'_>; K]) -> ([[f64; K]; K], (f64, f64)) {
+        let (gram, [prev, now]) = kernel::gram(self.isa, &self.coef_c, &self.u_prev, &self.u_now, vectors);
+        (gram, (prev, now))
     }
 
     /// `(vᵀũ^{n−1}, vᵀũ^n)` for a per-mode vector `v` of [`padded_len`](Self::padded_len) entries.
@@ -598,19 +630,22 @@ impl ModalString {
             &self.resistance,
         );
         self.finish_step();
+        self.history_ready = false;
         let fs = self.sample_rate;
         // ½m̃‖δ_t+ũ‖² + ½ΣK̂(μ_t+ũ)² and Δt·ΣR̂(δ_t·ũ)², from the unscaled sums.
         let stored = 0.5 * self.modal_mass * step2 * fs * fs + 0.125 * k_sum2;
         (projection, StringEnergy { stored, dissipated: 0.25 * r_diff2 * fs })
     }
 
-    /// Step the state on, flushing tiny amplitudes every [`FLUSH_INTERVAL`] steps.
+    /// Step the state on, flushing tiny amplitudes every [`FLUSH_INTERVAL`] steps (a flush makes
+    /// the next `z̃` stale).
     #[inline]
     fn finish_step(&mut self) {
         std::mem::swap(&mut self.u_prev, &mut self.u_now);
         self.since_flush += 1;
         if self.since_flush == FLUSH_INTERVAL {
             self.since_flush = 0;
+            self.history_ready = false;
             for u in self.u_prev.iter_mut().chain(self.u_now.iter_mut()) {
                 if u.abs() < FLUSH_BELOW {
                     *u = 0.0;
