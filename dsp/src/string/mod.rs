@@ -40,9 +40,10 @@
 //! Structure of arrays: every per-mode coefficient is a contiguous `Vec<f64>`, padded with inert
 //! zero modes to a whole number of SIMD chunks ([`ModalString::padded_len`]; vectors handed to
 //! the string come from [`ModalString::vector`]), and a step is two branch-free passes over the
-//! modes (see `kernel`). [`ModalString::history`] computes `z̃` and its projections
-//! on the contact vectors in one pass; [`ModalString::advance`] applies the forces, moves the state
-//! on and projects the new state on the output vector in the second.
+//! modes (see `kernel`). [`ModalString::history`] projects `z̃` on the contact vectors;
+//! [`ModalString::advance`] applies the forces, moves the state on, projects the new state on the
+//! output vector and computes the next step's `z̃`, all in one pass. So the first pass of a step
+//! that follows an `advance` only reads `z̃`; after anything else it computes `z̃` as well.
 
 mod kernel;
 mod simd;
