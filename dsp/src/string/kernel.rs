@@ -48,6 +48,25 @@ macro_rules! paired {
     }};
 }
 
+/// Add chunk `c` of each vector times `z` to its partial sum. (Functions, not closures: a
+/// closure would be compiled outside the target feature.)
+#[inline(always)]
+fn accumulate<L: Lanes, const K: usize>(s: L, acc: &mut [L::V; K], vectors: &[&[Chunk]; K], c: usize, z: L::V) {
+    for k in 0..K {
+        acc[k] = s.add(acc[k], s.mul(s.load(&vectors[k][c]), z));
+    }
+}
+
+/// The dot products from their even and odd partial sums, in the fixed order.
+#[inline(always)]
+fn finish<L: Lanes, const K: usize>(s: L, even: [L::V; K], odd: [L::V; K]) -> [f64; K] {
+    let mut sums = [0.0; K];
+    for k in 0..K {
+        sums[k] = s.sum(s.add(even[k], odd[k]));
+    }
+    sums
+}
+
 /// Pass 1: `zt = b∘up − a∘un`; returns the projections `vectors_kᵀ zt`.
 #[inline]
 pub fn history<const K: usize>(
@@ -82,16 +101,9 @@ pub fn history<const K: usize>(
             paired!(n, even, odd, |c, acc| {
                 let z = s.sub(s.mul(s.load(&b[c]), s.load(&up[c])), s.mul(s.load(&a[c]), s.load(&un[c])));
                 s.store(&mut zts[c], z);
-                for k in 0..K {
-                    acc[k] = s.add(acc[k], s.mul(s.load(&vectors[k][c]), z));
-                }
+                accumulate(s, acc, &vectors, c, z);
             });
-            // Plain loops, not closures: a closure would be compiled outside the target feature.
-            let mut sums = [0.0; K];
-            for k in 0..K {
-                sums[k] = s.sum(s.add(even[k], odd[k]));
-            }
-            sums
+            finish(s, even, odd)
         }
     }
     isa.run(History {
@@ -189,16 +201,9 @@ pub fn projections<const K: usize>(isa: Isa, zt: &[f64], vectors: [&[f64]; K]) -
             }
             let (mut even, mut odd) = ([s.splat(0.0); K], [s.splat(0.0); K]);
             paired!(n, even, odd, |c, acc| {
-                let z = s.load(&zt[c]);
-                for k in 0..K {
-                    acc[k] = s.add(acc[k], s.mul(s.load(&vectors[k][c]), z));
-                }
+                accumulate(s, acc, &vectors, c, s.load(&zt[c]));
             });
-            let mut sums = [0.0; K];
-            for k in 0..K {
-                sums[k] = s.sum(s.add(even[k], odd[k]));
-            }
-            sums
+            finish(s, even, odd)
         }
     }
     isa.run(Projections { zt: chunks(zt), vectors: vectors.map(chunks) })
