@@ -342,7 +342,7 @@ impl SlideCore {
         let state = match self.fingers {
             Fingers::None => {
                 let (t, state) = s.gram([o]);
-                self.theta[0][0] = t[0][0];
+                set_gram(&mut self.theta, &t, [0]);
                 state
             }
             Fingers::Left => {
