@@ -418,46 +418,26 @@ fn retired_hammer_leaves_the_output_unchanged() {
     for kind in [OutputKind::Displacement, OutputKind::Velocity, OutputKind::BridgeForce] {
         let mut params = fig5(3.5);
         params.pickup.kind = kind;
-        let samples = 8820;
-        let check = |name: &str, retire: &mut dyn FnMut(&mut [f64]) -> bool, frames: &[Frame]| {
-            let mut out = vec![0.0; samples];
-            // Uneven calls: retirement is checked on a fixed sample grid, not per call.
-            let retired = out.chunks_mut(37).fold(false, |_, chunk| retire(chunk));
-            assert!(retired, "{name} {kind:?}: the hammer was never retired");
-            for (i, (o, f)) in out.iter().zip(frames).enumerate() {
-                assert!(*o == f.output, "{name} {kind:?}: sample {i}: {o:e} vs {:e}", f.output);
-            }
-        };
-        let string = || ModalString::new(params.string, FS).unwrap();
-        let (frames, _) = run_hammer(&params, FS, qsa(law, 3.5, 6), samples);
-        let mut scene = HammerString::new(string(), &params, qsa(law, 3.5, 6));
-        check(
-            "qsa",
-            &mut |c| {
-                scene.process_output(c);
-                scene.retired()
-            },
-            &frames,
-        );
-        let (frames, _) = run_hammer(&params, FS, NewtonSolver::new(law), samples);
-        let mut scene = HammerString::new(string(), &params, NewtonSolver::new(law));
-        check(
-            "imp",
-            &mut |c| {
-                scene.process_output(c);
-                scene.retired()
-            },
-            &frames,
-        );
-        let (frames, _) = run_hammer(&params, FS, ExplicitSolver::new(law), samples);
-        let mut scene = HammerString::new(string(), &params, ExplicitSolver::new(law));
-        check(
-            "exp",
-            &mut |c| {
-                scene.process_output(c);
-                scene.retired()
-            },
-            &frames,
-        );
+        check_retired_output("qsa", &params, || qsa(law, 3.5, 6));
+        check_retired_output("imp", &params, || NewtonSolver::new(law));
+        check_retired_output("exp", &params, || ExplicitSolver::new(law));
+    }
+}
+
+/// Render 0.2 s of `params` through the real-time path in uneven calls (retirement is checked on
+/// a fixed sample grid, not per call) and through the harness path, with solvers from `solver`:
+/// the hammer must retire and the outputs must be equal, sample for sample.
+fn check_retired_output<S: ContactSolver>(name: &str, params: &HammerStringParams, solver: impl Fn() -> S) {
+    let samples = 8820;
+    let (frames, _) = run_hammer(params, FS, solver(), samples);
+    let mut scene = HammerString::new(ModalString::new(params.string, FS).unwrap(), params, solver());
+    let mut out = vec![0.0; samples];
+    for chunk in out.chunks_mut(37) {
+        scene.process_output(chunk);
+    }
+    let kind = params.pickup.kind;
+    assert!(scene.retired(), "{name} {kind:?}: the hammer was never retired");
+    for (i, (o, f)) in out.iter().zip(&frames).enumerate() {
+        assert!(*o == f.output, "{name} {kind:?}: sample {i}: {o:e} vs {:e}", f.output);
     }
 }
