@@ -27,7 +27,7 @@
 //! so when the hammer moves away with `w^n > √(2H)·ρ_h` the compression stays negative for ever
 //! and every later force is zero. The real-time path ([`HammerCore::process_output`]) checks this
 //! every [`RETIRE_CHECK`] steps (counted from the strike, so the same in any split into calls)
-//! and then steps the string on its own ([`ModalString::free_step`], the same arithmetic with no
+//! and then steps the string on its own ([`ModalString::free_steps`], the same arithmetic with no
 //! force): no contact projection, no solve. The harness path keeps every step whole, so its
 //! frames still carry the compression.
 
@@ -50,6 +50,18 @@ pub enum OutputKind {
     /// Transverse force on the bridge (N): at `x = 0` for the hammer–string scene,
     /// `Σ (Tβ_i + EIβ_i³) ũ_i`; at `x = L` for the slide–string scene.
     BridgeForce,
+}
+
+impl OutputKind {
+    /// The output sample of step n from the pickup's projections `now` of `ũ^n` and `next` of
+    /// `ũ^{n+1}`, with time step `dt` (s): the difference quotient for the velocity, else `now`.
+    #[inline]
+    pub fn sample(self, now: f64, next: f64, dt: f64) -> f64 {
+        match self {
+            OutputKind::Velocity => (next - now) / dt,
+            OutputKind::Displacement | OutputKind::BridgeForce => now,
+        }
+    }
 }
 
 /// Where and what the scene listens to.
@@ -324,10 +336,7 @@ impl HammerCore {
         };
         let w_now = self.hammer.position();
         self.hammer.advance(solution.force);
-        let output = match self.kind {
-            OutputKind::Velocity => (out_next - self.out_now) / self.dt,
-            OutputKind::Displacement | OutputKind::BridgeForce => self.out_now,
-        };
+        let output = self.kind.sample(self.out_now, out_next, self.dt);
         let mut frame = Frame {
             output,
             displacement: w_now,
@@ -375,10 +384,7 @@ impl HammerCore {
         let mut before = self.out_now;
         for o in free {
             let next = *o;
-            *o = match self.kind {
-                OutputKind::Velocity => (next - before) / self.dt,
-                OutputKind::Displacement | OutputKind::BridgeForce => before,
-            };
+            *o = self.kind.sample(before, next, self.dt);
             before = next;
         }
         self.out_now = before;

@@ -434,10 +434,7 @@ impl SlideCore {
         };
         let w_now = self.sho.position();
         let exchanged = self.sho.advance(z_sho, force, &hand);
-        let output = match self.kind {
-            OutputKind::Velocity => (out_next - self.out_now) / self.dt,
-            OutputKind::Displacement | OutputKind::BridgeForce => self.out_now,
-        };
+        let output = self.kind.sample(self.out_now, out_next, self.dt);
         let mut frame = Frame {
             output,
             displacement: w_now,
