@@ -291,9 +291,7 @@ pub fn measure_piano(name: &str, mode: Mode, keys: &[u8], seconds: f64, call: us
         }
     }
     let mean = fastest.iter().map(|c| c.0).sum::<f64>() / fastest.len().max(1) as f64;
-    let (worst_index, &(worst, worst_in_contact)) =
-        fastest.iter().enumerate().skip(1).max_by(|a, b| a.1.0.total_cmp(&b.1.0)).unwrap_or((0, &fastest[0]));
-    let _ = worst_index;
+    let &(worst, worst_in_contact) = fastest.iter().skip(1).max_by(|a, b| a.0.total_cmp(&b.0)).unwrap_or(&fastest[0]);
     let first = fastest[0].0;
     let calls = CallStats {
         call,
