@@ -248,9 +248,10 @@ pub const RUN: usize = 64;
 /// the state kept in registers: `up`, `un` hold `ũ^{n−1}`, `ũ^n` on entry and the last two states
 /// on return (no swap needed), and `outputs[t]` receives `outᵀũ^{n+1+t}`.
 ///
-/// The loops run over groups of up to four chunks, and within a group over the samples: the
-/// four chunks' recursions are independent, so their latencies overlap, and nothing goes
-/// through memory but the per-sample partial sums. Those are added chunk after chunk in the same
+/// The loops run over groups of chunks (as many as the vector registers hold: `Lanes::RESIDENT`,
+/// four with AVX-512, two with AVX), and within a group over the samples: the chunks'
+/// recursions are independent, so their latencies overlap, and nothing goes through memory but
+/// the per-sample partial sums. Those are added chunk after chunk in the same
 /// order as [`free`]'s, so the outputs are bit-identical to it.
 #[inline]
 pub fn free_run(isa: Isa, a: &[f64], b: &[f64], up: &mut [f64], un: &mut [f64], out: &[f64], outputs: &mut [f64]) {
@@ -271,17 +272,18 @@ pub fn free_run(isa: Isa, a: &[f64], b: &[f64], up: &mut [f64], un: &mut [f64], 
             (a[i], b[i], w[i]) = (s.load(&run.a[c]), s.load(&run.b[c]), s.load(&run.out[c]));
             (prev[i], now[i]) = (s.load(&run.up[c]), s.load(&run.un[c]));
         }
-        // `first` is a multiple of four, so chunk `first + i` has the parity of `i`.
+        // Chunk `first + i` adds to the partial sum of its parity, as in `free`.
+        let (p, q) = (first % 2, 1 - first % 2);
         for sum in sums.iter_mut() {
-            let (mut even, mut odd) = (s.load(&sum[0]), s.load(&sum[1]));
-            paired!(G, even, odd, |i, acc| {
+            let (mut same, mut other) = (s.load(&sum[p]), s.load(&sum[q]));
+            paired!(G, same, other, |i, acc| {
                 let z = s.sub(s.mul(b[i], prev[i]), s.mul(a[i], now[i]));
                 let next = s.sub(prev[i], z);
                 *acc = s.add(*acc, s.mul(w[i], next));
                 (prev[i], now[i]) = (now[i], next);
             });
-            s.store(&mut sum[0], even);
-            s.store(&mut sum[1], odd);
+            s.store(&mut sum[p], same);
+            s.store(&mut sum[q], other);
         }
         for i in 0..G {
             s.store(&mut run.up[first + i], prev[i]);
@@ -297,9 +299,15 @@ pub fn free_run(isa: Isa, a: &[f64], b: &[f64], up: &mut [f64], un: &mut [f64], 
             let sums = &mut sums[..steps];
             let n = self.up.len().min(self.un.len()).min(self.a.len()).min(self.b.len()).min(self.out.len());
             let mut first = 0;
-            while first + 4 <= n {
-                group::<L, 4>(s, &mut self, first, sums);
-                first += 4;
+            let whole = L::RESIDENT.clamp(1, 4);
+            while first + whole <= n {
+                match whole {
+                    4 => group::<L, 4>(s, &mut self, first, sums),
+                    3 => group::<L, 3>(s, &mut self, first, sums),
+                    2 => group::<L, 2>(s, &mut self, first, sums),
+                    _ => group::<L, 1>(s, &mut self, first, sums),
+                }
+                first += whole;
             }
             match n - first {
                 3 => group::<L, 3>(s, &mut self, first, sums),
@@ -528,9 +536,10 @@ pub fn sines(isa: Isa, sin: f64, cos: f64, out: &mut [f64]) {
 /// product and sum), for roofline estimates.
 pub const FREE_STEP_FLOPS: f64 = 6.0;
 
-/// A measure of the vector unit's peak: `iterations` steps of 16 independent chains
+/// A measure of the vector unit's peak: `iterations` steps of `Lanes::CHAINS` independent chains
 /// `x ← x·m + c` (a multiply and an add, as in the string's loops, never fused) on chunks of
-/// [`LANES`], so `iterations · 16 · LANES · 2` flops. Returns a checksum to keep the work.
+/// [`LANES`]. Returns the flops done, `iterations · CHAINS · LANES · 2`; the result of the chains
+/// goes through [`std::hint::black_box`] so the work is kept.
 pub fn peak_probe(isa: Isa, iterations: usize) -> f64 {
     struct Probe(usize);
     impl Kernel for Probe {
@@ -539,19 +548,21 @@ pub fn peak_probe(isa: Isa, iterations: usize) -> f64 {
         fn run<L: Lanes>(self, s: L) -> f64 {
             let (m, c) = (s.splat(0.999_999), s.splat(1e-9));
             let mut x = [s.splat(1.0); 16];
-            for j in 0..16 {
-                x[j] = s.splat(1.0 + j as f64 * 1e-3);
+            let chains = L::CHAINS.min(x.len());
+            for (j, v) in x.iter_mut().enumerate() {
+                *v = s.splat(1.0 + j as f64 * 1e-3);
             }
             for _ in 0..self.0 {
-                for v in &mut x {
+                for v in &mut x[..chains] {
                     *v = s.add(s.mul(*v, m), c);
                 }
             }
             let mut sum = 0.0;
-            for v in x {
-                sum += s.sum(v);
+            for v in &x[..chains] {
+                sum += s.sum(*v);
             }
-            sum
+            std::hint::black_box(sum);
+            (self.0 * chains * LANES * 2) as f64
         }
     }
     isa.run(Probe(iterations))

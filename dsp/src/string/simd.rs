@@ -32,6 +32,14 @@ pub fn lane_sum(acc: Chunk) -> f64 {
 pub trait Lanes: Copy {
     /// A chunk in registers.
     type V: Copy;
+    /// Chunks a register-resident loop keeps in registers, each with two states and three
+    /// coefficients (`kernel::free_run`): four with 32 registers of a chunk (AVX-512), two with
+    /// 16 registers of half a chunk (AVX), one otherwise. More would spill to the stack.
+    const RESIDENT: usize;
+    /// Independent chunk-wide multiply–add chains that fill the vector unit without spilling
+    /// (`kernel::peak_probe`): enough to hide the latency of a multiply and an add on every
+    /// arithmetic port.
+    const CHAINS: usize;
     /// Load a chunk.
     fn load(self, x: &Chunk) -> Self::V;
     /// Store a chunk.
@@ -121,6 +129,8 @@ pub struct Portable;
 
 impl Lanes for Portable {
     type V = Chunk;
+    const RESIDENT: usize = 1;
+    const CHAINS: usize = 3;
 
     #[inline(always)]
     fn load(self, x: &Chunk) -> Chunk {
@@ -187,6 +197,8 @@ mod x86 {
     // AVX-512F; pointers come from references to whole chunks of eight `f64`.
     impl Lanes for Avx512 {
         type V = __m512d;
+        const RESIDENT: usize = 4;
+        const CHAINS: usize = 16;
 
         #[inline(always)]
         fn load(self, x: &Chunk) -> __m512d {
@@ -227,6 +239,8 @@ mod x86 {
     // AVX; pointers come from references to whole chunks of eight `f64` (two halves of four).
     impl Lanes for Avx {
         type V = (__m256d, __m256d);
+        const RESIDENT: usize = 4;
+        const CHAINS: usize = 6;
 
         #[inline(always)]
         fn load(self, x: &Chunk) -> Self::V {
