@@ -40,6 +40,8 @@ pub trait Lanes: Copy {
     /// (`kernel::peak_probe`): enough to hide the latency of a multiply and an add on every
     /// arithmetic port.
     const CHAINS: usize;
+    /// Chunks the vector register file holds.
+    const REGISTERS: usize;
     /// Load a chunk.
     fn load(self, x: &Chunk) -> Self::V;
     /// Store a chunk.
@@ -131,6 +133,7 @@ impl Lanes for Portable {
     type V = Chunk;
     const RESIDENT: usize = 1;
     const CHAINS: usize = 3;
+    const REGISTERS: usize = 4;
 
     #[inline(always)]
     fn load(self, x: &Chunk) -> Chunk {
@@ -199,6 +202,7 @@ mod x86 {
         type V = __m512d;
         const RESIDENT: usize = 4;
         const CHAINS: usize = 16;
+        const REGISTERS: usize = 32;
 
         #[inline(always)]
         fn load(self, x: &Chunk) -> __m512d {
@@ -239,8 +243,9 @@ mod x86 {
     // AVX; pointers come from references to whole chunks of eight `f64` (two halves of four).
     impl Lanes for Avx {
         type V = (__m256d, __m256d);
-        const RESIDENT: usize = 4;
+        const RESIDENT: usize = 2;
         const CHAINS: usize = 6;
+        const REGISTERS: usize = 8;
 
         #[inline(always)]
         fn load(self, x: &Chunk) -> Self::V {
