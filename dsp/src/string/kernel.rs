@@ -34,20 +34,17 @@ macro_rules! paired {
             paired!($n, $acc0, $acc1, |$c, $acc| $body)
         } else {
             let n = $n;
-            let mut next = 0;
-            while next < n {
-                let $c = next;
-                let $acc = &mut $acc0;
-                $body
-                next += 2;
-            }
-            let mut next = 1;
-            while next < n {
-                let $c = next;
-                let $acc = &mut $acc1;
-                $body
-                next += 2;
-            }
+            paired!(@sweep n, 0, $acc0, |$c, $acc| $body);
+            paired!(@sweep n, 1, $acc1, |$c, $acc| $body);
+        }
+    }};
+    (@sweep $n:expr, $first:expr, $into:ident, |$c:ident, $acc:ident| $body:block) => {{
+        let mut next = $first;
+        while next < $n {
+            let $c = next;
+            let $acc = &mut $into;
+            $body
+            next += 2;
         }
     }};
     ($n:expr, $acc0:ident, $acc1:ident, |$c:ident, $acc:ident| $body:block) => {{
