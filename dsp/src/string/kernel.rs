@@ -329,20 +329,15 @@ pub fn free_run(isa: Isa, a: &[f64], b: &[f64], up: &mut [f64], un: &mut [f64], 
             let n = self.up.len().min(self.un.len()).min(self.a.len()).min(self.b.len()).min(self.out.len());
             let mut first = 0;
             let whole = L::RESIDENT.clamp(1, 4);
-            while first + whole <= n {
-                match whole {
+            while first < n {
+                let size = whole.min(n - first);
+                match size {
                     4 => group::<L, 4>(s, &mut self, first, sums),
                     3 => group::<L, 3>(s, &mut self, first, sums),
                     2 => group::<L, 2>(s, &mut self, first, sums),
                     _ => group::<L, 1>(s, &mut self, first, sums),
                 }
-                first += whole;
-            }
-            match n - first {
-                3 => group::<L, 3>(s, &mut self, first, sums),
-                2 => group::<L, 2>(s, &mut self, first, sums),
-                1 => group::<L, 1>(s, &mut self, first, sums),
-                _ => {}
+                first += size;
             }
             for (o, sum) in self.outputs.iter_mut().zip(sums.iter()) {
                 *o = s.sum(s.add(s.load(&sum[0]), s.load(&sum[1])));
