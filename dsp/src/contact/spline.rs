@@ -166,8 +166,12 @@ impl QuadSpline {
     #[inline]
     pub fn segment_of(&self, y: f64) -> usize {
         if y > 0.0 {
-            // The float-to-int cast saturates, so huge y lands in segment N.
-            ((y / self.dy).ceil() as usize).clamp(1, self.segments)
+            // ⌈x⌉ without `f64::ceil` (a libm call on baseline x86-64): the cast truncates (and
+            // saturates, so huge y lands in segment N) and is exact wherever x has a fraction.
+            let x = y / self.dy;
+            let below = x as usize;
+            let up = if (below as f64) < x { below.saturating_add(1) } else { below };
+            up.clamp(1, self.segments)
         } else {
             0
         }
@@ -223,6 +227,29 @@ mod tests {
         }
         assert_eq!(s.potential(-1e-3), 0.0);
         assert_eq!(s.segment_of(1.0), 7, "compression past y_N stays in the last segment");
+    }
+
+    /// The segment is `min(⌈y/Δy⌉, N)` (at least 1) for every positive y: on knots (which belong to
+    /// the lower segment), one ulp either side of them, tiny, huge and infinite; 0 otherwise.
+    #[test]
+    fn segment_of_is_the_ceiling_of_y_over_dy() {
+        let law = PowerLaw::new(4.5e9, 2.5).unwrap();
+        let s = QuadSpline::new(law, 7.9e-4, 7).unwrap();
+        let dy = s.knot(1);
+        let want = |y: f64| if y > 0.0 { ((y / dy).ceil() as usize).clamp(1, 7) } else { 0 };
+        let mut ys = vec![0.0, -0.0, -1.0, f64::NAN, f64::INFINITY, f64::MAX, f64::MIN_POSITIVE, 5e-324, 1e3];
+        for j in 0..=8 {
+            let y = j as f64 * dy;
+            ys.extend([
+                y,
+                f64::from_bits(y.to_bits() + 1),
+                f64::from_bits(y.to_bits().saturating_sub(1)),
+                y + 0.5 * dy,
+            ]);
+        }
+        for y in ys {
+            assert_eq!(s.segment_of(y), want(y), "y = {y:e}");
+        }
     }
 
     #[test]
