@@ -9,7 +9,9 @@
 //!
 //! `q = hᵀCh + ξ_h` (m/N) is constant while the striking point is fixed, so it is computed once.
 //! After the solve the string takes `C∘h·F` and the hammer `−F`. A strike has no fingers, no slide
-//! and no time-varying vectors: the per-sample loop is two passes over the modes and one solve.
+//! and no time-varying vectors: the per-sample loop is one pass over the modes (the string update,
+//! which also projects the next step's `z̃` on `h`: [`ModalString::advance_projecting`]) and one
+//! solve.
 //!
 //! Energy (physics §6.3): `H^{n+1/2}` = string + `½ m_h ((w^{n+1} − w^n)/Δt)²` + the solver's
 //! contact term; `H^{n+1/2} − H^{n−1/2} = −Δt (δ_t·ũ)ᵀ R̂ (δ_t·ũ)` exactly.
@@ -176,6 +178,8 @@ pub struct HammerCore {
     losses: f64,
     /// Contact force of the latest step (N).
     last_force: f64,
+    /// `hᵀz̃` of the coming step when the last step's string pass already projected it.
+    next_hz: Option<f64>,
     dt: f64,
 }
 
@@ -199,6 +203,7 @@ impl HammerCore {
             out_now: 0.0,
             losses: 0.0,
             last_force: 0.0,
+            next_hz: None,
             dt: 1.0 / fs,
             string,
             hammer,
@@ -244,6 +249,7 @@ impl HammerCore {
         self.out_now = self.string.project_state(&self.pickup).1;
         self.retired = false;
         self.since_check = 0;
+        self.next_hz = None;
     }
 
     /// Whether the hammer moves away and is beyond the reach of the string's energy: then no
@@ -297,6 +303,7 @@ impl HammerCore {
 
     /// The string, to damp it.
     pub fn string_mut(&mut self) -> &mut ModalString {
+        self.next_hz = None;
         &mut self.string
     }
 
@@ -322,7 +329,10 @@ impl HammerCore {
     /// One step with `solver`.
     #[inline]
     pub fn step<S: ContactSolver, const MONITOR: bool>(&mut self, solver: &mut S) -> Frame {
-        let [hz] = self.string.history([&self.shape]);
+        let hz = match self.next_hz.take() {
+            Some(hz) => hz,
+            None => self.string.history([&self.shape])[0],
+        };
         let z_h = self.hammer.history();
         let problem = ContactProblem { y_prev: self.y_prev, y_now: self.y_now, z: hz - z_h, q: self.q };
         let solution = solver.solve(&problem);
@@ -332,7 +342,9 @@ impl HammerCore {
         let (out_next, string_energy) = if MONITOR {
             self.string.advance_monitored(forces, &self.pickup)
         } else {
-            (self.string.advance(forces, &self.pickup), Default::default())
+            let (out_next, next) = self.string.advance_projecting(forces, &self.pickup, [&self.shape]);
+            self.next_hz = next.map(|[hz]| hz);
+            (out_next, Default::default())
         };
         let w_now = self.hammer.position();
         self.hammer.advance(solution.force);

@@ -9,12 +9,14 @@
 
 use super::simd::{Chunk, Isa, Kernel, LANES, Lanes, lane_sum};
 
+#[inline(always)]
 fn chunks(x: &[f64]) -> &[Chunk] {
     let (chunks, rest) = x.as_chunks::<LANES>();
     debug_assert!(rest.is_empty(), "per-mode arrays hold whole chunks");
     chunks
 }
 
+#[inline(always)]
 fn chunks_mut(x: &mut [f64]) -> &mut [Chunk] {
     let (chunks, rest) = x.as_chunks_mut::<LANES>();
     debug_assert!(rest.is_empty(), "per-mode arrays hold whole chunks");
@@ -146,11 +148,12 @@ pub fn history<const K: usize>(
 }
 
 /// Pass 2: `up = up − zt + Σ_k g_k F_k`; returns `outᵀ up`. In the same pass, the next step's
-/// pass 1 without its projections: `zt = b∘un − a∘up` with the new `up` (the state moves on by a
-/// swap, so this is exactly what [`history`] would compute next), for [`projections`].
+/// pass 1: `zt = b∘un − a∘up` with the new `up` (the state moves on by a swap, so this is exactly
+/// what [`history`] would compute next), and its projections on the `J` vectors `next` (the sums
+/// [`history`] and [`projections`] return for the same `zt`, bit for bit).
 #[inline]
 #[allow(clippy::too_many_arguments)]
-pub fn advance<const K: usize>(
+pub fn advance<const K: usize, const J: usize>(
     isa: Isa,
     a: &[f64],
     b: &[f64],
@@ -159,8 +162,9 @@ pub fn advance<const K: usize>(
     zt: &mut [f64],
     forces: [(&[f64], f64); K],
     out: &[f64],
-) -> f64 {
-    struct Advance<'a, const K: usize> {
+    next: [&[f64]; J],
+) -> (f64, [f64; J]) {
+    struct Advance<'a, const K: usize, const J: usize> {
         a: &'a [Chunk],
         b: &'a [Chunk],
         up: &'a mut [Chunk],
@@ -169,11 +173,12 @@ pub fn advance<const K: usize>(
         gains: [&'a [Chunk]; K],
         forces: [f64; K],
         out: &'a [Chunk],
+        next: [&'a [Chunk]; J],
     }
-    impl<const K: usize> Kernel for Advance<'_, K> {
-        type Output = f64;
+    impl<const K: usize, const J: usize> Kernel for Advance<'_, K, J> {
+        type Output = (f64, [f64; J]);
         #[inline(always)]
-        fn run<L: Lanes>(self, s: L) -> f64 {
+        fn run<L: Lanes>(self, s: L) -> (f64, [f64; J]) {
             let n = self.up.len();
             let (a, b, un, out) = (&self.a[..n], &self.b[..n], &self.un[..n], &self.out[..n]);
             let zts = &mut self.zt[..n];
@@ -183,19 +188,26 @@ pub fn advance<const K: usize>(
                 gains[k] = &gains[k][..n];
                 forces[k] = s.splat(self.forces[k]);
             }
+            let mut next_vectors = self.next;
+            for v in &mut next_vectors {
+                *v = &v[..n];
+            }
             let ups = self.up;
-            let (mut even, mut odd) = (s.splat(0.0), s.splat(0.0));
+            let zero = s.splat(0.0);
+            // (output sum, projections of the next zt) for the even and the odd chunks.
+            let (mut even, mut odd) = ((zero, [zero; J]), (zero, [zero; J]));
             paired!(n, even, odd, |c, acc| {
                 let mut next = s.sub(s.load(&ups[c]), s.load(&zts[c]));
                 for k in 0..K {
                     next = s.add(next, s.mul(s.load(&gains[k][c]), forces[k]));
                 }
                 s.store(&mut ups[c], next);
-                *acc = s.add(*acc, s.mul(s.load(&out[c]), next));
+                acc.0 = s.add(acc.0, s.mul(s.load(&out[c]), next));
                 let z = s.sub(s.mul(s.load(&b[c]), s.load(&un[c])), s.mul(s.load(&a[c]), next));
                 s.store(&mut zts[c], z);
+                accumulate(s, &mut acc.1, &next_vectors, c, z);
             });
-            s.sum(s.add(even, odd))
+            (s.sum(s.add(even.0, odd.0)), finish(s, even.1, odd.1))
         }
     }
     isa.run(Advance {
@@ -207,6 +219,7 @@ pub fn advance<const K: usize>(
         gains: forces.map(|(g, _)| chunks(g)),
         forces: forces.map(|(_, f)| f),
         out: chunks(out),
+        next: next.map(chunks),
     })
 }
 
@@ -649,8 +662,7 @@ mod tests {
         let run = |isa: Isa| {
             let (mut up, mut zt) = (up0.clone(), vec![0.0; n]);
             let h = history(isa, &a, &b, &up, &un, &mut zt, [&v0, &v1]);
-            let o = advance(isa, &a, &b, &mut up, &un, &mut zt, [(&g0, 0.3), (&g1, -1.7)], &out);
-            let p = projections(isa, &zt, [&v0, &v1]);
+            let (o, p) = advance(isa, &a, &b, &mut up, &un, &mut zt, [(&g0, 0.3), (&g1, -1.7)], &out, [&v0, &v1]);
             let mut free_up = up0.clone();
             let f = free(isa, &a, &b, &mut free_up, &un, &out);
             let mut shapes = vec![0.0; n];
@@ -671,29 +683,32 @@ mod tests {
         let [a, b, up0, un, out] = [10, 11, 12, 13, 14].map(|s| data(n, s));
         let (mut up, mut zt) = (up0.clone(), vec![0.0; n]);
         history::<0>(Isa::detect(), &a, &b, &up, &un, &mut zt, []);
-        let o = advance::<0>(Isa::detect(), &a, &b, &mut up, &un, &mut zt, [], &out);
+        let (o, []) = advance::<0, 0>(Isa::detect(), &a, &b, &mut up, &un, &mut zt, [], &out, []);
         let mut free_up = up0;
         let f = free(Isa::detect(), &a, &b, &mut free_up, &un, &out);
         assert_eq!(o.to_bits(), f.to_bits());
         assert_eq!(up, free_up);
     }
 
-    /// The next step's `z̃` that `advance` leaves behind, and its projections, are those of a
-    /// separate first pass.
+    /// The next step's `z̃` that `advance` leaves behind, and its projections (made in the same
+    /// pass or after it), are those of a separate first pass.
     #[test]
     fn advance_leaves_the_next_history() {
-        let n = 5 * LANES;
-        let [a, b, up0, un, v0, v1, g0] = [30, 31, 32, 33, 34, 35, 36].map(|s| data(n, s));
-        for isa in Isa::available() {
-            let (mut up, mut zt) = (up0.clone(), vec![0.0; n]);
-            history(isa, &a, &b, &up, &un, &mut zt, [&v0]);
-            advance(isa, &a, &b, &mut up, &un, &mut zt, [(&g0, 0.7)], &data(n, 37));
-            let got = projections(isa, &zt, [&v0, &v1]);
-            // The state moves on: ũ^n becomes ũ^{n−1}, the new state ũ^{n+1}.
-            let mut want_zt = vec![0.0; n];
-            let want = history(isa, &a, &b, &un, &up, &mut want_zt, [&v0, &v1]);
-            assert_eq!(zt, want_zt, "{isa:?}");
-            assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "{isa:?}");
+        for chunks in [1, 5, 6] {
+            let n = chunks * LANES;
+            let [a, b, up0, un, v0, v1, g0] = [30, 31, 32, 33, 34, 35, 36].map(|s| data(n, s));
+            for isa in Isa::available() {
+                let (mut up, mut zt) = (up0.clone(), vec![0.0; n]);
+                history(isa, &a, &b, &up, &un, &mut zt, [&v0]);
+                let (_, fused) = advance(isa, &a, &b, &mut up, &un, &mut zt, [(&g0, 0.7)], &data(n, 37), [&v1, &v0]);
+                let after = projections(isa, &zt, [&v0, &v1]);
+                // The state moves on: ũ^n becomes ũ^{n−1}, the new state ũ^{n+1}.
+                let mut want_zt = vec![0.0; n];
+                let want = history(isa, &a, &b, &un, &up, &mut want_zt, [&v0, &v1]);
+                assert_eq!(zt, want_zt, "{isa:?}");
+                assert_eq!(after.map(f64::to_bits), want.map(f64::to_bits), "{isa:?}");
+                assert_eq!([fused[1], fused[0]].map(f64::to_bits), want.map(f64::to_bits), "{isa:?}, {chunks} chunks");
+            }
         }
     }
 

@@ -553,12 +553,27 @@ impl ModalString {
     /// step's `z̃`, so that the next [`history`](Self::history) only projects it.
     #[inline]
     pub fn advance<const K: usize>(&mut self, forces: [(&[f64], f64); K], output: &[f64]) -> f64 {
+        self.advance_projecting(forces, output, []).0
+    }
+
+    /// [`advance`](Self::advance), also projecting the next step's `z̃` on the `J` vectors `next`
+    /// in the same pass: the second value is what [`history(next)`](Self::history) would return
+    /// next, bit for bit, so a caller whose vectors stay put can skip that pass. It is `None`
+    /// when this step flushed tiny amplitudes (the new `z̃` is then recomputed from the flushed
+    /// state by the next `history`).
+    #[inline]
+    pub fn advance_projecting<const K: usize, const J: usize>(
+        &mut self,
+        forces: [(&[f64], f64); K],
+        output: &[f64],
+        next: [&[f64]; J],
+    ) -> (f64, Option<[f64; J]>) {
         debug_assert!(self.history_ready, "advance follows history");
         let (a, b) = (&self.coef_a, &self.coef_b);
-        let projection =
-            kernel::advance(self.isa, a, b, &mut self.u_prev, &self.u_now, &mut self.history, forces, output);
+        let (projection, next) =
+            kernel::advance(self.isa, a, b, &mut self.u_prev, &self.u_now, &mut self.history, forces, output, next);
         self.finish_step();
-        projection
+        (projection, self.history_ready.then_some(next))
     }
 
     /// A whole step with no force on the string, [`history`](Self::history) and
