@@ -411,7 +411,13 @@ fn bad_string_scenes_are_errors_naming_the_key() {
 
 /// The real-time path retires the hammer once the string's energy can no longer reach it
 /// (`scene::hammer_string` module docs) and then steps the string alone: its output must equal
-/// the harness path's, which never retires, sample for sample, for every solver and output kind.
+/// the harness path's, which never retires, for every solver and output kind, up to rounding.
+/// The two paths compute the same free recursion in two forms that differ by a few ulps per mode
+/// and step (`string::kernel::free`); in a stable, lightly damped recursion such errors add up
+/// at most linearly, so after the N = 8,820 steps of the run they stay below `N·12ε ≈ 1.2e-11` of
+/// the state's scale, and the velocity's difference quotient multiplies that by at most
+/// `2fs/ω_1 ≈ 54`. The bound is 1e-9 of the output's peak; a wrong free step misses it by orders
+/// of magnitude.
 #[test]
 fn retired_hammer_leaves_the_output_unchanged() {
     let law = fig5_law();
@@ -426,7 +432,7 @@ fn retired_hammer_leaves_the_output_unchanged() {
 
 /// Render 0.2 s of `params` through the real-time path in uneven calls (retirement is checked on
 /// a fixed sample grid, not per call) and through the harness path, with solvers from `solver`:
-/// the hammer must retire and the outputs must be equal, sample for sample.
+/// the hammer must retire and the outputs must agree to 1e-9 of their peak, sample for sample.
 fn check_retired_output<S: ContactSolver>(name: &str, params: &HammerStringParams, solver: impl Fn() -> S) {
     let samples = 8820;
     let (frames, _) = run_hammer(params, FS, solver(), samples);
@@ -437,7 +443,7 @@ fn check_retired_output<S: ContactSolver>(name: &str, params: &HammerStringParam
     }
     let kind = params.pickup.kind;
     assert!(scene.retired(), "{name} {kind:?}: the hammer was never retired");
-    for (i, (o, f)) in out.iter().zip(&frames).enumerate() {
-        assert!(*o == f.output, "{name} {kind:?}: sample {i}: {o:e} vs {:e}", f.output);
-    }
+    let peak = frames.iter().map(|f| f.output.abs()).fold(0.0, f64::max);
+    let worst = out.iter().zip(&frames).map(|(o, f)| (o - f.output).abs()).fold(0.0, f64::max);
+    assert!(worst <= 1e-9 * peak, "{name} {kind:?}: outputs differ by {:.2e} of the peak", worst / peak);
 }

@@ -29,9 +29,11 @@
 //! so when the hammer moves away with `w^n > √(2H)·ρ_h` the compression stays negative for ever
 //! and every later force is zero. The real-time path ([`HammerCore::process_output`]) checks this
 //! every [`RETIRE_CHECK`] steps (counted from the strike, so the same in any split into calls)
-//! and then steps the string on its own ([`ModalString::free_steps`], the same arithmetic with no
-//! force): no contact projection, no solve. The harness path keeps every step whole, so its
-//! frames still carry the compression.
+//! and then steps the string on its own ([`ModalString::free_steps`], the homogeneous recursion
+//! `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}`): no contact projection, no solve. The harness path keeps
+//! every step whole (`ũ^{n−1} − z̃` with a zero force, the same recursion rounded differently),
+//! so its frames still carry the compression, and its output agrees with the real-time path's to
+//! rounding.
 
 use crate::contact::{ContactProblem, ContactSolver};
 use crate::exciter::{Hammer, HammerParams};

@@ -576,9 +576,10 @@ impl ModalString {
         (projection, self.history_ready.then_some(next))
     }
 
-    /// A whole step with no force on the string, [`history`](Self::history) and
-    /// [`advance`](Self::advance) in one pass with the same arithmetic: `ũ^{n+1} = ũ^{n−1} − z̃`.
-    /// Returns `outputᵀ ũ^{n+1}`.
+    /// A whole step with no force on the string in one pass, by the homogeneous recursion
+    /// `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}` with the coefficients of [`history`](Self::history) and
+    /// [`advance`](Self::advance) (which compute `ũ^{n−1} − z̃`, the same recursion rounded
+    /// differently: a few ulps per step). Returns `outputᵀ ũ^{n+1}`.
     #[inline]
     pub fn free_step(&mut self, output: &[f64]) -> f64 {
         let projection = kernel::free(self.isa, &self.coef_a, &self.coef_b, &mut self.u_prev, &self.u_now, output);
