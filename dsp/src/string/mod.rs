@@ -278,6 +278,15 @@ pub struct ModalString {
     isa: Isa,
 }
 
+/// Set the amplitudes below [`FLUSH_BELOW`] (m) to zero. Written as a select, not a branch, so
+/// it compiles to a few vector instructions per chunk instead of a mispredicted branch per mode.
+#[inline]
+fn flush_tiny(u: &mut [f64]) {
+    for u in u {
+        *u = if u.abs() < FLUSH_BELOW { 0.0 } else { *u };
+    }
+}
+
 /// Energy terms of one string step (J), returned by [`ModalString::advance_monitored`].
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StringEnergy {
@@ -663,11 +672,8 @@ impl ModalString {
         if self.since_flush == FLUSH_INTERVAL {
             self.since_flush = 0;
             self.history_ready = false;
-            for u in self.u_prev.iter_mut().chain(self.u_now.iter_mut()) {
-                if u.abs() < FLUSH_BELOW {
-                    *u = 0.0;
-                }
-            }
+            flush_tiny(&mut self.u_prev);
+            flush_tiny(&mut self.u_now);
         }
     }
 
@@ -739,6 +745,31 @@ mod tests {
         for (i, (&got, &beta)) in shapes.iter().zip(s.wavenumbers()).enumerate() {
             assert!((got - (beta * x).sin()).abs() < 1e-12, "mode {}", i + 1);
         }
+    }
+
+    /// A decaying string never holds a subnormal amplitude: every [`FLUSH_INTERVAL`] steps the
+    /// amplitudes below [`FLUSH_BELOW`] become exact zeros and the others are left alone, so the
+    /// string comes to rest. With η0 = 2000/s, 1e-3 m falls below 1e-30 m in about 0.03 s (1,400
+    /// steps at 44.1 kHz; without the flush it would still be about 1e-129 m after the 6,400 steps
+    /// here), and no amplitude is anywhere near the threshold in the first 500 steps.
+    #[test]
+    fn tiny_amplitudes_are_flushed_to_zero() {
+        let mut p = c4();
+        p.damping = Damping::Viscous { eta0: 2000.0, eta2: 0.0 };
+        let mut s = ModalString::new(p, 44100.0).unwrap();
+        let start: Vec<f64> = (0..s.modes()).map(|i| 1e-3 / (i + 1) as f64).collect();
+        s.set_state(&start, &start);
+        let pickup = s.vector();
+        let mut out = [0.0; 37];
+        for call in 0..173 {
+            s.free_steps(&pickup, &mut out);
+            let steps = (call + 1) * out.len();
+            for &u in s.state().iter().chain(s.previous_state()) {
+                assert!(!u.is_subnormal(), "step {steps}: subnormal {u:e}");
+                assert!(steps > 500 || u != 0.0, "step {steps}: an audible amplitude was flushed");
+            }
+        }
+        assert!(s.state().iter().chain(s.previous_state()).all(|u| *u == 0.0), "the string comes to rest");
     }
 
     #[test]
