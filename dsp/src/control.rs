@@ -102,6 +102,10 @@ impl Breakpoints {
             return p[i - 1].1;
         }
         let ((t0, v0), (t1, v1)) = (p[i - 1], p[i]);
+        if v0 == v1 {
+            // What the line below gives for a flat segment (`t0 ≤ t`), without its division.
+            return v0 + 0.0;
+        }
         v0 + (v1 - v0) * (t - t0) / (t1 - t0)
     }
 }
@@ -153,7 +157,9 @@ impl Ramp {
     /// sample) over `len` samples.
     #[inline]
     pub fn new(from: f64, to: f64, len: usize) -> Self {
-        Self { start: from, slope: (to - from) / len as f64 }
+        // A one-sample block (N_b = 1, every sample) needs no division: `x / 1 = x` exactly.
+        let rise = to - from;
+        Self { start: from, slope: if len == 1 { rise } else { rise / len as f64 } }
     }
 
     /// Value at sample `k` of the block (`k = len` gives the end value).
@@ -178,6 +184,26 @@ mod tests {
         assert_eq!(b.at(1.0), 2.0);
         assert_eq!(b.at(9.0), 3.0);
         assert_eq!(b.range(), (1.0, 3.0));
+    }
+
+    /// The shortcuts (a flat segment, a one-sample ramp) give the general formulas' bits.
+    #[test]
+    fn shortcuts_give_the_general_formulas_bits() {
+        let general = |(t0, v0): (f64, f64), (t1, v1): (f64, f64), t: f64| v0 + (v1 - v0) * (t - t0) / (t1 - t0);
+        for v in [-1.5e-3, 0.3, 0.0, -0.0, 1e300] {
+            let b = Breakpoints::new(vec![(0.0, 7.0), (0.25, v), (2.45, v), (3.0, 1.0)]).unwrap();
+            let mut cursor = 0;
+            for t in [0.25, 0.26, 1.0, 2.449] {
+                let want = general((0.25, v), (2.45, v), t);
+                assert_eq!(b.at(t).to_bits(), want.to_bits(), "v = {v}, t = {t}");
+                assert_eq!(b.at_cursor(t, &mut cursor).to_bits(), want.to_bits(), "v = {v}, t = {t}");
+            }
+        }
+        for (from, to) in [(0.1, 0.3), (-1.5e-3, 3e-3), (0.2, 0.2)] {
+            let ramp = Ramp::new(from, to, 1);
+            assert_eq!(ramp.at(1).to_bits(), (from + (to - from) / 1.0 * 1.0).to_bits());
+            assert_eq!(ramp.at(0), from);
+        }
     }
 
     #[test]
