@@ -364,6 +364,35 @@ fn renders_are_block_size_invariant() {
     }
 }
 
+/// The real-time path (`render_output`: output only, no frames, no energy bookkeeping) gives the
+/// harness path's output bit for bit,
+/// over the whole slide phrase (attach, plucks with both fingers, glissando, vibrato, rattle,
+/// lift-off) at N_b = 1, 8 and 64, in calls of 64 and 37 samples; and with the left finger
+/// lifted and put down again where it was (the touching fingers change while no vector moves).
+#[test]
+fn slide_real_time_path_matches_the_harness() {
+    let phrase = scene_file("slide-phrase.toml");
+    let left_force = "points = [[0.0, 0.0], [0.2, 0.0], [0.25, 0.3], [2.9, 0.3], [3.0, 0.0]]";
+    let retouch = phrase.replace(
+        left_force,
+        "points = [[0.0, 0.0], [0.2, 0.0], [0.25, 0.3], [2.9, 0.3], [3.0, 0.0], [3.3, 0.0], [3.35, 0.3]]",
+    );
+    assert_ne!(retouch, phrase, "the edit must apply");
+    for (text, block) in [(&phrase, 1), (&phrase, 8), (&phrase, 64), (&retouch, 1), (&retouch, 64)] {
+        let mut scene = parse_scene(text).unwrap();
+        if let SceneDescription::SlideString(d) = &mut scene {
+            d.params.block = block;
+        }
+        let frames = render(&scene, std::iter::empty()).unwrap().frames;
+        for chunk in [64, 37] {
+            let (out, _) = qsa_dsp::render::render_output(&scene, chunk).unwrap();
+            assert_eq!(out.len(), frames.len());
+            let first = out.iter().zip(&frames).position(|(o, f)| o.to_bits() != f.output.to_bits());
+            assert_eq!(first, None, "N_b = {block}, calls of {chunk}: first differing sample");
+        }
+    }
+}
+
 /// Bad input names its key: positions outside (0, L), a negative mass, unknown automation
 /// targets, breakpoints not increasing in time.
 #[test]
