@@ -392,6 +392,34 @@ pub fn dot(isa: Isa, x: &[f64], y: &[f64]) -> f64 {
     isa.run(Dot { x: chunks(x), y: chunks(y) })
 }
 
+/// `(Σ (un − up)², Σ k (un + up)²)` over whole chunks, for the string's energy.
+#[inline]
+pub fn energy_sums(isa: Isa, up: &[f64], un: &[f64], k: &[f64]) -> (f64, f64) {
+    struct EnergySums<'a> {
+        up: &'a [Chunk],
+        un: &'a [Chunk],
+        k: &'a [Chunk],
+    }
+    impl Kernel for EnergySums<'_> {
+        type Output = (f64, f64);
+        #[inline(always)]
+        fn run<L: Lanes>(self, s: L) -> (f64, f64) {
+            let n = self.up.len().min(self.un.len()).min(self.k.len());
+            let (up, un, k) = (&self.up[..n], &self.un[..n], &self.k[..n]);
+            let zero = s.splat(0.0);
+            let (mut even, mut odd) = ([zero; 2], [zero; 2]);
+            paired!(n, even, odd, |c, acc| {
+                let (p, q) = (s.load(&up[c]), s.load(&un[c]));
+                let (step, sum) = (s.sub(q, p), s.add(q, p));
+                acc[0] = s.add(acc[0], s.mul(step, step));
+                acc[1] = s.add(acc[1], s.mul(s.load(&k[c]), s.mul(sum, sum)));
+            });
+            (s.sum(s.add(even[0], odd[0])), s.sum(s.add(even[1], odd[1])))
+        }
+    }
+    isa.run(EnergySums { up: chunks(up), un: chunks(un), k: chunks(k) })
+}
+
 /// One contact vector of [`gram`]. If `fresh`, `shape` holds bare mode shapes on entry: they are
 /// multiplied by `window` (if any) and written back, and `gain = c∘shape` is written. Otherwise
 /// `shape` and `gain` already hold the vector and its gain, and are only read.

@@ -696,21 +696,17 @@ impl ModalString {
     /// still however far it is deflected.
     pub fn kinetic_energy(&self) -> f64 {
         let fs = self.sample_rate;
-        let sum: f64 = self.u_now.iter().zip(&self.u_prev).map(|(a, b)| (a - b) * (a - b)).sum();
-        0.5 * self.modal_mass * sum * fs * fs
+        let (step2, _) = kernel::energy_sums(self.isa, &self.u_prev, &self.u_now, &self.stiffness);
+        0.5 * self.modal_mass * step2 * fs * fs
     }
 
     /// The string's energy `H^{n−1/2}` of the current state (J): the stored term between
-    /// `ũ^{n−1}` and `ũ^n`.
+    /// `ũ^{n−1}` and `ũ^n`, `½ m̃ ‖(ũ^n − ũ^{n−1})/Δt‖² + ½ Σ K̂ ((ũ^n + ũ^{n−1})/2)²`, from the
+    /// unscaled sums in one pass (as [`advance_monitored`](Self::advance_monitored) does).
     pub fn energy(&self) -> f64 {
-        let dt = 1.0 / self.sample_rate;
-        let mut e = 0.0;
-        for i in 0..self.modes() {
-            let v = (self.u_now[i] - self.u_prev[i]) / dt;
-            let mean = 0.5 * (self.u_now[i] + self.u_prev[i]);
-            e += 0.5 * self.modal_mass * v * v + 0.5 * self.stiffness[i] * mean * mean;
-        }
-        e
+        let fs = self.sample_rate;
+        let (step2, k_sum2) = kernel::energy_sums(self.isa, &self.u_prev, &self.u_now, &self.stiffness);
+        0.5 * self.modal_mass * step2 * fs * fs + 0.125 * k_sum2
     }
 }
 
@@ -770,6 +766,26 @@ mod tests {
             }
         }
         assert!(s.state().iter().chain(s.previous_state()).all(|u| *u == 0.0), "the string comes to rest");
+    }
+
+    /// The one-pass energy is the per-mode definition (physics §6.3) to rounding.
+    #[test]
+    fn energy_is_the_stored_term_of_every_mode() {
+        let mut s = ModalString::new(c4(), 44100.0).unwrap();
+        let m = s.modes();
+        let prev: Vec<f64> = (0..m).map(|i| 1e-4 * ((i * 7 % 11) as f64 - 5.0) / (i + 1) as f64).collect();
+        let now: Vec<f64> = (0..m).map(|i| 1e-4 * ((i * 5 % 13) as f64 - 6.0) / (i + 1) as f64).collect();
+        s.set_state(&prev, &now);
+        let (fs, mass) = (s.sample_rate(), s.modal_mass());
+        let (mut kinetic, mut potential) = (0.0, 0.0);
+        for i in 0..m {
+            let v = (now[i] - prev[i]) * fs;
+            let mean = 0.5 * (now[i] + prev[i]);
+            kinetic += 0.5 * mass * v * v;
+            potential += 0.5 * s.stiffness()[i] * mean * mean;
+        }
+        assert!((s.kinetic_energy() / kinetic - 1.0).abs() < 1e-13, "{} vs {kinetic}", s.kinetic_energy());
+        assert!((s.energy() / (kinetic + potential) - 1.0).abs() < 1e-13, "{} vs {}", s.energy(), kinetic + potential);
     }
 
     #[test]
