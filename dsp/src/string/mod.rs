@@ -657,10 +657,23 @@ impl ModalString {
         );
         self.finish_step();
         self.history_ready = false;
+        // Δt·ΣR̂(δ_t·ũ)² from the unscaled sum.
+        let dissipated = 0.25 * r_diff2 * self.sample_rate;
+        (projection, StringEnergy { stored: self.stored_energy(step2, k_sum2), dissipated })
+    }
+
+    /// `½ m̃ ‖δ/Δt‖² + ½ Σ K̂ (σ/2)²` (J) between two states, from the unscaled sums `Σ δ²` and
+    /// `Σ K̂ σ²` of their difference δ and their sum σ.
+    #[inline]
+    fn stored_energy(&self, step2: f64, k_sum2: f64) -> f64 {
+        self.kinetic_from(step2) + 0.125 * k_sum2
+    }
+
+    /// `½ m̃ ‖δ/Δt‖²` (J) from `Σ δ²`.
+    #[inline]
+    fn kinetic_from(&self, step2: f64) -> f64 {
         let fs = self.sample_rate;
-        // ½m̃‖δ_t+ũ‖² + ½ΣK̂(μ_t+ũ)² and Δt·ΣR̂(δ_t·ũ)², from the unscaled sums.
-        let stored = 0.5 * self.modal_mass * step2 * fs * fs + 0.125 * k_sum2;
-        (projection, StringEnergy { stored, dissipated: 0.25 * r_diff2 * fs })
+        0.5 * self.modal_mass * step2 * fs * fs
     }
 
     /// Step the state on, flushing tiny amplitudes every [`FLUSH_INTERVAL`] steps (a flush makes
@@ -695,18 +708,16 @@ impl ModalString {
     /// Kinetic energy of the latest step, `½ m̃ ‖(ũ^n − ũ^{n−1})/Δt‖²` (J): zero for a string held
     /// still however far it is deflected.
     pub fn kinetic_energy(&self) -> f64 {
-        let fs = self.sample_rate;
         let (step2, _) = kernel::energy_sums(self.isa, &self.u_prev, &self.u_now, &self.stiffness);
-        0.5 * self.modal_mass * step2 * fs * fs
+        self.kinetic_from(step2)
     }
 
     /// The string's energy `H^{n−1/2}` of the current state (J): the stored term between
     /// `ũ^{n−1}` and `ũ^n`, `½ m̃ ‖(ũ^n − ũ^{n−1})/Δt‖² + ½ Σ K̂ ((ũ^n + ũ^{n−1})/2)²`, from the
     /// unscaled sums in one pass (as [`advance_monitored`](Self::advance_monitored) does).
     pub fn energy(&self) -> f64 {
-        let fs = self.sample_rate;
         let (step2, k_sum2) = kernel::energy_sums(self.isa, &self.u_prev, &self.u_now, &self.stiffness);
-        0.5 * self.modal_mass * step2 * fs * fs + 0.125 * k_sum2
+        self.stored_energy(step2, k_sum2)
     }
 }
 
