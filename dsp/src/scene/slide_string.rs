@@ -315,30 +315,30 @@ impl SlideCore {
     }
 
     /// Recompute the contact vectors that moved (the slide's always, a finger's only while it
-    /// touches the string), the Gram matrix of the touching ones, and the compressions: the new
-    /// mode shapes by rotations, then one pass for windows, gains, θ and the slide's projections.
+    /// touches the string), the Gram matrix of the touching ones, and the compressions, in one
+    /// [`ModalString::gram`]: a pass a vector makes it by rotations, windows it and sums its θ
+    /// entry; one more sums the cross terms and the slide's projections.
     /// A finger left out keeps its old vector and θ entries, which only ever meet its zero force.
     fn place(&mut self, positions: [f64; 3]) {
         let s = &self.string;
         let left = matches!(self.fingers, Fingers::Left | Fingers::Both);
         let right = matches!(self.fingers, Fingers::Right | Fingers::Both);
         let needed = [true, left, right];
-        let mut moved = [false; 3];
+        let mut fresh = [None; 3];
         for z in 0..3 {
             if needed[z] && positions[z] != self.positions[z] {
-                s.mode_shapes(positions[z], &mut self.shapes[z]);
+                fresh[z] = Some(s.shape_angle(positions[z]));
                 self.positions[z] = positions[z];
-                moved[z] = true;
             }
         }
-        if moved == [false; 3] {
+        if fresh == [None; 3] {
             return;
         }
         let [sh_o, sh_l, sh_r] = &mut self.shapes;
         let [g_o, g_l, g_r] = &mut self.gains;
-        let o = GramVector { shape: sh_o, gain: g_o, window: None, fresh: moved[0] };
-        let l = GramVector { shape: sh_l, gain: g_l, window: Some(&self.left_window), fresh: moved[1] };
-        let r = GramVector { shape: sh_r, gain: g_r, window: Some(&self.right_window), fresh: moved[2] };
+        let o = GramVector { shape: sh_o, gain: g_o, window: None, fresh: fresh[0] };
+        let l = GramVector { shape: sh_l, gain: g_l, window: Some(&self.left_window), fresh: fresh[1] };
+        let r = GramVector { shape: sh_r, gain: g_r, window: Some(&self.right_window), fresh: fresh[2] };
         let state = match self.fingers {
             Fingers::None => {
                 let (t, state) = s.gram([o]);
@@ -361,7 +361,7 @@ impl SlideCore {
                 state
             }
         };
-        if moved[0] {
+        if fresh[0].is_some() {
             self.y_prev = state.0 - self.sho.previous();
             self.y_now = state.1 - self.sho.position();
         }

@@ -420,9 +420,8 @@ pub fn energy_sums(isa: Isa, up: &[f64], un: &[f64], k: &[f64]) -> (f64, f64) {
     isa.run(EnergySums { up: chunks(up), un: chunks(un), k: chunks(k) })
 }
 
-/// One contact vector of [`gram`]. If `fresh`, `shape` holds bare mode shapes on entry: they are
-/// multiplied by `window` (if any) and written back, and `gain = c∘shape` is written. Otherwise
-/// `shape` and `gain` already hold the vector and its gain, and are only read.
+/// One contact vector of [`gram`]: `shape` is `h` (dimensionless) and `gain` is `C∘h` (m/N),
+/// whole chunks each.
 #[derive(Debug)]
 pub struct GramVector<'a> {
     /// The vector `h` (dimensionless), whole chunks.
@@ -431,35 +430,89 @@ pub struct GramVector<'a> {
     pub gain: &'a mut [f64],
     /// Per-mode window factors for a fresh vector (whole chunks, zero past M), or none.
     pub window: Option<&'a [f64]>,
-    /// Whether `shape` holds bare mode shapes to finish.
-    pub fresh: bool,
+    /// `Some((sin θ, cos θ))`: make the vector afresh, `h_i = sin((i+1)θ)` (the mode shapes of
+    /// [`sines`]) times the window if any, zero past the modes, and write `shape` and `gain`.
+    /// `None`: `shape` and `gain` already hold the vector and are only read.
+    pub fresh: Option<(f64, f64)>,
 }
 
-/// Finish the fresh vectors and return their Gram matrix in the C metric, `θ_ab = h_aᵀ(C∘h_b)`
+/// Make the fresh vectors and return their Gram matrix in the C metric, `θ_ab = h_aᵀ(C∘h_b)`
 /// for `a ≤ b` (entries below the diagonal are zero), and the projections `(h_0ᵀup, h_0ᵀun)` of
-/// the state on the first vector. Each sum is the one [`dot`] would give. Two loops: the vectors
-/// and θ, then the projections on the finished first vector. In one loop, the partial sums of
-/// both and the vectors did not fit AVX's registers: spilling made it slower than the two
-/// (two vectors over 175 modes, AVX2: 128 → 118 ns, faster in 11 of 12 interleaved runs).
+/// the state on the first vector. `c` is zero past the `modes` modes. Each sum is the one [`dot`]
+/// would give for the finished vectors.
+///
+/// One pass a vector makes it in registers (the rotation chain of [`sines`]), windows it, writes
+/// it and its gain and sums `θ_aa`, so a fresh vector is never written bare and read back; a
+/// last pass sums the cross terms and the state projections from the finished vectors. (One
+/// pass for everything would need more registers than AVX has, as a two-vector chain alone takes
+/// eight of its sixteen.)
 #[inline]
 pub fn gram<const K: usize>(
     isa: Isa,
     c: &[f64],
     up: &[f64],
     un: &[f64],
+    modes: usize,
     vectors: [GramVector<'_>; K],
 ) -> ([[f64; K]; K], [f64; 2]) {
     struct Vector<'a> {
         shape: &'a mut [Chunk],
         gain: &'a mut [Chunk],
         window: Option<&'a [Chunk]>,
-        fresh: bool,
+        fresh: Option<(f64, f64)>,
     }
     struct Gram<'a, const K: usize> {
         c: &'a [Chunk],
         up: &'a [Chunk],
         un: &'a [Chunk],
+        modes: usize,
         vectors: [Vector<'a>; K],
+    }
+    /// `hᵀ(C∘h)` of one vector, made afresh (see [`make`]) or read.
+    #[inline(always)]
+    fn diagonal<L: Lanes>(s: L, c: &[Chunk], v: &mut Vector<'_>) -> f64 {
+        let n = c.len();
+        let (shape, gain) = (&mut v.shape[..n], &mut v.gain[..n]);
+        match (v.fresh, v.window) {
+            (None, _) => {
+                let zero = s.splat(0.0);
+                let (mut even, mut odd) = (zero, zero);
+                paired!(n, even, odd, |i, acc| {
+                    *acc = s.add(*acc, s.mul(s.load(&shape[i]), s.load(&gain[i])));
+                });
+                s.sum(s.add(even, odd))
+            }
+            // Two copies of the loop, with and without the window.
+            (Some(angle), Some(w)) => make(s, c, shape, gain, Some(&w[..n]), angle),
+            (Some(angle), None) => make(s, c, shape, gain, None, angle),
+        }
+    }
+    /// Make a vector from the rotation chain at `angle`, times `window`, write it and its gain,
+    /// and return `hᵀ(C∘h)`.
+    #[inline(always)]
+    fn make<L: Lanes>(
+        s: L,
+        c: &[Chunk],
+        shape: &mut [Chunk],
+        gain: &mut [Chunk],
+        window: Option<&[Chunk]>,
+        angle: (f64, f64),
+    ) -> f64 {
+        let n = c.len();
+        let mut chain = Rotation::new(s, angle);
+        let zero = s.splat(0.0);
+        let (mut even, mut odd) = (zero, zero);
+        paired!(n, even, odd, |i, acc| {
+            let mut h = chain.next(s);
+            if let Some(w) = window {
+                h = s.mul(h, s.load(&w[i]));
+            }
+            s.store(&mut shape[i], h);
+            let g = s.mul(s.load(&c[i]), h);
+            s.store(&mut gain[i], g);
+            *acc = s.add(*acc, s.mul(h, g));
+        });
+        s.sum(s.add(even, odd))
     }
     impl<const K: usize> Kernel for Gram<'_, K> {
         type Output = ([[f64; K]; K], [f64; 2]);
@@ -474,50 +527,49 @@ pub fn gram<const K: usize>(
             }
             let c = &self.c[..n];
             let mut vectors = self.vectors;
-            let zero = s.splat(0.0);
-            let (mut even, mut odd) = ([[zero; K]; K], [[zero; K]; K]);
-            // Accumulators: the K(K+1)/2 Gram entries, twice; temporaries: h, g.
-            paired!(n, fits = fits::<L>(K * (K + 1) + 2 * K), even, odd, |i, acc| {
-                let (mut h, mut g) = ([zero; K], [zero; K]);
-                for k in 0..K {
-                    let v = &mut vectors[k];
-                    h[k] = s.load(&v.shape[i]);
-                    if v.fresh {
-                        if let Some(w) = v.window {
-                            h[k] = s.mul(h[k], s.load(&w[i]));
-                            s.store(&mut v.shape[i], h[k]);
-                        }
-                        g[k] = s.mul(s.load(&c[i]), h[k]);
-                        s.store(&mut v.gain[i], g[k]);
-                    } else {
-                        g[k] = s.load(&v.gain[i]);
-                    }
-                }
-                for a in 0..K {
-                    for b in a..K {
-                        acc[a][b] = s.add(acc[a][b], s.mul(h[a], g[b]));
-                    }
-                }
-            });
             let mut gram = [[0.0; K]; K];
-            for a in 0..K {
-                for b in a..K {
-                    gram[a][b] = s.sum(s.add(even[a][b], odd[a][b]));
+            for (k, v) in vectors.iter_mut().enumerate() {
+                gram[k][k] = diagonal(s, c, v);
+                // Past the modes a fresh shape holds the rotation's values and its gain `0·h`
+                // (`c` is zero there, so `θ_kk` did not see them): make both zero.
+                if v.fresh.is_some() {
+                    let m = self.modes.min(n * LANES);
+                    v.shape.as_flattened_mut()[m..].fill(0.0);
+                    v.gain.as_flattened_mut()[m..].fill(0.0);
                 }
             }
-            let Some(first) = vectors.first() else { return (gram, [0.0; 2]) };
-            let (h, states) = (&first.shape[..n], [&self.up[..n], &self.un[..n]]);
-            let (mut even, mut odd) = ([zero; 2], [zero; 2]);
-            paired!(n, even, odd, |i, acc| {
-                accumulate(s, acc, &states, i, s.load(&h[i]));
+            let zero = s.splat(0.0);
+            // Accumulators: the K(K−1)/2 cross terms and the two state projections, twice;
+            // temporaries: the K vectors.
+            let (mut even, mut odd) = (([[zero; K]; K], [zero; 2]), ([[zero; K]; K], [zero; 2]));
+            let states = [&self.up[..n], &self.un[..n]];
+            paired!(n, fits = fits::<L>(K * K.saturating_sub(1) + 4 + K), even, odd, |i, acc| {
+                for a in 0..K {
+                    let h = s.load(&vectors[a].shape[i]);
+                    for b in a + 1..K {
+                        acc.0[a][b] = s.add(acc.0[a][b], s.mul(h, s.load(&vectors[b].gain[i])));
+                    }
+                    if a == 0 {
+                        accumulate(s, &mut acc.1, &states, i, h);
+                    }
+                }
             });
-            (gram, finish(s, even, odd))
+            for a in 0..K {
+                for b in a + 1..K {
+                    gram[a][b] = s.sum(s.add(even.0[a][b], odd.0[a][b]));
+                }
+            }
+            if K == 0 {
+                return (gram, [0.0; 2]);
+            }
+            (gram, finish(s, even.1, odd.1))
         }
     }
     isa.run(Gram {
         c: chunks(c),
         up: chunks(up),
         un: chunks(un),
+        modes,
         vectors: vectors.map(|v| Vector {
             shape: chunks_mut(v.shape),
             gain: chunks_mut(v.gain),
@@ -527,84 +579,78 @@ pub fn gram<const K: usize>(
     })
 }
 
-/// `out_i = sin((i+1)θ)` for whole chunks, from `sin θ` and `cos θ`, by rotations:
+/// The mode shapes' rotation chain, `sin((i+1)θ)` a chunk at a time: the first chunk by doubling
+/// (lanes `[0, w)` rotated by `wθ` give lanes `[w, 2w)`, for w = 1, 2, 4), every later one the
+/// chunk before rotated by `LANES·θ`:
 ///
 /// ```text
 /// sin((i+k)θ) = sin(iθ) cos kθ + cos(iθ) sin kθ,   cos((i+k)θ) = cos(iθ) cos kθ − sin(iθ) sin kθ
 /// ```
 ///
-/// The first chunk comes from doubling (lanes `[0, w)` rotated by `wθ` give lanes `[w, 2w)`,
-/// for w = 1, 2, 4), the next three the same way a chunk at a time (by 8θ, then 16θ), and every
-/// later chunk from the chunk four before it, rotated by 32θ: four independent chains, so the
-/// dependency chain is about 6 + M/32 rotations long instead of M and the loop is bound by
-/// throughput, not latency. A rotation is orthogonal, so each one adds a rounding error without
-/// amplifying earlier ones, at every angle (the three-term recurrence `2cos φ·s_n − s_{n−1}`
-/// turns an error `ε` in `cos φ` into a phase error `√(2ε)` when `φ` is near a multiple of π,
-/// which a stride of 32 makes common).
+/// A rotation is orthogonal, so each one adds a rounding error without amplifying earlier ones,
+/// at every angle: after `M/LANES` chunks the error is a few `M/LANES · ε` (the three-term
+/// recurrence `2cos φ·s_n − s_{n−1}` turns an error `ε` in `cos φ` into a phase error `√(2ε)`
+/// when `φ` is near a multiple of π, which a stride of `LANES·θ` makes common). The chain is one
+/// rotation of latency a chunk; the passes that run it ([`sines`], [`gram`]) have enough other
+/// work a chunk to hide that.
+struct Rotation<L: Lanes> {
+    sin: L::V,
+    cos: L::V,
+    step: (L::V, L::V),
+}
+
+impl<L: Lanes> Rotation<L> {
+    /// The chain for `(sin θ, cos θ)`, at its first chunk.
+    #[inline(always)]
+    fn new(s: L, (sin, cos): (f64, f64)) -> Self {
+        /// `(sin(a + b), cos(a + b))` from `(sin a, cos a)` and `(sin b, cos b)`.
+        #[inline(always)]
+        fn rotate((sa, ca): (f64, f64), (sb, cb): (f64, f64)) -> (f64, f64) {
+            (sa * cb + ca * sb, ca * cb - sa * sb)
+        }
+        let (mut first_sin, mut first_cos) = ([0.0; LANES], [0.0; LANES]);
+        (first_sin[0], first_cos[0]) = (sin, cos);
+        let mut width = 1;
+        while width < LANES {
+            let step = (first_sin[width - 1], first_cos[width - 1]);
+            for l in 0..width {
+                (first_sin[width + l], first_cos[width + l]) = rotate((first_sin[l], first_cos[l]), step);
+            }
+            width *= 2;
+        }
+        let step = (s.splat(first_sin[LANES - 1]), s.splat(first_cos[LANES - 1]));
+        Self { sin: s.load(&first_sin), cos: s.load(&first_cos), step }
+    }
+
+    /// This chunk's sines; the chain moves on to the next chunk.
+    #[inline(always)]
+    fn next(&mut self, s: L) -> L::V {
+        let (sn, cs, (sb, cb)) = (self.sin, self.cos, self.step);
+        self.sin = s.add(s.mul(sn, cb), s.mul(cs, sb));
+        self.cos = s.sub(s.mul(cs, cb), s.mul(sn, sb));
+        sn
+    }
+}
+
+/// `out_i = sin((i+1)θ)` for whole chunks, from `sin θ` and `cos θ`, by the rotation chain that
+/// [`gram`] runs for a fresh vector (so the two give the same bits).
 #[inline]
 pub fn sines(isa: Isa, sin: f64, cos: f64, out: &mut [f64]) {
     struct Sines<'a> {
-        sin: f64,
-        cos: f64,
+        angle: (f64, f64),
         out: &'a mut [Chunk],
-    }
-    /// `(sin(a + b), cos(a + b))` from `(sin a, cos a)` and `(sin b, cos b)`.
-    #[inline(always)]
-    fn rotate((sa, ca): (f64, f64), (sb, cb): (f64, f64)) -> (f64, f64) {
-        (sa * cb + ca * sb, ca * cb - sa * sb)
-    }
-    #[inline(always)]
-    fn rotate_chunk<L: Lanes>(s: L, (sn, cs): (L::V, L::V), (sb, cb): (f64, f64)) -> (L::V, L::V) {
-        let (sb, cb) = (s.splat(sb), s.splat(cb));
-        (s.add(s.mul(sn, cb), s.mul(cs, sb)), s.sub(s.mul(cs, cb), s.mul(sn, sb)))
     }
     impl Kernel for Sines<'_> {
         type Output = ();
         #[inline(always)]
         fn run<L: Lanes>(self, s: L) {
-            let out = self.out;
-            if out.is_empty() {
-                return;
-            }
-            let (mut first_sin, mut first_cos) = ([0.0; LANES], [0.0; LANES]);
-            (first_sin[0], first_cos[0]) = (self.sin, self.cos);
-            let mut width = 1;
-            while width < LANES {
-                let step = (first_sin[width - 1], first_cos[width - 1]);
-                for l in 0..width {
-                    (first_sin[width + l], first_cos[width + l]) = rotate((first_sin[l], first_cos[l]), step);
-                }
-                width *= 2;
-            }
-            let by8 = (first_sin[LANES - 1], first_cos[LANES - 1]);
-            let by16 = rotate(by8, by8);
-            let by32 = rotate(by16, by16);
-            let zero = s.splat(0.0);
-            let mut chains = [(zero, zero); 4];
-            chains[0] = (s.load(&first_sin), s.load(&first_cos));
-            chains[1] = rotate_chunk(s, chains[0], by8);
-            chains[2] = rotate_chunk(s, chains[0], by16);
-            chains[3] = rotate_chunk(s, chains[1], by16);
-            let n = out.len();
-            let head = n.min(4);
-            for j in 0..head {
-                s.store(&mut out[j], chains[j].0);
-            }
-            let mut k = head;
-            while k + 4 <= n {
-                for j in 0..4 {
-                    chains[j] = rotate_chunk(s, chains[j], by32);
-                    s.store(&mut out[k + j], chains[j].0);
-                }
-                k += 4;
-            }
-            for j in 0..n - k {
-                chains[j] = rotate_chunk(s, chains[j], by32);
-                s.store(&mut out[k + j], chains[j].0);
+            let mut chain = Rotation::new(s, self.angle);
+            for chunk in self.out {
+                s.store(chunk, chain.next(s));
             }
         }
     }
-    isa.run(Sines { sin, cos, out: chunks_mut(out) })
+    isa.run(Sines { angle: (sin, cos), out: chunks_mut(out) })
 }
 
 /// Flops per mode and sample of a [`free_run`] step (two products and a difference, and the
@@ -768,37 +814,50 @@ mod tests {
         }
     }
 
-    /// One `gram` pass finishes fresh vectors and gives the sums that separate window, gain and
-    /// `dot` passes give, bit for bit, on every instruction set (AVX-512 keeps both sets of
-    /// accumulators in registers; AVX and the portable lanes sweep the even and odd chunks).
+    /// `gram` makes fresh vectors as `sines` and a window would, and gives the sums that `dot`
+    /// gives for the finished vectors, bit for bit, on every instruction set (AVX-512 keeps both
+    /// sets of cross-term accumulators in registers; AVX and the portable lanes sweep the even and
+    /// odd chunks). Past the modes (where `c` is zero) fresh shapes and gains are zero.
     #[test]
     fn gram_is_the_separate_passes() {
         let cases =
             [1, 5, 6].into_iter().flat_map(|chunks| Isa::available().into_iter().map(move |i| (chunks * LANES, i)));
         for (n, isa) in cases {
-            let [c, up, un, bare0, bare1, kept, kept_gain, window] =
-                [40, 41, 42, 43, 44, 45, 46, 47].map(|s| data(n, s));
-            let (mut s0, mut s1, mut s2) = (bare0.clone(), bare1.clone(), kept.clone());
-            let (mut g0, mut g1, mut g2) = (vec![0.0; n], vec![0.0; n], kept_gain.clone());
+            let modes = n - 3;
+            let [mut c, up, un, kept, kept_gain, mut window] = [40, 41, 42, 45, 46, 47].map(|s| data(n, s));
+            c[modes..].fill(0.0);
+            window[modes..].fill(0.0);
+            let angles = [0.3f64, 2.1].map(f64::sin_cos);
+            let (mut s0, mut s1, mut s2) = (data(n, 43), data(n, 44), kept.clone());
+            let (mut g0, mut g1, mut g2) = (data(n, 48), data(n, 49), kept_gain.clone());
             let (t, state) = gram(
                 isa,
                 &c,
                 &up,
                 &un,
+                modes,
                 [
-                    GramVector { shape: &mut s0, gain: &mut g0, window: None, fresh: true },
-                    GramVector { shape: &mut s1, gain: &mut g1, window: Some(&window), fresh: true },
-                    GramVector { shape: &mut s2, gain: &mut g2, window: Some(&window), fresh: false },
+                    GramVector { shape: &mut s0, gain: &mut g0, window: None, fresh: Some(angles[0]) },
+                    GramVector { shape: &mut s1, gain: &mut g1, window: Some(&window), fresh: Some(angles[1]) },
+                    GramVector { shape: &mut s2, gain: &mut g2, window: Some(&window), fresh: None },
                 ],
             );
-            let w1: Vec<f64> = bare1.iter().zip(&window).map(|(h, w)| h * w).collect();
-            let shapes = [bare0.clone(), w1, kept.clone()];
+            let bare = angles.map(|(sin, cos)| {
+                let mut out = vec![0.0; n];
+                sines(isa, sin, cos, &mut out);
+                out[modes..].fill(0.0);
+                out
+            });
+            let w1: Vec<f64> = bare[1].iter().zip(&window).map(|(h, w)| h * w).collect();
+            let shapes = [bare[0].clone(), w1, kept.clone()];
             let gains: Vec<Vec<f64>> = vec![
                 c.iter().zip(&shapes[0]).map(|(c, h)| c * h).collect(),
                 c.iter().zip(&shapes[1]).map(|(c, h)| c * h).collect(),
                 kept_gain.clone(),
             ];
-            assert_eq!([&s0, &s1, &s2], [&shapes[0], &shapes[1], &shapes[2]], "{isa:?}");
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!([&s0, &s1, &s2].map(|v| bits(v)), [0, 1, 2].map(|k| bits(&shapes[k])), "{isa:?}");
+            assert_eq!([&g0, &g1].map(|v| bits(&v[modes..])), [vec![0; n - modes], vec![0; n - modes]], "{isa:?}");
             assert_eq!([&g0, &g1, &g2], [&gains[0], &gains[1], &gains[2]], "{isa:?}");
             for a in 0..3 {
                 for b in a..3 {

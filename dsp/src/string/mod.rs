@@ -515,8 +515,7 @@ impl ModalString {
     /// are zeroed). One sine and one cosine for all modes: the rest by rotations (see
     /// `kernel::sines`), eight modes at a time when `out` holds whole chunks.
     pub fn mode_shapes(&self, x: f64, out: &mut [f64]) {
-        let theta = std::f64::consts::PI * x / self.params.length;
-        let (s1, c1) = theta.sin_cos();
+        let (s1, c1) = self.shape_angle(x);
         let m = self.modes().min(out.len());
         let whole = m.div_ceil(LANES) * LANES;
         if whole <= out.len() {
@@ -529,6 +528,13 @@ impl ModalString {
             }
         }
         out[m..].fill(0.0);
+    }
+
+    /// `(sin θ, cos θ)` for `θ = πx/L` (`x` in m), the angle the mode shapes at `x` are made from
+    /// (`β_i x = iθ`): what a fresh [`GramVector`] takes.
+    #[inline]
+    pub fn shape_angle(&self, x: f64) -> (f64, f64) {
+        (std::f64::consts::PI * x / self.params.length).sin_cos()
     }
 
     /// The weights that turn the modal state into the transverse force on the support (N/m):
@@ -623,14 +629,17 @@ impl ModalString {
         kernel::dot(self.isa, x, y)
     }
 
-    /// Finish the contact vectors marked fresh (window and gain, see [`GramVector`]) and return, in
-    /// one pass, their Gram matrix in the C metric `θ_ab = h_aᵀ(C∘h_b)` for `a ≤ b` (m/N; zero
-    /// below the diagonal) and the projections `(h_0ᵀũ^{n−1}, h_0ᵀũ^n)` (m) of the state on the
-    /// first. Every sum equals the [`project`](Self::project) or
-    /// [`project_state`](Self::project_state) of the same vectors.
+    /// Make the contact vectors marked fresh (the mode shapes at their angle, see
+    /// [`shape_angle`](Self::shape_angle), times their window, and their gains; see
+    /// [`GramVector`]) and return their Gram matrix in the C metric `θ_ab = h_aᵀ(C∘h_b)` for
+    /// `a ≤ b` (m/N; zero below the diagonal) and the projections `(h_0ᵀũ^{n−1}, h_0ᵀũ^n)` (m)
+    /// of the state on the first. A fresh shape is the [`mode_shapes`](Self::mode_shapes) at
+    /// the same angle times the window, and every sum equals the [`project`](Self::project) or
+    /// [`project_state`](Self::project_state) of the finished vectors, bit for bit.
     #[inline]
     pub fn gram<const K: usize>(&self, vectors: [GramVector<'_>; K]) -> ([[f64; K]; K], (f64, f64)) {
-        let (gram, [prev, now]) = kernel::gram(self.isa, &self.coef_c, &self.u_prev, &self.u_now, vectors);
+        let (c, modes) = (&self.coef_c, self.modes());
+        let (gram, [prev, now]) = kernel::gram(self.isa, c, &self.u_prev, &self.u_now, modes, vectors);
         (gram, (prev, now))
     }
 
