@@ -559,9 +559,6 @@ pub fn gram<const K: usize>(
                     gram[a][b] = s.sum(s.add(even.0[a][b], odd.0[a][b]));
                 }
             }
-            if K == 0 {
-                return (gram, [0.0; 2]);
-            }
             (gram, finish(s, even.1, odd.1))
         }
     }
@@ -590,9 +587,9 @@ pub fn gram<const K: usize>(
 /// A rotation is orthogonal, so each one adds a rounding error without amplifying earlier ones,
 /// at every angle: after `M/LANES` chunks the error is a few `M/LANES · ε` (the three-term
 /// recurrence `2cos φ·s_n − s_{n−1}` turns an error `ε` in `cos φ` into a phase error `√(2ε)`
-/// when `φ` is near a multiple of π, which a stride of `LANES·θ` makes common). The chain is one
-/// rotation of latency a chunk; the passes that run it ([`sines`], [`gram`]) have enough other
-/// work a chunk to hide that.
+/// when `φ` is near a multiple of π, which a stride of `LANES·θ` makes common). The chain costs a
+/// rotation's latency a chunk: in [`gram`] a chunk's other work (window, gain, θ) hides it;
+/// [`sines`] alone, which runs only when a pickup or a striking point moves, is bound by it.
 struct Rotation<L: Lanes> {
     sin: L::V,
     cos: L::V,
