@@ -380,16 +380,22 @@ pub fn dot(isa: Isa, x: &[f64], y: &[f64]) -> f64 {
         type Output = f64;
         #[inline(always)]
         fn run<L: Lanes>(self, s: L) -> f64 {
-            let n = self.x.len().min(self.y.len());
-            let (x, y) = (&self.x[..n], &self.y[..n]);
-            let (mut even, mut odd) = (s.splat(0.0), s.splat(0.0));
-            paired!(n, even, odd, |c, acc| {
-                *acc = s.add(*acc, s.mul(s.load(&x[c]), s.load(&y[c])));
-            });
-            s.sum(s.add(even, odd))
+            dot_chunks(s, self.x, self.y)
         }
     }
     isa.run(Dot { x: chunks(x), y: chunks(y) })
+}
+
+/// [`dot`]'s sum, for kernels already running on `L`.
+#[inline(always)]
+fn dot_chunks<L: Lanes>(s: L, x: &[Chunk], y: &[Chunk]) -> f64 {
+    let n = x.len().min(y.len());
+    let (x, y) = (&x[..n], &y[..n]);
+    let (mut even, mut odd) = (s.splat(0.0), s.splat(0.0));
+    paired!(n, even, odd, |c, acc| {
+        *acc = s.add(*acc, s.mul(s.load(&x[c]), s.load(&y[c])));
+    });
+    s.sum(s.add(even, odd))
 }
 
 /// `(Σ (un − up)², Σ k (un + up)²)` over whole chunks, for the string's energy.
@@ -474,14 +480,7 @@ pub fn gram<const K: usize>(
         let n = c.len();
         let (shape, gain) = (&mut v.shape[..n], &mut v.gain[..n]);
         match (v.fresh, v.window) {
-            (None, _) => {
-                let zero = s.splat(0.0);
-                let (mut even, mut odd) = (zero, zero);
-                paired!(n, even, odd, |i, acc| {
-                    *acc = s.add(*acc, s.mul(s.load(&shape[i]), s.load(&gain[i])));
-                });
-                s.sum(s.add(even, odd))
-            }
+            (None, _) => dot_chunks(s, shape, gain),
             // Two copies of the loop, with and without the window.
             (Some(angle), Some(w)) => make(s, c, shape, gain, Some(&w[..n]), angle),
             (Some(angle), None) => make(s, c, shape, gain, None, angle),
