@@ -365,10 +365,10 @@ fn renders_are_block_size_invariant() {
 }
 
 /// The real-time path (`render_output`: output only, no frames, no energy bookkeeping) gives the
-/// harness path's output bit for bit,
-/// over the whole slide phrase (attach, plucks with both fingers, glissando, vibrato, rattle,
-/// lift-off) at N_b = 1, 8 and 64, in calls of 64 and 37 samples; and with the left finger
-/// lifted and put down again where it was (the touching fingers change while no vector moves).
+/// harness path's output bit for bit over the whole slide phrase (attach, plucks with both
+/// fingers, glissando, vibrato, rattle, lift-off) at N_b = 1, 8 and 64, in calls of 64 and 37
+/// samples; and with the left finger lifted and put down again where it was (the touching
+/// fingers change while no vector moves).
 #[test]
 fn slide_real_time_path_matches_the_harness() {
     let phrase = scene_file("slide-phrase.toml");
