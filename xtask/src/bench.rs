@@ -13,13 +13,26 @@
 //! - `piano/c4`: one C4 voice of the instrument at 48 kHz; its line says how many such voices fit
 //!   in real time on one core (`1/rtf`, rounded down);
 //! - `piano/88-keys`: all 88 keys (A0 to C8) struck together, pedal down, 48 kHz: the whole
-//!   piano at once.
+//!   piano at once;
+//! - `piano/restrike/{qsa,exp,imp}`: the 16 keys struck together again every 40 ms, 50 times,
+//!   each time at a seeded random velocity in [`RESTRIKE_VELOCITIES`] (the same for all 16, so
+//!   that their contacts overlap), in calls of 16 samples, for each solver: every voice in
+//!   contact at once, strike after strike, with contacts of many strengths.
 //!
 //! Instrument cases also time every process call: for each call the fastest of the runs (which
 //! removes most of the machine's noise), then `call_mean_us`; `first_call_us`, the call that
 //! starts every note; `call_worst_us`, the costliest of the others, with `worst_ratio` (over the
 //! mean) and `worst_in_contact` (voices in contact as it began); `most_in_contact`; and
 //! `worst_rtf`, the costliest call of all against its own duration.
+//!
+//! **All voices in contact at once.** A call counts as one when every voice played is in contact
+//! as it begins and as it ends (a hammer touches its string over one stretch of time, a pressed
+//! slide all along): `contact_calls` such calls, their mean `contact_mean_us`, the costliest
+//! `contact_worst_us` and `contact_ratio`, worst over mean. This is the cost bound of the
+//! contact step itself: with no data-dependent iteration the costliest such call stays close to
+//! their mean, whatever the strength of the contacts. (`worst_ratio` instead compares a strike's
+//! calls with a whole render's mean, mostly free strings, which take one register-resident pass a
+//! sample and no solve.)
 //!
 //! The `peak` line measures the vector unit's peak (independent multiply–add chains, the
 //! string's arithmetic without fusing) in Gflop/s. Lines of cases that are mostly free string
@@ -115,6 +128,15 @@ pub struct CallStats {
     pub most_in_contact: usize,
     /// RTF of the costliest call of all (the first included) alone.
     pub worst_rtf: f64,
+    /// Calls with every voice played in contact as they began and as they ended (after the
+    /// first call).
+    pub contact_calls: usize,
+    /// Mean cost of those calls (µs; `null` without any).
+    pub contact_mean_us: f64,
+    /// Costliest of those calls (µs; `null` without any).
+    pub contact_worst_us: f64,
+    /// `contact_worst_us / contact_mean_us` (`null` without any).
+    pub contact_ratio: f64,
 }
 
 /// The vector unit's measured peak, in Gflop/s (best of `runs`).
@@ -152,16 +174,27 @@ fn goal(name: &str) -> &'static str {
     }
 }
 
+/// Goal of the all-in-contact column: the costliest call with every voice in contact within
+/// 1.5 times the mean of such calls (issue 6: bounded cost, no data-dependent iteration).
+const CONTACT_GOAL: f64 = 1.5;
+
 /// The Markdown table of `lines`.
 pub fn table(lines: &[BenchLine]) -> String {
     let mut t = String::from(
-        "| case | modes | voices | RTF (median) | goal | roofline | worst call / mean (in contact) | first call / mean | worst call RTF |\n\
-         |---|---|---|---|---|---|---|---|---|\n",
+        "| case | modes | voices | RTF (median) | goal | roofline | all voices in contact: worst / mean call (calls) | worst call / mean (in contact) | first call / mean | worst call RTF |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n",
     );
     for l in lines {
         let roofline = l.roofline.map_or(String::new(), |r| format!("{:.0} %", r * 100.0));
-        let (worst, first, worst_rtf) = l.calls.map_or(Default::default(), |c| {
+        let (contact, worst, first, worst_rtf) = l.calls.map_or(Default::default(), |c| {
+            let contact = if c.contact_calls == 0 {
+                "none".to_owned()
+            } else {
+                let verdict = if c.contact_ratio <= CONTACT_GOAL { "" } else { ", over the goal" };
+                format!("{:.2} ({}{verdict})", c.contact_ratio, c.contact_calls)
+            };
             (
+                contact,
                 format!("{:.2} ({}/{})", c.worst_ratio, c.worst_in_contact, c.most_in_contact),
                 format!("{:.1}", c.first_call_us / c.call_mean_us),
                 format!("{:.3}", c.worst_rtf),
@@ -169,7 +202,7 @@ pub fn table(lines: &[BenchLine]) -> String {
         });
         let fit = l.fit.map_or(String::new(), |f| format!(" ({f} fit)"));
         t += &format!(
-            "| {} | {} | {} | {:.2e}{fit} | {} | {roofline} | {worst} | {first} | {worst_rtf} |\n",
+            "| {} | {} | {} | {:.2e}{fit} | {} | {roofline} | {contact} | {worst} | {first} | {worst_rtf} |\n",
             l.name,
             l.modes,
             l.voices,
@@ -254,27 +287,60 @@ pub fn measure(name: &str, scene: &SceneDescription, runs: usize) -> Result<Benc
 /// Sample rate of the instrument cases (Hz).
 const PIANO_RATE: f64 = 48_000.0;
 
-/// Time the instrument (in `mode`) playing `keys` together with the pedal down, `runs` times,
-/// rendering `seconds` in calls of `call` samples.
-pub fn measure_piano(name: &str, mode: Mode, keys: &[u8], seconds: f64, call: usize, runs: usize) -> BenchLine {
-    let settings = Settings { mode, ..Settings::default() };
+/// Velocities of the re-strikes (MIDI velocity / 127): hammer speeds of 0.4 to 2.4 m/s
+/// (`0.3·20^velocity`), soft enough that all 16 contacts of a strike overlap for a call or more.
+pub const RESTRIKE_VELOCITIES: std::ops::Range<f32> = 0.1..0.7;
+
+/// What an instrument case plays: `keys` together with the pedal down at velocity 0.7, and, with
+/// `restrike`, all of them again every `restrike.0` calls at one velocity drawn from
+/// [`RESTRIKE_VELOCITIES`] by a generator seeded with `restrike.1`.
+#[derive(Debug, Clone, Copy)]
+pub struct Performance<'a> {
+    /// MIDI keys.
+    pub keys: &'a [u8],
+    /// Calls between strikes and the velocities' seed.
+    pub restrike: Option<(usize, u64)>,
+}
+
+/// Time the instrument with `settings` playing `play` for `seconds` in calls of `call` samples,
+/// `runs` times.
+pub fn measure_piano(
+    name: &str,
+    settings: Settings,
+    play: Performance<'_>,
+    seconds: f64,
+    call: usize,
+    runs: usize,
+) -> BenchLine {
+    use rand::{RngExt, SeedableRng};
+    let (mode, keys) = (settings.mode, play.keys);
     let samples = (seconds * PIANO_RATE) as usize;
-    let once = || {
-        let mut piano = Instrument::new(PIANO_RATE, keys.len().max(1), settings);
+    let strike = |piano: &mut Instrument, velocity: f32| {
         // One channel per note (the MPE way) so that slide notes are separate voices, not glides.
         for (i, &key) in keys.iter().enumerate() {
             let channel = if mode == Mode::Slide { (i % 16) as u8 } else { 0 };
             piano.handle(Event::Sustain { channel, down: true });
-            piano.handle(Event::NoteOn { channel, key, velocity: 0.7 });
+            piano.handle(Event::NoteOn { channel, key, velocity });
         }
+    };
+    let once = || {
+        let mut piano = Instrument::new(PIANO_RATE, keys.len().max(1), settings);
+        let mut velocities = rand_pcg::Pcg64::seed_from_u64(play.restrike.map_or(0, |r| r.1));
+        strike(&mut piano, 0.7);
         let (mut left, mut right) = (vec![0.0f32; call], vec![0.0f32; call]);
         let mut calls = Vec::with_capacity(samples / call);
         let start = std::time::Instant::now();
-        for _ in 0..samples / call {
+        for n in 0..samples / call {
+            if let Some((every, _)) = play.restrike
+                && n > 0
+                && n % every == 0
+            {
+                strike(&mut piano, velocities.random_range(RESTRIKE_VELOCITIES));
+            }
             let in_contact = piano.in_contact();
             let t = std::time::Instant::now();
             piano.process(&mut left, &mut right);
-            calls.push((t.elapsed().as_secs_f64(), in_contact));
+            calls.push(Call { seconds: t.elapsed().as_secs_f64(), in_contact, after: piano.in_contact() });
         }
         (start.elapsed().as_secs_f64(), piano.sounding(), calls)
     };
@@ -285,23 +351,11 @@ pub fn measure_piano(name: &str, mode: Mode, keys: &[u8], seconds: f64, call: us
         let (wall, voices, calls) = once();
         sounding = voices;
         rtfs.push(wall / seconds);
-        for (best, (t, _)) in fastest.iter_mut().zip(calls) {
-            best.0 = best.0.min(t);
+        for (best, c) in fastest.iter_mut().zip(calls) {
+            best.seconds = best.seconds.min(c.seconds);
         }
     }
-    let mean = fastest.iter().map(|c| c.0).sum::<f64>() / fastest.len().max(1) as f64;
-    let &(worst, worst_in_contact) = fastest.iter().skip(1).max_by(|a, b| a.0.total_cmp(&b.0)).unwrap_or(&fastest[0]);
-    let first = fastest[0].0;
-    let calls = CallStats {
-        call,
-        call_mean_us: mean * 1e6,
-        first_call_us: first * 1e6,
-        call_worst_us: worst * 1e6,
-        worst_ratio: worst / mean,
-        worst_in_contact,
-        most_in_contact: fastest.iter().map(|c| c.1).max().unwrap_or(0),
-        worst_rtf: worst.max(first) / (call as f64 / PIANO_RATE),
-    };
+    let calls = CallStats::of(&fastest, keys.len(), call);
     rtfs.sort_by(f64::total_cmp);
     let rtf = rtfs[rtfs.len() / 2];
     let modes = keys
@@ -315,10 +369,11 @@ pub fn measure_piano(name: &str, mode: Mode, keys: &[u8], seconds: f64, call: us
                 .map_or(0, |s| s.modes())
         })
         .sum();
+    let segments = if settings.method == Method::Qsa { settings.segments } else { 0 };
     BenchLine {
         name: name.to_owned(),
         method: settings.method.name(),
-        segments: settings.segments,
+        segments,
         block: settings.block,
         sample_rate: PIANO_RATE as u32,
         modes,
@@ -331,6 +386,51 @@ pub fn measure_piano(name: &str, mode: Mode, keys: &[u8], seconds: f64, call: us
         roofline: None,
         fit: None,
         calls: Some(calls),
+    }
+}
+
+/// One timed process call.
+#[derive(Debug, Clone, Copy)]
+struct Call {
+    /// Wall time (s).
+    seconds: f64,
+    /// Voices in contact as the call began and as it ended.
+    in_contact: usize,
+    after: usize,
+}
+
+impl CallStats {
+    /// The figures of `calls` (each the fastest over the runs) of `call` samples, with `played`
+    /// voices played.
+    fn of(calls: &[Call], played: usize, call: usize) -> Self {
+        let mean_of = |c: &[f64]| c.iter().sum::<f64>() / c.len() as f64;
+        let all: Vec<f64> = calls.iter().map(|c| c.seconds).collect();
+        let mean = mean_of(&all);
+        let first = all[0];
+        let (worst, worst_in_contact) = calls
+            .iter()
+            .skip(1)
+            .map(|c| (c.seconds, c.in_contact))
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .unwrap_or((first, calls[0].in_contact));
+        let contact: Vec<f64> =
+            calls.iter().skip(1).filter(|c| c.in_contact == played && c.after == played).map(|c| c.seconds).collect();
+        let contact_mean = if contact.is_empty() { f64::NAN } else { mean_of(&contact) };
+        let contact_worst = contact.iter().copied().fold(f64::NAN, f64::max);
+        CallStats {
+            call,
+            call_mean_us: mean * 1e6,
+            first_call_us: first * 1e6,
+            call_worst_us: worst * 1e6,
+            worst_ratio: worst / mean,
+            worst_in_contact,
+            most_in_contact: calls.iter().map(|c| c.in_contact).max().unwrap_or(0),
+            worst_rtf: worst.max(first) / (call as f64 / PIANO_RATE),
+            contact_calls: contact.len(),
+            contact_mean_us: contact_mean * 1e6,
+            contact_worst_us: contact_worst * 1e6,
+            contact_ratio: contact_worst / contact_mean,
+        }
     }
 }
 
@@ -378,18 +478,27 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
     let sixteen: Vec<u8> = (0..16).map(|i| 48 + (i * 36 / 15) as u8).collect();
     let all: Vec<u8> = (21..=108).collect();
     let c4 = vec![60u8];
+    let piano = Settings { mode: Mode::Piano, ..Settings::default() };
+    let slide = Settings { mode: Mode::Slide, ..Settings::default() };
+    let once = |keys| Performance { keys, restrike: None };
+    // Every 120 calls of 16 samples: 40 ms, 50 strikes in 2 s.
+    let restrike = Performance { keys: &sixteen, restrike: Some((120, 6)) };
+    let with = |method| Settings { method, ..piano };
     let cases = [
-        ("piano/c4", Mode::Piano, &c4, 64),
-        ("piano/16-voices/64", Mode::Piano, &sixteen, 64),
-        ("piano/16-voices/512", Mode::Piano, &sixteen, 512),
-        ("slide/16-voices/64", Mode::Slide, &sixteen, 64),
-        ("slide/16-voices/512", Mode::Slide, &sixteen, 512),
-        ("piano/88-keys", Mode::Piano, &all, 64),
+        ("piano/c4", piano, once(&c4), 64),
+        ("piano/16-voices/64", piano, once(&sixteen), 64),
+        ("piano/16-voices/512", piano, once(&sixteen), 512),
+        ("slide/16-voices/64", slide, once(&sixteen), 64),
+        ("slide/16-voices/512", slide, once(&sixteen), 512),
+        ("piano/88-keys", piano, once(&all), 64),
+        ("piano/restrike/qsa", with(Method::Qsa), restrike, 16),
+        ("piano/restrike/exp", with(Method::Exp), restrike, 16),
+        ("piano/restrike/imp", with(Method::Imp), restrike, 16),
     ];
-    for (name, mode, keys, call) in cases {
+    for (name, settings, play, call) in cases {
         if name.contains(&args.filter) {
-            let mut line = measure_piano(name, mode, keys, 2.0, call, args.runs);
-            if mode == Mode::Piano {
+            let mut line = measure_piano(name, settings, play, 2.0, call, args.runs);
+            if settings.mode == Mode::Piano && play.restrike.is_none() {
                 line.roofline = Some(roofline(line.modes, line.sample_rate, line.rtf));
             }
             if name == "piano/c4" {
@@ -402,4 +511,67 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
         write_docs(&lines, peak, &isa)?;
     }
     Ok(lines)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn call(micros: f64, in_contact: usize, after: usize) -> Call {
+        Call { seconds: micros * 1e-6, in_contact, after }
+    }
+
+    #[test]
+    fn contact_figures_take_only_calls_with_every_voice_in_contact_throughout() {
+        // Two voices played. The first call (which starts the notes) never counts; a call
+        // counts only with both voices in contact as it begins and as it ends.
+        let calls = [
+            call(50.0, 2, 2), // first call: excluded although in contact
+            call(10.0, 2, 2),
+            call(14.0, 2, 2),
+            call(30.0, 2, 1), // contact ends inside the call
+            call(20.0, 1, 2), // contact begins inside the call
+            call(2.0, 0, 0),
+        ];
+        let s = CallStats::of(&calls, 2, 64);
+        assert_eq!(s.contact_calls, 2);
+        assert!((s.contact_mean_us - 12.0).abs() < 1e-9);
+        assert!((s.contact_worst_us - 14.0).abs() < 1e-9);
+        assert!((s.contact_ratio - 14.0 / 12.0).abs() < 1e-12);
+        // The whole-render figures: mean over every call, worst after the first.
+        assert!((s.call_mean_us - 126.0 / 6.0).abs() < 1e-9);
+        assert!((s.call_worst_us - 30.0).abs() < 1e-9);
+        assert_eq!((s.worst_in_contact, s.most_in_contact), (2, 2));
+        // The costliest call of all (the first) against a 64-sample call's duration.
+        assert!((s.worst_rtf - 50e-6 / (64.0 / PIANO_RATE)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn contact_figures_are_absent_without_such_calls() {
+        let calls = [call(50.0, 1, 1), call(3.0, 1, 0), call(2.0, 0, 0)];
+        let s = CallStats::of(&calls, 1, 64);
+        assert_eq!(s.contact_calls, 0);
+        assert!(s.contact_mean_us.is_nan() && s.contact_ratio.is_nan());
+        let line = BenchLine {
+            name: "piano/x".into(),
+            method: "qsa",
+            segments: 6,
+            block: 64,
+            sample_rate: 48_000,
+            modes: 53,
+            seconds: 1.0,
+            rtf: 1e-3,
+            rtf_min: 1e-3,
+            ns_per_sample: 20.0,
+            runs: 1,
+            voices: 1,
+            roofline: None,
+            fit: None,
+            calls: Some(s),
+        };
+        assert!(table(std::slice::from_ref(&line)).contains("| none |"));
+        // NaN figures serialise as JSON null, not as an invalid number.
+        let json = serde_json::to_string(&line).expect("serialises");
+        assert!(json.contains("\"contact_ratio\":null"), "{json}");
+    }
 }
