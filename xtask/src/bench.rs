@@ -268,7 +268,7 @@ pub fn measure(name: &str, scene: &SceneDescription, runs: usize) -> Result<Benc
     Ok(BenchLine {
         name: name.to_owned(),
         method: common.solver.method.name(),
-        segments: if common.solver.method == Method::Qsa { common.solver.segments } else { 0 },
+        segments: qsa_segments(common.solver.method, common.solver.segments),
         block,
         sample_rate: fs,
         modes,
@@ -370,11 +370,10 @@ pub fn measure_piano(
                 .map_or(0, |s| s.modes())
         })
         .sum();
-    let segments = if settings.method == Method::Qsa { settings.segments } else { 0 };
     BenchLine {
         name: name.to_owned(),
         method: settings.method.name(),
-        segments,
+        segments: qsa_segments(settings.method, settings.segments),
         block: settings.block,
         sample_rate: PIANO_RATE as u32,
         modes,
@@ -434,6 +433,11 @@ impl CallStats {
             contact_ratio: contact_worst / contact_mean,
         }
     }
+}
+
+/// The QSA segment count a line reports: `segments` for QSA, 0 for the solvers without any.
+fn qsa_segments(method: Method, segments: usize) -> usize {
+    if method == Method::Qsa { segments } else { 0 }
 }
 
 fn string_modes(params: &qsa_dsp::string::StringParams, fs: u32) -> usize {
