@@ -416,7 +416,8 @@ impl CallStats {
             .unwrap_or((first, calls[0].in_contact));
         let contact: Vec<f64> =
             calls.iter().skip(1).filter(|c| c.in_contact == played && c.after == played).map(|c| c.seconds).collect();
-        let contact_mean = if contact.is_empty() { f64::NAN } else { mean_of(&contact) };
+        // With no such call both are NaN (0/0 and the fold's start): `null` in the JSON line.
+        let contact_mean = mean_of(&contact);
         let contact_worst = contact.iter().copied().fold(f64::NAN, f64::max);
         CallStats {
             call,
