@@ -507,7 +507,8 @@ fn segment_searches_give_bit_identical_trajectories() {
 
 fn same_bits(a: &Frame, b: &Frame) -> bool {
     let fields = |f: &Frame| {
-        [f.output, f.displacement, f.velocity, f.compression, f.force, f.energy, f.losses].map(f64::to_bits)
+        [f.output, f.displacement, f.velocity, f.compression, f.force, f.energy, f.losses, f.control_work]
+            .map(f64::to_bits)
     };
     fields(a) == fields(b)
 }

@@ -82,7 +82,7 @@ fn exp_renders_the_slide_excerpt_without_nan() {
     for k in [1, 2, 4, 8] {
         let frames = slide.scene.frames(SolverSettings { method: Method::Exp, segments: 1, v_ref: None }, k);
         let bad = frames.iter().position(|f| {
-            ![f.output, f.displacement, f.velocity, f.compression, f.force, f.energy, f.losses]
+            ![f.output, f.displacement, f.velocity, f.compression, f.force, f.energy, f.losses, f.control_work]
                 .iter()
                 .all(|v| v.is_finite())
         });

@@ -67,7 +67,7 @@ fn worst_step_balance(frames: &[Frame], e0: f64) -> f64 {
     let mut prev = e0;
     let mut worst = 0.0_f64;
     for f in frames {
-        let now = f.energy + f.losses;
+        let now = f.balance();
         worst = worst.max((now - prev).abs() / f.energy);
         prev = now;
     }

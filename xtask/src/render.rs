@@ -9,7 +9,8 @@
 //! - writes a mono 32-bit float WAV (default: next to the scene file, with extension `.wav`),
 //!   peak-normalised unless the scene's `[output] normalize = false`;
 //! - with `--csv`, writes the per-sample signals next to the WAV (same name, `.csv`), header
-//!   `t,u,y,force,energy,velocity,losses,work,output` (units: s, m, m, N, J, m/s, J, count, as
+//!   `t,u,y,force,energy,velocity,losses,control_work,work,output` (units: s, m, m, N, J, m/s, J,
+//!   J, count, as
 //!   the WAV before normalisation);
 //! - prints exactly one JSON line on stdout: the [`Summary`].
 //!
@@ -271,11 +272,11 @@ fn write_wav(
 
 fn write_csv(w: &mut impl Write, rendered: &Rendered, sample_rate: u32) -> std::io::Result<()> {
     let dt = 1.0 / sample_rate as f64;
-    writeln!(w, "t,u,y,force,energy,velocity,losses,work,output")?;
+    writeln!(w, "t,u,y,force,energy,velocity,losses,control_work,work,output")?;
     for (n, f) in rendered.frames.iter().enumerate() {
         writeln!(
             w,
-            "{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{}",
             n as f64 * dt,
             f.displacement,
             f.compression,
@@ -283,6 +284,7 @@ fn write_csv(w: &mut impl Write, rendered: &Rendered, sample_rate: u32) -> std::
             f.energy,
             f.velocity,
             f.losses,
+            f.control_work,
             f.work,
             f.output
         )?;

@@ -7,4 +7,4 @@ mod slide;
 
 pub use finger::FingerParams;
 pub use hammer::{Hammer, HammerParams};
-pub use slide::{HandMotion, SlideHand, SlideParams};
+pub use slide::{HandExchange, HandMotion, SlideHand, SlideParams};

@@ -50,6 +50,15 @@ pub struct SlideHand {
     w_now: f64,
 }
 
+/// Energy exchanged between the hand and the slide in one step (J).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct HandExchange {
+    /// Work the moving hand did on the slide, `Δt·P_H` (J; either sign).
+    pub supplied: f64,
+    /// Energy the hand's damping took, `Δt·Q_o` (J, ≥ 0).
+    pub dissipated: f64,
+}
+
 /// One step's hand input `w_H^{n−1}, w_H^n, w_H^{n+1}` (m).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HandMotion {
@@ -106,20 +115,23 @@ impl SlideHand {
         (2.0 * (self.k + 1.0) * self.w_prev + 2.0 * (self.k - 1.0) * self.w_now - self.xi * t_h) * self.norm
     }
 
-    /// Apply the contact force (N; the slide feels `−F`) and step on. Returns the energy
-    /// exchanged with the hand during the step, `Δt (P_H − Q_o)` (J).
+    /// Apply the contact force (N; the slide feels `−F`) and step on. Returns the energy the
+    /// hand's motion supplied during the step, `Δt·P_H` (J), and the energy its damping took,
+    /// `Δt·Q_o` (J, ≥ 0).
     #[inline]
-    pub fn advance(&mut self, z_sho: f64, force: f64, hand: &HandMotion) -> f64 {
+    pub fn advance(&mut self, z_sho: f64, force: f64, hand: &HandMotion) -> HandExchange {
         let next = self.w_prev - z_sho - self.q * force;
         let p = &self.params;
         let centred = (next - self.w_prev) / (2.0 * self.dt);
         let hand_centred = (hand.next - hand.prev) / (2.0 * self.dt);
         let spring = 0.25 * ((next - hand.next) + 2.0 * (self.w_now - hand.now) + (self.w_prev - hand.prev));
-        let exchanged =
-            self.dt * ((p.damping * centred - p.stiffness * spring) * hand_centred - p.damping * centred * centred);
+        let exchange = HandExchange {
+            supplied: self.dt * (p.damping * centred - p.stiffness * spring) * hand_centred,
+            dissipated: self.dt * p.damping * centred * centred,
+        };
         self.w_prev = self.w_now;
         self.w_now = next;
-        exchanged
+        exchange
     }
 
     /// Stored energy `½ m_o (δ_t+ w_o)² + ½ k_H (μ_t+(w_o − w_H))²` (J) of the latest step,

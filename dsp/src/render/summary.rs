@@ -32,8 +32,8 @@ pub struct Summary {
     /// Exciter velocity at the end of the render, after its last contact (m/s); `null` if there
     /// was no contact or the render ended in contact.
     pub rebound_velocity: Option<f64>,
-    /// Largest deviation of the energy balance `H^{n+1/2} + losses − H^{−1/2}`, relative to the
-    /// largest energy in the render.
+    /// Largest deviation of the energy balance `H^{n+1/2} + losses − control_work − H^{−1/2}`,
+    /// relative to the largest energy in the render.
     pub energy_drift_rel: f64,
     /// Largest solver work in one step (QSA sign tests, IMP iterations).
     pub max_work: u32,
@@ -74,7 +74,7 @@ impl Summary {
             max_compression = max_compression.max(f.compression);
             max_work = max_work.max(f.work);
             scale = scale.max(f.energy.abs());
-            drift = drift.max((f.energy + f.losses - run.initial_energy).abs());
+            drift = drift.max((f.balance() - run.initial_energy).abs());
         }
         let last = frames.last();
         let rebound_velocity = match last {

@@ -359,6 +359,7 @@ impl HammerCore {
             force: solution.force,
             energy: 0.0,
             losses: 0.0,
+            control_work: 0.0,
             work: solver.last_work(),
         };
         if MONITOR {

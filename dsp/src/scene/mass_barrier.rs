@@ -96,6 +96,7 @@ impl<S: ContactSolver> MassBarrier<S> {
             force: solution.force,
             energy,
             losses: 0.0,
+            control_work: 0.0,
             work: self.solver.last_work(),
         };
         self.y_now = y_next;

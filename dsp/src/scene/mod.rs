@@ -28,11 +28,24 @@ pub struct Frame {
     pub force: f64,
     /// Numerical energy `H^{n+1/2}` (J).
     pub energy: f64,
-    /// Net energy that has left the system up to `n+1/2` through losses, minus what sources
-    /// supplied (J). `energy + losses` is conserved to rounding.
+    /// Energy that has left the system up to `n+1/2` through damping (J), ≥ 0 and
+    /// non-decreasing.
     pub losses: f64,
+    /// Work the control inputs have done on the system up to `n+1/2` (J, either sign): the
+    /// moving hand, the fingers' forces and the slide's travel along the string (zero in scenes
+    /// without controls).
+    pub control_work: f64,
     /// Solver work in this step (QSA sign tests, IMP Newton iterations; 0 for EXP).
     pub work: u32,
+}
+
+impl Frame {
+    /// `energy + losses − control_work` (J): what the energy balance keeps constant, to
+    /// rounding, from the initial energy on.
+    #[inline]
+    pub fn balance(&self) -> f64 {
+        self.energy + self.losses - self.control_work
+    }
 }
 
 /// A scene that can be rendered sample by sample.

@@ -7,12 +7,11 @@
 //!   finger (plucking), each a force `F_φe` spread over a half-cosine window with damping
 //!   `F_φR = −r|F_φe| δ_t· u_φ` ([`finger`](crate::exciter::finger)).
 //!
-//! # One step (physics §7.3, seed eqs. 65, 72–74)
+//! # One step (seed eqs. 65, 72–74; docs/physics.md §7.3)
 //!
-//! With the contact vectors frozen for the step (`ĥ_ζ`, ζ ∈ {o, l, r}), their Gram matrix in the
-//! C metric `θ_ζξ = Σ_i ĥ_ζ,i C_i ĥ_ξ,i`, `z_ζ = ĥ_ζᵀz̃`, `e_ζ = Σ_φ θ_ζφ F_φe`,
-//! `d_φ = e_φ − z_φ` and `γ_φ = r|F_φe|/(2Δt)`, the finger damping forces are eliminated in
-//! closed form:
+//! With the contact vectors `ĥ_ζ` (ζ ∈ {o, l, r}) of the step, their Gram matrix in the C metric
+//! `θ_ζξ = Σ_i ĥ_ζ,i C_i ĥ_ξ,i`, `z_ζ = ĥ_ζᵀz̃`, `e_ζ = Σ_φ θ_ζφ F_φe`, `d_φ = e_φ − z_φ` and
+//! `γ_φ = r|F_φe|/(2Δt)`, the finger damping forces are eliminated in closed form:
 //!
 //! ```text
 //! Δ    = (1 + γ_l θ_ll)(1 + γ_r θ_rr) − γ_l γ_r θ_lr²
@@ -20,29 +19,54 @@
 //! s_r  = [(1+γ_lθ_ll)(d_r + θ_ro F) − γ_lθ_rl(d_l + θ_lo F)] / Δ  ≡ s_r0 + s_r1 F
 //! z_str = z_o − e_o + γ_l θ_ol s_l0 + γ_r θ_or s_r0
 //! q_str = θ_oo − γ_l θ_ol s_l1 − γ_r θ_or s_r1
-//! s + (z_str − z_sho) − (q_str + q_sho) F = 0                                  (seed eq. 74)
+//! s + (z_str − z_sho − J) − (q_str + q_sho) F = 0                         (seed eq. 74, with J)
 //! ```
 //!
 //! and after the solve `F_φR = −γ_φ s_φ` and
 //! `ũ^{n+1} = ũ^{n−1} − z̃ + C(ĥ_o F + Σ_φ ĥ_φ (F_φe + F_φR))` (seed eq. 65 with the excitation
 //! counted once).
 //!
-//! # Controls (seed §6.7)
+//! # Controls within a block (seed §6.7; docs/physics.md §7.5)
 //!
 //! Slide position `x_o`, hand height `w_H`, finger positions and finger forces come from a
-//! [`ControlSource`] sampled at block boundaries every `N_b` samples. Within a block the hand
-//! height and finger forces ramp linearly; the vectors, θ and the projections are recomputed once
-//! per block from the positions at the block's start, and only when a position changed. With
-//! [`Fixed`](crate::control::Fixed) controls none of this code runs. A finger whose force is zero
-//! throughout a block is left out of that block's passes over the modes.
+//! [`ControlSource`] sampled at block boundaries every `N_b` samples and moved linearly inside
+//! the block: the hand height and finger forces by ramps, and every contact vector by
+//! interpolating between the exact vectors at the block's two ends,
+//! `ĥ_ζ = (1 − a) h_ζ(x_ζ^start) + a h_ζ(x_ζ^end)` at fraction `a = k/N_b` of the block. A step
+//! then projects `z̃` on both end vectors and spreads each force along both, and
+//! `θ(a) = (1−a)² θ_ss + a(1−a)(θ_se + θ_es) + a² θ_ee` comes from one Gram matrix of the block's
+//! vectors. The vectors are made at block boundaries only (an end vector becomes the next
+//! block's start vector), and only for contacts that touch the string: the slide always, a
+//! finger while its force is non-zero at either end of the block. With [`Fixed`](crate::control::Fixed) controls none of
+//! this runs.
 //!
-//! # Energy (seed eqs. 75–80)
+//! # The compression carried across a moving vector
 //!
-//! `H^{n+1/2}` = string + SHO + contact. Per step the losses are `Δt(Q_str + Q_o + Σ Q_φ)` and the
-//! sources `Δt(P_H + Σ P_φ)`, with `Δt Q_φ = γ_φ s_φ²/2` and `Δt P_φ = F_φe s_φ/2` for fixed
-//! finger positions. Moving the slide or the fingers exchanges energy through the time-varying
-//! vectors (seed eq. 77–78), which is not booked: the balance closes to rounding only while the
-//! positions are fixed.
+//! The contact potential is evaluated on carried compressions: `y^{n+1} = ĥ_oᵀũ^{n+1} − w_o^{n+1}`
+//! is measured with the step's vector, and the step's `y^{n−1}` is the one the step before last
+//! measured, with its own vector. Where the slide's vector changed in between, the string under
+//! the slide now differs from the carried value by
+//!
+//! ```text
+//! J = ĥ_o^nᵀũ^{n−1} − w_o^{n−1} − y^{n−1}
+//! ```
+//!
+//! which enters the scalar problem above. The potential is then continuous in time, and the slide's
+//! travel does the work `−½F^n J` on the system in the step (`F ≤ 0`): a force times a
+//! displacement, the discrete form of `−F ∂_x u ẋ_o` (seed eq. 57). Re-measuring both
+//! compressions with the new vector instead makes the potential jump by `V(y + J) − V(y)`, which
+//! for a stiff contact (κ = 1e13 with α = 1, `J` of micrometres) is joules pumped into the
+//! string in one step: the scheme blew up. The projections `ĥᵀũ^{n−1}` that `J` needs are kept
+//! for the slide's two vectors by the update's own recursion
+//! `hᵀũ^{n+1} = hᵀũ^{n−1} − hᵀz̃ + Σ_ζ hᵀ(C∘ĥ_ζ) F_ζ`, which needs only sums the step already has.
+//!
+//! # Energy (seed eqs. 75–80; docs/physics.md §7.4–7.5)
+//!
+//! `H^{n+1/2}` = string + SHO + contact. Per step the losses are `Δt(Q_str + Q_o + Σ Q_φ)` with
+//! `Δt Q_φ = γ_φ s_φ²/2`, and the controls supply `Δt(P_H + Σ P_φ) − ½F J` with
+//! `Δt P_φ = F_φe s_φ/2`: `H^{n+1/2} + losses − control work` is constant to rounding whatever
+//! the controls do, since every vector used to distribute a force is the one used to project the
+//! motion it works on.
 
 use crate::contact::{ContactProblem, ContactSolver};
 use crate::control::{ControlSource, Ramp};
@@ -73,26 +97,224 @@ impl SlideControls {
     }
 }
 
-/// Which fingers touch the string during a block. A finger whose force is zero at both ends of
-/// a block (so throughout it) neither excites nor damps the string there (`F_φe = 0`, `γ_φ = 0`),
-/// so its projection and its share of the update are skipped for the block.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Fingers {
-    None,
-    Left,
-    Right,
-    Both,
+/// The slide's contact, then the left and the right finger.
+const SLIDE: usize = 0;
+const LEFT: usize = 1;
+const RIGHT: usize = 2;
+
+/// Slots of the contact vectors: contact `c` keeps the vector at its position at the block's
+/// start in slot `2c` and the one at the block's end in slot `2c + 1`.
+const SLOTS: usize = 6;
+
+/// The slot of contact `c`'s start (`end = false`) or end vector.
+#[inline(always)]
+const fn slot(c: usize, end: bool) -> usize {
+    2 * c + end as usize
 }
 
-impl Fingers {
-    fn touching(start: &SlideControls, end: &SlideControls) -> Self {
-        let left = start.left_force != 0.0 || end.left_force != 0.0;
-        let right = start.right_force != 0.0 || end.right_force != 0.0;
-        match (left, right) {
-            (false, false) => Fingers::None,
-            (true, false) => Fingers::Left,
-            (false, true) => Fingers::Right,
-            (true, true) => Fingers::Both,
+/// The contact a slot belongs to.
+#[inline(always)]
+const fn contact(slot: usize) -> usize {
+    slot / 2
+}
+
+/// Which contact vectors a block's passes over the modes use.
+///
+/// A contact touches the string during a block if it is the slide (always) or a finger whose
+/// force is non-zero at the block's start or end (a finger with zero force throughout neither
+/// excites nor damps the string: `F_φe = 0`, `γ_φ = 0`). A touching contact whose position
+/// changes across the block (with `N_b ≥ 2`) is interpolated between its start and end vectors,
+/// so the passes use both; any other touching contact uses its start vector alone.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Plan {
+    touching: [bool; 3],
+    moving: [bool; 3],
+    /// The slots in use, in order: `slots[..count]`.
+    slots: [usize; SLOTS],
+    count: usize,
+}
+
+impl Plan {
+    /// No contact at all (before the first block).
+    const NONE: Plan = Plan { touching: [false; 3], moving: [false; 3], slots: [0; SLOTS], count: 0 };
+
+    fn new(touching: [bool; 3], moving: [bool; 3]) -> Self {
+        let mut plan = Plan { touching, moving, slots: [0; SLOTS], count: 0 };
+        for c in 0..3 {
+            let ends: &[bool] = if !touching[c] {
+                &[]
+            } else if moving[c] {
+                &[false, true]
+            } else {
+                &[false]
+            };
+            for &end in ends {
+                plan.slots[plan.count] = slot(c, end);
+                plan.count += 1;
+            }
+        }
+        plan
+    }
+
+    /// The first `V` slots (`V = count`).
+    #[inline(always)]
+    fn slots<const V: usize>(&self) -> [usize; V] {
+        std::array::from_fn(|j| self.slots[j])
+    }
+
+    /// The weight of `slot`'s vector at fraction `a` of the block: `1 − a` and `a` for the start
+    /// and end vectors of a moving contact, 1 for a contact held still.
+    #[inline(always)]
+    fn weight(&self, slot: usize, a: f64) -> f64 {
+        match (slot % 2 == 1, self.moving[contact(slot)]) {
+            (true, _) => a,
+            (false, true) => 1.0 - a,
+            (false, false) => 1.0,
+        }
+    }
+}
+
+/// Run `$body` with the const `$v` equal to the runtime count `$count` (1 to [`SLOTS`]), so the
+/// per-sample code is compiled once for each number of vectors.
+macro_rules! with_count {
+    ($count:expr, |$v:ident| $body:expr) => {
+        match $count {
+            1 => {
+                const $v: usize = 1;
+                $body
+            }
+            2 => {
+                const $v: usize = 2;
+                $body
+            }
+            3 => {
+                const $v: usize = 3;
+                $body
+            }
+            4 => {
+                const $v: usize = 4;
+                $body
+            }
+            5 => {
+                const $v: usize = 5;
+                $body
+            }
+            _ => {
+                const $v: usize = 6;
+                $body
+            }
+        }
+    };
+}
+
+/// The contact vectors of every slot, their gains and their Gram matrix.
+#[derive(Debug, Clone)]
+struct ContactVectors {
+    /// `h` of each slot (dimensionless).
+    shapes: [Vec<f64>; SLOTS],
+    /// `C∘h` of each slot (m/N).
+    gains: [Vec<f64>; SLOTS],
+    /// Where each slot's vector was made (m); NaN before the first.
+    made_at: [f64; SLOTS],
+    /// `θ_jk = h_jᵀ(C∘h_k)` between the slots of the current plan (m/N), both triangles.
+    gram: [[f64; SLOTS]; SLOTS],
+    /// Window factors of the fingers (the slide has none).
+    windows: [Option<Vec<f64>>; 3],
+}
+
+impl ContactVectors {
+    fn new(string: &ModalString, left: &FingerParams, right: &FingerParams) -> Self {
+        Self {
+            shapes: std::array::from_fn(|_| string.vector()),
+            gains: std::array::from_fn(|_| string.vector()),
+            made_at: [f64::NAN; SLOTS],
+            gram: [[0.0; SLOTS]; SLOTS],
+            windows: [
+                None,
+                Some(finger::window_factors(string, left.width)),
+                Some(finger::window_factors(string, right.width)),
+            ],
+        }
+    }
+
+    /// Exchange contact `c`'s start and end vectors (with their rows and columns of θ).
+    fn swap_ends(&mut self, c: usize) {
+        let (s, e) = (slot(c, false), slot(c, true));
+        self.shapes.swap(s, e);
+        self.gains.swap(s, e);
+        self.made_at.swap(s, e);
+        self.gram.swap(s, e);
+        for row in &mut self.gram {
+            row.swap(s, e);
+        }
+    }
+
+    /// Make the slots marked in `fresh` at their positions (m) and the Gram matrix of `order`
+    /// (a plan's slots, any order) in one [`ModalString::gram`]; returns the projections
+    /// `(hᵀũ^{n−1}, hᵀũ^n)` (m) of the state on the first slot of `order`.
+    fn update<const V: usize>(
+        &mut self,
+        string: &ModalString,
+        order: [usize; V],
+        fresh: [Option<f64>; SLOTS],
+    ) -> (f64, f64) {
+        let mut shapes = self.shapes.each_mut().map(Some);
+        let mut gains = self.gains.each_mut().map(Some);
+        let vectors: [GramVector<'_>; V] = std::array::from_fn(|j| {
+            let k = order[j];
+            GramVector {
+                shape: shapes[k].take().expect("a plan names each slot once"),
+                gain: gains[k].take().expect("a plan names each slot once"),
+                window: self.windows[contact(k)].as_deref(),
+                fresh: fresh[k].map(|x| string.shape_angle(x)),
+            }
+        });
+        let (theta, state) = string.gram(vectors);
+        for a in 0..V {
+            for b in a..V {
+                let (j, k) = (order[a], order[b]);
+                self.gram[j][k] = theta[a][b];
+                self.gram[k][j] = theta[a][b];
+            }
+        }
+        for (made, at) in self.made_at.iter_mut().zip(fresh) {
+            if let Some(x) = at {
+                *made = x;
+            }
+        }
+        state
+    }
+}
+
+/// The finger damping forces eliminated in closed form (module docs): the fingers' velocity
+/// projections `s_φ = s_φ0 + s_φ1 F` and the slide's `z_str`, `q_str`.
+#[derive(Debug, Clone, Copy)]
+struct Elimination {
+    s0: [f64; 2],
+    s1: [f64; 2],
+    z_str: f64,
+    q_str: f64,
+}
+
+impl Elimination {
+    /// From the Gram matrix `th` of the step's vectors (m/N), the projections `z` of `z̃` on
+    /// them (m), the finger forces `f` (N) and damping coefficients `γ` (N/m).
+    #[inline(always)]
+    fn new(th: &[[f64; 3]; 3], z: [f64; 3], f: [f64; 2], g: [f64; 2]) -> Self {
+        let e = [0, 1, 2].map(|a| th[a][1] * f[0] + th[a][2] * f[1]);
+        let (d_l, d_r) = (e[1] - z[LEFT], e[2] - z[RIGHT]);
+        let (g_l, g_r) = (g[0], g[1]);
+        let (a_l, a_r) = (1.0 + g_l * th[1][1], 1.0 + g_r * th[2][2]);
+        let det = a_l * a_r - g_l * g_r * th[1][2] * th[1][2];
+        let s_l0 = (a_r * d_l - g_r * th[1][2] * d_r) / det;
+        let s_l1 = (a_r * th[1][0] - g_r * th[1][2] * th[2][0]) / det;
+        let s_r0 = (a_l * d_r - g_l * th[2][1] * d_l) / det;
+        let s_r1 = (a_l * th[2][0] - g_l * th[2][1] * th[1][0]) / det;
+        Self {
+            s0: [s_l0, s_r0],
+            s1: [s_l1, s_r1],
+            z_str: z[SLIDE] - e[0] + g_l * th[0][1] * s_l0 + g_r * th[0][2] * s_r0,
+            q_str: th[0][0] - g_l * th[0][1] * s_l1 - g_r * th[0][2] * s_r1,
         }
     }
 }
@@ -178,21 +400,16 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> Scene for SlideString<S,
 pub struct SlideCore {
     string: ModalString,
     sho: SlideHand,
-    left_window: Vec<f64>,
-    right_window: Vec<f64>,
-    /// Contact vectors `ĥ_o, ĥ_l, ĥ_r`.
-    shapes: [Vec<f64>; 3],
-    /// `C∘ĥ_ζ` (m/N).
-    gains: [Vec<f64>; 3],
-    /// `θ_ζξ` (m/N).
-    theta: [[f64; 3]; 3],
-    /// Positions the vectors were computed for (m).
-    positions: [f64; 3],
+    vectors: ContactVectors,
+    /// The current block's vectors.
+    plan: Plan,
     pickup: Vec<f64>,
     kind: OutputKind,
     /// Finger damping parameters r (s/m).
     r: [f64; 2],
     block: usize,
+    /// `1/N_b` of the current block.
+    inv_block: f64,
     /// Block length to use from the next block boundary.
     next_block: usize,
     /// Sample index of the next step.
@@ -205,14 +422,22 @@ pub struct SlideCore {
     hand: Ramp,
     left_force: Ramp,
     right_force: Ramp,
-    /// Which fingers touch the string anywhere in the current block.
-    fingers: Fingers,
     /// `w_H^{n−1}` (m).
     hand_prev: f64,
+    /// The carried compressions `y^{n−1}`, `y^n` (m): each measured with the slide vector of the
+    /// step that made it.
     y_prev: f64,
     y_now: f64,
+    /// `(hᵀũ^{n−1}, hᵀũ^n)` (m) for the slide's start and end vectors, kept by the string
+    /// update's own recursion (used when the slide vector changes).
+    slide_state: [[f64; 2]; 2],
+    /// Whether the slide's vector in the block's first step differs from the one before it.
+    slide_jumped: bool,
+    /// Steps since the slide's vector last changed (saturating).
+    slide_still: u32,
     out_now: f64,
     losses: f64,
+    control_work: f64,
     /// Contact force of the latest step (N).
     last_force: f64,
     dt: f64,
@@ -233,16 +458,13 @@ impl SlideCore {
         }
         let sho = SlideHand::new(params.slide, fs, start.hand_height);
         let mut core = Self {
-            left_window: finger::window_factors(&string, params.left.width),
-            right_window: finger::window_factors(&string, params.right.width),
-            shapes: [string.vector(), string.vector(), string.vector()],
-            gains: [string.vector(), string.vector(), string.vector()],
-            theta: [[0.0; 3]; 3],
-            positions: [f64::NAN; 3],
+            vectors: ContactVectors::new(&string, &params.left, &params.right),
+            plan: Plan::NONE,
             pickup,
             kind: params.pickup.kind,
             r: [params.left.damping, params.right.damping],
             block,
+            inv_block: 1.0 / block as f64,
             next_block: block,
             n: 0,
             k: 0,
@@ -251,18 +473,26 @@ impl SlideCore {
             hand: Ramp::new(start.hand_height, target.hand_height, block),
             left_force: Ramp::new(start.left_force, target.left_force, block),
             right_force: Ramp::new(start.right_force, target.right_force, block),
-            fingers: Fingers::touching(&start, &target),
             hand_prev: start.hand_height,
             y_prev: 0.0,
             y_now: 0.0,
+            slide_state: [[0.0; 2]; 2],
+            slide_jumped: false,
+            slide_still: u32::MAX,
             out_now: 0.0,
             losses: 0.0,
+            control_work: 0.0,
             last_force: 0.0,
             dt: 1.0 / fs,
             string,
             sho,
         };
-        core.place(start.positions());
+        core.plan_block();
+        // The compressions start out measured with the first slide vector.
+        let [p, n] = core.slide_state[0];
+        core.y_prev = p - core.sho.previous();
+        core.y_now = n - core.sho.position();
+        core.slide_jumped = false;
         core.out_now = core.string.project_state(&core.pickup).1;
         core
     }
@@ -296,7 +526,8 @@ impl SlideCore {
 
     /// What a monitor shows: `(compression y^n (m), latest contact force (N), slide position x_o (m))`.
     pub fn contact(&self) -> (f64, f64, f64) {
-        (self.y_now, self.last_force, self.positions[0])
+        let (from, to) = (self.start.slide_position, self.target.slide_position);
+        (self.y_now, self.last_force, from + (to - from) * self.k as f64 * self.inv_block)
     }
 
     /// Whether the slide touches the string (now or one step back).
@@ -309,65 +540,87 @@ impl SlideCore {
         self.string.energy() + self.sho.energy(self.hand_prev, self.hand.at(self.k))
     }
 
+    /// Work the controls have done on the string and the slide since the core was made (J):
+    /// the moving hand, the fingers' forces and the slide's travel (module docs).
+    pub fn control_work(&self) -> f64 {
+        self.control_work
+    }
+
     /// The string.
     pub fn string(&self) -> &ModalString {
         &self.string
     }
 
-    /// Recompute the contact vectors that moved (the slide's always, a finger's only while it
-    /// touches the string), the Gram matrix of the touching ones, and the compressions, in one
-    /// [`ModalString::gram`]: a pass a vector makes it by rotations, windows it and sums its θ
-    /// entry; one more sums the cross terms and the slide's projections.
-    /// A finger left out keeps its old vector and θ entries, which only ever meet its zero force.
-    fn place(&mut self, positions: [f64; 3]) {
-        let s = &self.string;
-        let left = matches!(self.fingers, Fingers::Left | Fingers::Both);
-        let right = matches!(self.fingers, Fingers::Right | Fingers::Both);
-        let needed = [true, left, right];
-        let mut fresh = [None; 3];
-        for z in 0..3 {
-            if needed[z] && positions[z] != self.positions[z] {
-                fresh[z] = Some(s.shape_angle(positions[z]));
-                self.positions[z] = positions[z];
+    /// Plan the block that starts now, from the controls at its start (`self.start`) and end
+    /// (`self.target`): which vectors the passes use, and make those that are missing. A
+    /// contact's start vector is usually the last block's end vector (swapped in); vectors are
+    /// made only for positions no slot holds, and the Gram matrix of every slot in use is
+    /// recomputed whenever a vector or the set of touching contacts changed, so θ always belongs
+    /// to the current positions and touching set.
+    fn plan_block(&mut self) {
+        let (start, end) = (self.start.positions(), self.target.positions());
+        let touching = [true, self.start.left_force != 0.0 || self.target.left_force != 0.0, {
+            self.start.right_force != 0.0 || self.target.right_force != 0.0
+        }];
+        let was = self.plan;
+        let v = &mut self.vectors;
+        let mut fresh = [None; SLOTS];
+        let mut moving = [false; 3];
+        // The slide's vector jumps at this block's first step unless the last step used exactly
+        // this block's start vector (the last block held the slide still at this position).
+        self.slide_jumped = was.moving[SLIDE];
+        let mut end_tracked = was.moving[SLIDE];
+        for c in 0..3 {
+            if !touching[c] {
+                continue;
+            }
+            let (s, e) = (slot(c, false), slot(c, true));
+            if v.made_at[s] != start[c] {
+                if v.made_at[e] == start[c] {
+                    v.swap_ends(c);
+                    if c == SLIDE {
+                        self.slide_state.swap(0, 1);
+                        end_tracked = true;
+                    }
+                } else {
+                    fresh[s] = Some(start[c]);
+                }
+                if c == SLIDE {
+                    self.slide_jumped = true;
+                }
+            }
+            moving[c] = self.block > 1 && end[c] != start[c];
+            if moving[c] && v.made_at[e] != end[c] {
+                fresh[e] = Some(end[c]);
             }
         }
-        if fresh == [None; 3] {
+        let plan = Plan::new(touching, moving);
+        self.plan = plan;
+        if plan == was && fresh == [None; SLOTS] {
             return;
         }
-        let [sh_o, sh_l, sh_r] = &mut self.shapes;
-        let [g_o, g_l, g_r] = &mut self.gains;
-        let o = GramVector { shape: sh_o, gain: g_o, window: None, fresh: fresh[0] };
-        let l = GramVector { shape: sh_l, gain: g_l, window: Some(&self.left_window), fresh: fresh[1] };
-        let r = GramVector { shape: sh_r, gain: g_r, window: Some(&self.right_window), fresh: fresh[2] };
-        let state = match self.fingers {
-            Fingers::None => {
-                let (t, state) = s.gram([o]);
-                set_gram(&mut self.theta, &t, [0]);
-                state
+        // The state projections are needed for a fresh slide vector (the first in the Gram
+        // pass, which sums them) and for an end vector whose projections were not kept.
+        let (s, e) = (slot(SLIDE, false), slot(SLIDE, true));
+        let first = if fresh[e].is_some() || (moving[SLIDE] && !end_tracked) { e } else { s };
+        let mut order = plan.slots;
+        let at = order[..plan.count].iter().position(|&k| k == first).expect("the slide is in every plan");
+        order[..plan.count].swap(0, at);
+        let string = &self.string;
+        let state = with_count!(plan.count, |V| v.update::<V>(string, std::array::from_fn(|j| order[j]), fresh));
+        let state = [state.0, state.1];
+        if first == e {
+            self.slide_state[1] = state;
+            if fresh[s].is_some() {
+                let (p, n) = string.project_state(&v.shapes[s]);
+                self.slide_state[0] = [p, n];
             }
-            Fingers::Left => {
-                let (t, state) = s.gram([o, l]);
-                set_gram(&mut self.theta, &t, [0, 1]);
-                state
-            }
-            Fingers::Right => {
-                let (t, state) = s.gram([o, r]);
-                set_gram(&mut self.theta, &t, [0, 2]);
-                state
-            }
-            Fingers::Both => {
-                let (t, state) = s.gram([o, l, r]);
-                set_gram(&mut self.theta, &t, [0, 1, 2]);
-                state
-            }
-        };
-        if fresh[0].is_some() {
-            self.y_prev = state.0 - self.sho.previous();
-            self.y_now = state.1 - self.sho.position();
+        } else if fresh[s].is_some() {
+            self.slide_state[0] = state;
         }
     }
 
-    /// Start a new block: move the targets on and, if a position changed, the vectors.
+    /// Start a new block: move the targets on and plan its vectors.
     fn begin_block<C: ControlSource<SlideControls>>(&mut self, controls: &mut C) {
         self.start = self.target;
         self.target = controls.at(self.n + self.block as u64);
@@ -375,65 +628,89 @@ impl SlideCore {
         self.hand = Ramp::new(s.hand_height, t.hand_height, len);
         self.left_force = Ramp::new(s.left_force, t.left_force, len);
         self.right_force = Ramp::new(s.right_force, t.right_force, len);
-        self.fingers = Fingers::touching(s, t);
-        self.place(self.start.positions());
+        self.plan_block();
     }
 
+    /// One step with the `V` vectors `slots` of the current plan.
     #[inline]
-    fn step<S: ContactSolver, const MONITOR: bool>(&mut self, solver: &mut S) -> Frame {
+    fn step<S: ContactSolver, const MONITOR: bool, const V: usize>(
+        &mut self,
+        solver: &mut S,
+        slots: [usize; V],
+    ) -> Frame {
         let k = self.k;
+        let plan = self.plan;
+        // Interpolation weights of the vectors at this step (all 1 for contacts held still).
+        let a = k as f64 * self.inv_block;
+        let w: [f64; V] = std::array::from_fn(|j| plan.weight(slots[j], a));
         let hand = HandMotion { prev: self.hand_prev, now: self.hand.at(k), next: self.hand.at(k + 1) };
-        let (f_le, f_re) = (self.left_force.at(k), self.right_force.at(k));
-        let th = &self.theta;
-        let [sh_o, sh_l, sh_r] = &self.shapes;
-        let (z_o, z_l, z_r) = match self.fingers {
-            Fingers::None => {
-                let [z_o] = self.string.history([sh_o]);
-                (z_o, 0.0, 0.0)
+        let f = [self.left_force.at(k), self.right_force.at(k)];
+        let shapes = &self.vectors.shapes;
+        let projections: [f64; V] = self.string.history(std::array::from_fn(|j| &shapes[slots[j]][..]));
+        // `ĥ_ζᵀz̃` and `θ_ζξ = ĥ_ζᵀ(C∘ĥ_ξ)` of the interpolated vectors `ĥ_ζ = Σ w_j h_j`.
+        let g = &self.vectors.gram;
+        let (mut z, mut th) = ([0.0; 3], [[0.0; 3]; 3]);
+        for j in 0..V {
+            let c = contact(slots[j]);
+            z[c] += w[j] * projections[j];
+            for i in 0..V {
+                th[c][contact(slots[i])] += w[j] * w[i] * g[slots[j]][slots[i]];
             }
-            Fingers::Left => {
-                let [z_o, z_l] = self.string.history([sh_o, sh_l]);
-                (z_o, z_l, 0.0)
+        }
+        // The slide's vector moved since the compression y^{n−1} was measured: the string under
+        // it, `ĥ_oᵀũ^{n−1}`, differs from the carried `y^{n−1} + w_o^{n−1}` by `J`.
+        if (k == 0 && self.slide_jumped) || (k > 0 && plan.moving[SLIDE]) {
+            self.slide_still = 0;
+        }
+        let jump = if self.slide_still < 2 {
+            let mut under = 0.0;
+            for j in 0..V {
+                if contact(slots[j]) == SLIDE {
+                    under += w[j] * self.slide_state[slots[j] % 2][0];
+                }
             }
-            Fingers::Right => {
-                let [z_o, z_r] = self.string.history([sh_o, sh_r]);
-                (z_o, 0.0, z_r)
-            }
-            Fingers::Both => {
-                let [z_o, z_l, z_r] = self.string.history([sh_o, sh_l, sh_r]);
-                (z_o, z_l, z_r)
-            }
+            (under - self.sho.previous()) - self.y_prev
+        } else {
+            0.0
         };
-        let e = [0, 1, 2].map(|a| th[a][1] * f_le + th[a][2] * f_re);
-        let (d_l, d_r) = (e[1] - z_l, e[2] - z_r);
-        let (g_l, g_r) = (self.r[0] * f_le.abs() / (2.0 * self.dt), self.r[1] * f_re.abs() / (2.0 * self.dt));
-        let (a_l, a_r) = (1.0 + g_l * th[1][1], 1.0 + g_r * th[2][2]);
-        let det = a_l * a_r - g_l * g_r * th[1][2] * th[1][2];
-        let s_l0 = (a_r * d_l - g_r * th[1][2] * d_r) / det;
-        let s_l1 = (a_r * th[1][0] - g_r * th[1][2] * th[2][0]) / det;
-        let s_r0 = (a_l * d_r - g_l * th[2][1] * d_l) / det;
-        let s_r1 = (a_l * th[2][0] - g_l * th[2][1] * th[1][0]) / det;
-        let z_str = z_o - e[0] + g_l * th[0][1] * s_l0 + g_r * th[0][2] * s_r0;
-        let q_str = th[0][0] - g_l * th[0][1] * s_l1 - g_r * th[0][2] * s_r1;
+        let gamma = [self.r[0] * f[0].abs() / (2.0 * self.dt), self.r[1] * f[1].abs() / (2.0 * self.dt)];
+        let fingers = Elimination::new(&th, z, f, gamma);
         let z_sho = self.sho.history(&hand);
-        let problem =
-            ContactProblem { y_prev: self.y_prev, y_now: self.y_now, z: z_str - z_sho, q: q_str + self.sho.coupling() };
+        let problem = ContactProblem {
+            y_prev: self.y_prev,
+            y_now: self.y_now,
+            z: fingers.z_str - z_sho - jump,
+            q: fingers.q_str + self.sho.coupling(),
+        };
         let solution = solver.solve(&problem);
         let force = solution.force;
         self.last_force = force;
         let y_next = self.y_prev + solution.s;
-        let (s_l, s_r) = (s_l0 + s_l1 * force, s_r0 + s_r1 * force);
-        let [g_o, g_lf, g_rf] = &self.gains;
-        let (o, l, r) = ((&g_o[..], force), (&g_lf[..], f_le - g_l * s_l), (&g_rf[..], f_re - g_r * s_r));
-        let (out_next, string_energy) = match (MONITOR, self.fingers) {
-            (true, _) => self.string.advance_monitored([o, l, r], &self.pickup),
-            (false, Fingers::None) => (self.string.advance([o], &self.pickup), Default::default()),
-            (false, Fingers::Left) => (self.string.advance([o, l], &self.pickup), Default::default()),
-            (false, Fingers::Right) => (self.string.advance([o, r], &self.pickup), Default::default()),
-            (false, Fingers::Both) => (self.string.advance([o, l, r], &self.pickup), Default::default()),
+        let s_f = [0, 1].map(|i| fingers.s0[i] + fingers.s1[i] * force);
+        // Modal force along each contact: the slide's F, each finger's F_φe + F_φR.
+        let along = [force, f[0] - gamma[0] * s_f[0], f[1] - gamma[1] * s_f[1]];
+        let gains = &self.vectors.gains;
+        let forces: [(&[f64], f64); V] =
+            std::array::from_fn(|j| (&gains[slots[j]][..], w[j] * along[contact(slots[j])]));
+        let (out_next, string_energy) = if MONITOR {
+            self.string.advance_monitored(forces, &self.pickup)
+        } else {
+            (self.string.advance(forces, &self.pickup), Default::default())
         };
+        // The slide vectors' projections follow the update ũ^{n+1} = ũ^{n−1} − z̃ + Σ C∘ĥ F.
+        for j in 0..V {
+            if contact(slots[j]) == SLIDE {
+                let mut next = self.slide_state[slots[j] % 2][0] - projections[j];
+                for i in 0..V {
+                    next += g[slots[j]][slots[i]] * forces[i].1;
+                }
+                let state = &mut self.slide_state[slots[j] % 2];
+                *state = [state[1], next];
+            }
+        }
         let w_now = self.sho.position();
-        let exchanged = self.sho.advance(z_sho, force, &hand);
+        let exchange = self.sho.advance(z_sho, force, &hand);
+        self.control_work += -0.5 * force * jump + exchange.supplied + 0.5 * (f[0] * s_f[0] + f[1] * s_f[1]);
         let output = self.kind.sample(self.out_now, out_next, self.dt);
         let mut frame = Frame {
             output,
@@ -443,19 +720,22 @@ impl SlideCore {
             force,
             energy: 0.0,
             losses: 0.0,
+            control_work: 0.0,
             work: solver.last_work(),
         };
         if MONITOR {
-            let fingers = 0.5 * (g_l * s_l * s_l + g_r * s_r * s_r - f_le * s_l - f_re * s_r);
-            self.losses += string_energy.dissipated + fingers - exchanged;
+            let fingers = 0.5 * (gamma[0] * s_f[0] * s_f[0] + gamma[1] * s_f[1] * s_f[1]);
+            self.losses += string_energy.dissipated + fingers + exchange.dissipated;
             frame.energy =
                 string_energy.stored + self.sho.energy(hand.now, hand.next) + solver.stored_energy(y_next, self.y_now);
             frame.losses = self.losses;
+            frame.control_work = self.control_work;
         }
         self.out_now = out_next;
         self.y_prev = self.y_now;
         self.y_now = y_next;
         self.hand_prev = hand.now;
+        self.slide_still = self.slide_still.saturating_add(1);
         self.n += 1;
         self.k += 1;
         frame
@@ -476,14 +756,18 @@ impl SlideCore {
             if self.k == self.block {
                 self.k = 0;
                 self.block = self.next_block;
+                self.inv_block = 1.0 / self.block as f64;
                 if C::VARYING {
                     self.begin_block(controls);
                 }
             }
             let run = (self.block - self.k).min(count - done);
-            for i in done..done + run {
-                sink(i, self.step::<S, MONITOR>(solver));
-            }
+            with_count!(self.plan.count, |V| {
+                let slots = self.plan.slots::<V>();
+                for i in done..done + run {
+                    sink(i, self.step::<S, MONITOR, V>(solver, slots));
+                }
+            });
             done += run;
         }
     }
@@ -496,17 +780,6 @@ impl SlideCore {
         out: &mut [f64],
     ) {
         self.run::<S, C, false>(solver, controls, out.len(), |i, f| out[i] = f.output);
-    }
-}
-
-/// Write the Gram matrix `t` of the vectors `index` (upper triangle) into θ, symmetrically.
-fn set_gram<const K: usize>(theta: &mut [[f64; 3]; 3], t: &[[f64; K]; K], index: [usize; K]) {
-    for a in 0..K {
-        for b in a..K {
-            let (i, j) = (index[a], index[b]);
-            theta[i][j] = t[a][b];
-            theta[j][i] = t[a][b];
-        }
     }
 }
 

@@ -380,7 +380,10 @@ impl ModalString {
             let p = if mode.underdamped {
                 decay * (mode.omega * dt).cos()
             } else {
-                decay * ((mode.sigma * mode.sigma - mode.omega0 * mode.omega0).sqrt() * dt).cosh()
+                // e^{−σΔt} cosh(γΔt) as the mean of two decaying exponentials (0 < γ < σ): the
+                // product form gives 0·∞ = NaN once σΔt passes about 710.
+                let gamma = (mode.sigma * mode.sigma - mode.omega0 * mode.omega0).sqrt();
+                0.5 * ((gamma - mode.sigma) * dt).exp() + 0.5 * ((-gamma - mode.sigma) * dt).exp()
             };
             let q = decay * decay;
             let den = 1.0 + 2.0 * p + q;
@@ -806,6 +809,32 @@ mod tests {
         }
         assert!((s.kinetic_energy() / kinetic - 1.0).abs() < 1e-13, "{} vs {kinetic}", s.kinetic_energy());
         assert!((s.energy() / (kinetic + potential) - 1.0).abs() < 1e-13, "{} vs {}", s.energy(), kinetic + potential);
+    }
+
+    /// An overdamped mode with a decay rate far beyond the sample rate (σΔt ≈ 2000, where
+    /// `e^{−σΔt}` underflows to 0 and `cosh(γΔt)` overflows) gets finite coefficients, and its
+    /// recursion `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}` has `P` within rounding of the exact
+    /// `½(e^{(γ−σ)Δt} + e^{(−γ−σ)Δt})`, computed here with the slowest part alone.
+    #[test]
+    fn overdamped_modes_with_huge_damping_stay_finite() {
+        let mut p = c4();
+        p.damping = Damping::Viscous { eta0: 1e8, eta2: 0.0 };
+        let mut s = ModalString::new(p, 44100.0).unwrap();
+        assert!(s.modes() > 0);
+        for i in 0..s.modes() {
+            let (a, b, c) = (s.coef_a[i], s.coef_b[i], s.coef_c[i]);
+            assert!(a.is_finite() && b.is_finite() && c.is_finite(), "mode {i}: A {a} B {b} C {c}");
+            let (sigma, omega0) = (s.decay_rates()[i], s.angular_frequencies()[i]);
+            let gamma = (sigma * sigma - omega0 * omega0).sqrt();
+            let slow = 0.5 * ((gamma - sigma) / 44100.0).exp();
+            assert!((0.5 * a - slow).abs() <= 1e-12 * slow.max(f64::MIN_POSITIVE), "mode {i}: P {} vs {slow}", 0.5 * a);
+        }
+        let ones = vec![1e-3; s.modes()];
+        s.set_state(&ones, &ones);
+        let pickup = s.vector();
+        let mut out = [0.0; 128];
+        s.free_steps(&pickup, &mut out);
+        assert!(s.state().iter().all(|u| u.is_finite() && u.abs() <= 1e-3), "the state decays and stays finite");
     }
 
     #[test]

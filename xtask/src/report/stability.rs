@@ -444,7 +444,9 @@ pub struct Measure {
 }
 
 fn finite(f: &Frame) -> bool {
-    [f.output, f.displacement, f.velocity, f.compression, f.force, f.energy, f.losses].iter().all(|v| v.is_finite())
+    [f.output, f.displacement, f.velocity, f.compression, f.force, f.energy, f.losses, f.control_work]
+        .iter()
+        .all(|v| v.is_finite())
 }
 
 /// Run `set` with `method`.
@@ -473,7 +475,7 @@ pub fn measure(set: &ParamSet, method: Method) -> Measure {
     };
     let scale = frames.iter().map(|f| f.energy.abs()).fold(e0.abs(), f64::max);
     let scale = if scale > 0.0 { scale } else { 1.0 };
-    let deviation = |f: &Frame| (f.energy + f.losses - e0) / scale;
+    let deviation = |f: &Frame| (f.balance() - e0) / scale;
     Measure {
         non_finite: !e0.is_finite() || !frames.iter().all(finite),
         panic: None,
