@@ -114,7 +114,8 @@ impl NiceEguiApp for EditorApp {
     }
 }
 
-/// Title, what the loudest voice is, and the DSP load.
+/// Title, what the loudest voice is, how many voices the energy guard silenced (if any), and
+/// the DSP load.
 fn header(ui: &mut Ui, m: &Monitor, load: f32, peak: f32) {
     ui.horizontal(|ui| {
         ui.label(RichText::new("QSA Strings").size(20.0).strong());
@@ -134,6 +135,11 @@ fn header(ui: &mut Ui, m: &Monitor, load: f32, peak: f32) {
             )
         };
         ui.label(voice);
+        if m.guard_trips > 0 {
+            // The energy guard silenced voices whose physics misbehaved: worth a bug report.
+            let text = format!("guard silenced {}", plural(m.guard_trips as usize, "voice"));
+            ui.label(RichText::new(text).color(egui::Color32::from_rgb(230, 120, 40)));
+        }
         ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
             ui.label(RichText::new(format!("{:5.1} % (peak {:.1} %)", load * 100.0, peak * 100.0)).monospace());
             views::load_bar(ui, vec2(160.0, 14.0), load, peak);

@@ -5,6 +5,7 @@
 use qsa_dsp::contact::{ContactSolver, ExplicitSolver, NewtonSolver, PowerLaw, QsaSolver, QuadSpline};
 use qsa_dsp::control::Breakpoints;
 use qsa_dsp::exciter::SlideParams;
+use qsa_dsp::instrument::{Event, Instrument, Mode, SLIDE_SPEED, Settings};
 use qsa_dsp::preset::slide_guitar;
 use qsa_dsp::render::{parse_scene, render};
 use qsa_dsp::scene::{Frame, OutputKind, Pickup, Scene, SlideAutomation, SlideString, SlideStringParams};
@@ -392,4 +393,86 @@ fn a_finger_touching_again_after_a_glide_meets_the_current_cross_terms() {
             assert!(drift <= 1e-12, "N_b = {nb} {name}: balance drift {drift:e}");
         }
     }
+}
+
+/// An instrument in slide mode with `settings`, rendered in 256-sample calls, with
+/// `changes` of the settings applied at the given samples; returns the left channel.
+fn play_slide(settings: Settings, changes: &[(usize, Settings)], key: u8, samples: usize) -> Vec<f64> {
+    let mut instrument = Instrument::new(FS, 2, Settings { mode: Mode::Slide, ..settings });
+    instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.8 });
+    let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
+    let mut t = 0;
+    while t < samples {
+        for (at, s) in changes {
+            if *at == t {
+                instrument.set_settings(&Settings { mode: Mode::Slide, ..*s });
+            }
+        }
+        let next_change = changes.iter().map(|c| c.0).filter(|&at| at > t).min().unwrap_or(samples);
+        let n = 256.min(next_change - t).min(samples - t);
+        instrument.process(&mut left[t..t + n], &mut right[t..t + n]);
+        t += n;
+    }
+    assert_eq!(instrument.guard_trips(), 0, "the guard never fires");
+    left.iter().map(|&v| f64::from(v)).collect()
+}
+
+/// Pitch (Hz) of a slide note `semitones` above the open string: the speaking length's.
+fn slide_pitch(semitones: f64) -> f64 {
+    110.0 * 2f64.powf(semitones / 12.0)
+}
+
+/// Host automation of `Slide position` is the gesture itself: with the glide time at its
+/// longest (2 s), a move from 5 to 7 semitones is followed at once (the slide reaches 7 within
+/// a few blocks at up to 5 m/s), where an exponential glide with a 2 s time constant would
+/// still be 1.8 semitones short after 200 ms. The pitch 50 to 250 ms after the move is the
+/// 7-semitone pitch within 1 % (a semitone is 6 %); the slide's glide applies only to moves
+/// that keys and bends ask for.
+#[test]
+fn automated_slide_position_is_followed_without_the_glide_lag() {
+    let base = Settings { follow_key: false, slide_position: 5.0, glide_time: 2.0, ..Default::default() };
+    let moved = Settings { slide_position: 7.0, ..base };
+    let out = play_slide(base, &[(24_000, moved)], 60, 36_000);
+    let before = qsa_tests::fundamental(&out[9_600..24_000], FS, 0.8 * slide_pitch(5.0), 1.2 * slide_pitch(5.0));
+    let after = qsa_tests::fundamental(&out[26_400..36_000], FS, 0.8 * slide_pitch(7.0), 1.2 * slide_pitch(7.0));
+    println!(
+        "before {before:.2} Hz (5 st: {:.2}), after {after:.2} Hz (7 st: {:.2})",
+        slide_pitch(5.0),
+        slide_pitch(7.0)
+    );
+    assert!((before / slide_pitch(5.0) - 1.0).abs() < 0.01, "before the move: {before} Hz");
+    assert!((after / slide_pitch(7.0) - 1.0).abs() < 0.01, "after the move: {after} Hz");
+}
+
+/// The slide never travels faster than a hand can move it: a jump of the setting from 0 to 24
+/// semitones (from 5 mm to 0.75 L = 0.49 m) becomes a slide at most 5 m/s (`SLIDE_SPEED`): the
+/// contact point moves at most 5 m/s × one block between block boundaries, and takes at least
+/// 96 ms to arrive.
+#[test]
+fn a_jump_of_the_slide_position_moves_the_slide_at_a_hands_speed() {
+    let length = slide_guitar().string.length;
+    let base = Settings { follow_key: false, slide_position: 0.0, block: 64, ..Default::default() };
+    let mut instrument = Instrument::new(FS, 1, Settings { mode: Mode::Slide, ..base });
+    instrument.handle(Event::NoteOn { channel: 0, key: 60, velocity: 0.8 });
+    let (mut l, mut r) = (vec![0.0f32; 64], vec![0.0f32; 64]);
+    for _ in 0..40 {
+        instrument.process(&mut l, &mut r);
+    }
+    instrument.set_settings(&Settings { mode: Mode::Slide, slide_position: 24.0, ..base });
+    let mut last = instrument.monitor().contact_position * length;
+    let (start, mut arrived) = (last, None);
+    for block in 1..200 {
+        instrument.process(&mut l, &mut r);
+        let x = instrument.monitor().contact_position * length;
+        let speed = (x - last) * FS / 64.0;
+        assert!(speed <= SLIDE_SPEED * (1.0 + 1e-9), "block {block}: {speed} m/s");
+        if arrived.is_none() && (x - 0.75 * length).abs() < 1e-9 {
+            arrived = Some(block);
+        }
+        last = x;
+    }
+    let blocks = arrived.expect("the slide arrives");
+    let seconds = blocks as f64 * 64.0 / FS;
+    println!("from {start:.3} m to {last:.3} m in {seconds:.3} s");
+    assert!(seconds >= (0.75 * length - start) / SLIDE_SPEED, "arrived in {seconds} s");
 }

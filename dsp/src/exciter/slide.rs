@@ -88,6 +88,12 @@ impl SlideHand {
         self.w_prev = w_prev;
     }
 
+    /// The slide at rest at height `w0` (m).
+    pub fn rest(&mut self, w0: f64) {
+        self.w_prev = w0;
+        self.w_now = w0;
+    }
+
     /// `w_o^{n−1}` (m).
     #[inline]
     pub fn previous(&self) -> f64 {

@@ -46,7 +46,9 @@ pub use midi::event_from_midi;
 pub use monitor::{Monitor, SHAPE_POINTS};
 pub use params::{PARAM_IDS, ParamError, ParamValues};
 pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, hammer_speed};
-pub use slide_voice::{ChannelState, OPEN_KEY, PLUCK_TIME, REST_FORCE, SlideVoice, TRAIL};
+pub use slide_voice::{
+    ChannelState, GUARD_FACTOR, HAND_SPEED, OPEN_KEY, PLUCK_TIME, REST_FORCE, SLIDE_SPEED, SlideVoice, TRAIL,
+};
 pub use solvers::Solvers;
 pub use voice::{PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike};
 
@@ -204,6 +206,12 @@ impl Instrument {
     pub fn sounding(&self) -> usize {
         self.voices.iter().filter(|v| v.sounding || v.fading()).count()
             + self.slides.iter().filter(|v| v.sounding).count()
+    }
+
+    /// How many times the guard has silenced a voice since the instrument was made (see
+    /// [`SlideVoice`]'s guard): zero unless the physics misbehaved.
+    pub fn guard_trips(&self) -> u32 {
+        self.slides.iter().map(SlideVoice::guard_trips).sum()
     }
 
     /// Voices whose exciter touches the string (or is about to): hammers in contact and slides

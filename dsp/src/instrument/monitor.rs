@@ -12,6 +12,8 @@ pub const SHAPE_POINTS: usize = 64;
 pub struct Monitor {
     /// Voices sounding.
     pub sounding: usize,
+    /// Voices the guard has silenced since the engine started ([`Instrument::guard_trips`]).
+    pub guard_trips: u32,
     /// Mode of the loudest voice.
     pub mode: Mode,
     /// Its MIDI key.
@@ -34,6 +36,7 @@ impl Default for Monitor {
     fn default() -> Self {
         Self {
             sounding: 0,
+            guard_trips: 0,
             mode: Mode::Piano,
             key: 60,
             energy: 0.0,
@@ -62,7 +65,7 @@ impl Instrument {
         let Some((_, string, energy, (compression, force, position), key, mode)) =
             piano.chain(slide).max_by(|a, b| a.0.total_cmp(&b.0))
         else {
-            return Monitor::default();
+            return Monitor { guard_trips: self.guard_trips(), ..Monitor::default() };
         };
         let length = string.params().length;
         let mut shape = [0.0f32; SHAPE_POINTS];
@@ -72,6 +75,7 @@ impl Instrument {
         }
         Monitor {
             sounding: self.sounding(),
+            guard_trips: self.guard_trips(),
             mode,
             key,
             energy,

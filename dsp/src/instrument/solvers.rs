@@ -58,4 +58,13 @@ impl Solvers {
         self.method = method;
         true
     }
+
+    /// The contact's share of the energy (J) of the solver in use, given `y^{n+1}` and `y^n` (m).
+    pub fn stored_energy(&self, y_next: f64, y_now: f64) -> f64 {
+        match self.method {
+            Method::Qsa => self.qsa.stored_energy(y_next, y_now),
+            Method::Imp => self.imp.stored_energy(y_next, y_now),
+            Method::Exp => self.exp.stored_energy(y_next, y_now),
+        }
+    }
 }

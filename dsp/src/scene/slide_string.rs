@@ -497,6 +497,35 @@ impl SlideCore {
         core
     }
 
+    /// Bring the string to rest and the slide to rest at the hand height of `controls`, held
+    /// from now on until the controls move again (`N_b`, parameters and the pickup are kept).
+    /// Never allocates.
+    pub fn rest(&mut self, controls: SlideControls) {
+        self.string.reset();
+        self.sho.rest(controls.hand_height);
+        self.start = controls;
+        self.target = controls;
+        self.hand = Ramp::new(controls.hand_height, controls.hand_height, self.block);
+        self.left_force = Ramp::new(controls.left_force, controls.left_force, self.block);
+        self.right_force = Ramp::new(controls.right_force, controls.right_force, self.block);
+        self.hand_prev = controls.hand_height;
+        self.plan_block();
+        self.slide_state = [[0.0; 2]; 2];
+        self.slide_jumped = false;
+        self.slide_still = u32::MAX;
+        self.y_prev = -self.sho.previous();
+        self.y_now = -self.sho.position();
+        self.out_now = 0.0;
+        self.last_force = 0.0;
+    }
+
+    /// The string, for tests that need to put a state into it by hand (the carried
+    /// projections then no longer match it).
+    #[cfg(test)]
+    pub(crate) fn string_mut(&mut self) -> &mut ModalString {
+        &mut self.string
+    }
+
     /// `(y^{n−1}, y^n)` (m), to start a solver from.
     pub fn compressions(&self) -> (f64, f64) {
         (self.y_prev, self.y_now)
