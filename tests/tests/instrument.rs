@@ -281,8 +281,18 @@ fn slide(settings: Settings) -> Instrument {
 /// 20 % of `expected`. The slide rides on the hand spring (a 30 g slide on 1e4 N/m resonates at
 /// 92 Hz), which pulls the first partial 1–1.5 % sharp while the harmonic series keeps the speaking
 /// length's spacing; the ear, like the period, follows the series.
+///
+/// The slide's output is the string's velocity at the pickup (a magnetic pickup), which lifts
+/// the upper partials by their number; the period is measured on its running sum, the
+/// displacement, whose first partial leads as the string's does.
 fn slide_pitch(out: &[f32], expected: f64) -> f64 {
-    let signal: Vec<f64> = out[7_200..].iter().map(|&v| f64::from(v)).collect();
+    let signal: Vec<f64> = out[7_200..]
+        .iter()
+        .scan(0.0, |sum, &v| {
+            *sum += f64::from(v);
+            Some(*sum)
+        })
+        .collect();
     fundamental(&signal, FS, 0.8 * expected, 1.2 * expected)
 }
 

@@ -476,3 +476,39 @@ fn a_jump_of_the_slide_position_moves_the_slide_at_a_hands_speed() {
     println!("from {start:.3} m to {last:.3} m in {seconds:.3} s");
     assert!(seconds >= (0.75 * length - start) / SLIDE_SPEED, "arrived in {seconds} s");
 }
+
+/// `x`'s DC component (Hann-weighted mean) over `range`, relative to its RMS there, in dB.
+fn dc_db(x: &[f64], range: std::ops::Range<usize>) -> f64 {
+    let s = &x[range];
+    let n = s.len() as f64;
+    let hann = |i: usize| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / n).cos();
+    let dc = s.iter().enumerate().map(|(i, v)| hann(i) * v).sum::<f64>()
+        / s.iter().enumerate().map(|(i, _)| hann(i)).sum::<f64>();
+    let rms = (s.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+    20.0 * (dc.abs() / rms).log10()
+}
+
+/// A held slide note carries no DC: the slide presses the string statically (about 1.5 mm at
+/// the slide), which a displacement output heard as an offset 0 dB below the note's RMS; the
+/// pickup senses velocity, so over the held note (0.3 to 2.5 s) the DC component is below
+/// −60 dB of the RMS (measured −185 dB), and after note-off, while the muting finger holds the
+/// string down, the output's mean stays below −60 dB of the held note's RMS as well.
+#[test]
+fn a_held_slide_note_has_no_dc() {
+    let mut instrument = Instrument::new(FS, 2, Settings { mode: Mode::Slide, ..Default::default() });
+    instrument.handle(Event::NoteOn { channel: 0, key: 52, velocity: 0.8 });
+    let samples = (4.0 * FS) as usize;
+    let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
+    let off = (2.5 * FS) as usize;
+    instrument.process(&mut left[..off], &mut right[..off]);
+    instrument.handle(Event::NoteOff { channel: 0, key: 52 });
+    instrument.process(&mut left[off..], &mut right[off..]);
+    let x: Vec<f64> = left.iter().map(|&v| f64::from(v)).collect();
+    let held = dc_db(&x, (0.3 * FS) as usize..off);
+    let rms = (x[(0.3 * FS) as usize..off].iter().map(|v| v * v).sum::<f64>() / (off as f64 - 0.3 * FS)).sqrt();
+    let after = x[off + (0.5 * FS) as usize..].iter().sum::<f64>() / (x.len() - off) as f64;
+    let after_db = 20.0 * (after.abs() / rms).log10();
+    println!("held note: DC {held:.1} dB of its RMS {rms:.3e}; after note-off: mean {after_db:.1} dB");
+    assert!(held < -60.0, "held note DC {held:.1} dB");
+    assert!(after_db < -60.0, "muted string's mean {after_db:.1} dB");
+}

@@ -61,8 +61,12 @@ pub const MAX_VOICES: usize = 128;
 /// near 0.5.
 pub const OUTPUT_SCALE: f64 = 0.016;
 
-/// Output scale of the slide guitar (1/m): string displacement at the pickup to full scale.
-pub const SLIDE_SCALE: f64 = 300.0;
+/// Output scale of the slide guitar (s/m): string velocity at the pickup to full scale. The
+/// slide voice listens as a magnetic pickup does, whose coil's voltage follows the rate of change
+/// of the flux the string modulates, so the string's velocity under it: a slide or finger holding
+/// the string deflected gives no signal, where a displacement output would carry that
+/// deflection as a DC offset and step at every press and release. A plucked note peaks near 0.5.
+pub const SLIDE_SCALE: f64 = 0.3;
 
 /// A note or controller event, as MIDI delivers them.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -136,7 +136,7 @@ impl SlideVoice {
             left: g.left,
             right: g.right,
             block: settings.block,
-            pickup: Pickup { kind: OutputKind::Displacement, position: settings.pickup_position },
+            pickup: Pickup { kind: OutputKind::Velocity, position: settings.pickup_position },
         };
         let law = PowerLaw::new(settings.slide_kappa, settings.slide_alpha).expect("clamped settings give a valid law");
         Self {
@@ -349,10 +349,11 @@ impl SlideVoice {
 
     /// Move the pickup (fraction of the length).
     pub fn set_pickup(&mut self, position: f64) {
-        self.core.set_pickup(Pickup { kind: OutputKind::Displacement, position });
+        self.core.set_pickup(Pickup { kind: OutputKind::Velocity, position });
     }
 
-    /// Render `out.len()` samples of string displacement at the pickup (m). A voice the guard
+    /// Render `out.len()` samples of string velocity at the pickup (m/s, see
+    /// [`SLIDE_SCALE`](crate::instrument::SLIDE_SCALE)). A voice the guard
     /// has caught fades out linearly over its block; a non-finite sample silences it at once, and
     /// the samples rendered with it are silent.
     pub fn render(&mut self, out: &mut [f64]) {
