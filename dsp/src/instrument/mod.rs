@@ -373,7 +373,9 @@ impl Instrument {
             if move_pickup {
                 v.set_pickup(self.pickup);
             }
-            v.begin_block(&self.settings, &self.channels[usize::from(v.strike.channel)], len);
+            if v.sounding {
+                v.begin_block(&self.settings, &self.channels[usize::from(v.strike.channel)], len);
+            }
         }
     }
 }

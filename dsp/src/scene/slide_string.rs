@@ -286,6 +286,31 @@ impl ContactVectors {
     }
 }
 
+/// The coefficients `[c0, c1, c2]` of `θ_ζξ(a) = c0 + a·c1 + a²·c2` (m/N) between the contacts'
+/// vectors interpolated over a block, `ĥ_ζ = w_s h_ζs + w_e h_ζe`, from the Gram matrix `g` of the
+/// plan's slots: with `θ^{ss}`, `θ^{se} + θ^{es}` and `θ^{ee}` of a pair, `θ(a) = (1−a)²θ^{ss} +
+/// a(1−a)(θ^{se} + θ^{es}) + a²θ^{ee}`, so `c0 = θ^{ss}`, `c1 = (θ^{se} + θ^{es}) − 2θ^{ss}` and
+/// `c2 = θ^{ss} − (θ^{se} + θ^{es}) + θ^{ee}`. A contact held still has its start vector at both
+/// ends.
+fn block_theta(plan: &Plan, g: &[[f64; SLOTS]; SLOTS]) -> [[[f64; 3]; 3]; 3] {
+    let mut theta = [[[0.0; 3]; 3]; 3];
+    let ends = |c: usize| (slot(c, false), if plan.moving[c] { slot(c, true) } else { slot(c, false) });
+    for i in (0..3).filter(|&i| plan.touching[i]) {
+        for k in (0..3).filter(|&k| plan.touching[k]) {
+            let ((is, ie), (ks, ke)) = (ends(i), ends(k));
+            let (ss, mixed, ee) = (g[is][ks], g[is][ke] + g[ie][ks], g[ie][ke]);
+            if plan.moving[i] || plan.moving[k] {
+                theta[0][i][k] = ss;
+                theta[1][i][k] = mixed - 2.0 * ss;
+                theta[2][i][k] = ss - mixed + ee;
+            } else {
+                theta[0][i][k] = ss;
+            }
+        }
+    }
+    theta
+}
+
 /// The finger damping forces eliminated in closed form (module docs): the fingers' velocity
 /// projections `s_φ = s_φ0 + s_φ1 F` and the slide's `z_str`, `q_str`.
 #[derive(Debug, Clone, Copy)]
@@ -403,6 +428,9 @@ pub struct SlideCore {
     vectors: ContactVectors,
     /// The current block's vectors.
     plan: Plan,
+    /// `θ_ζξ(a) = c0 + a·c1 + a²·c2` between the contacts' interpolated vectors over the block
+    /// (m/N): `[c0, c1, c2]`, zero for contacts that do not touch.
+    theta: [[[f64; 3]; 3]; 3],
     pickup: Vec<f64>,
     kind: OutputKind,
     /// Finger damping parameters r (s/m).
@@ -460,6 +488,7 @@ impl SlideCore {
         let mut core = Self {
             vectors: ContactVectors::new(&string, &params.left, &params.right),
             plan: Plan::NONE,
+            theta: [[[0.0; 3]; 3]; 3],
             pickup,
             kind: params.pickup.kind,
             r: [params.left.damping, params.right.damping],
@@ -566,7 +595,14 @@ impl SlideCore {
 
     /// String and slide energy of the current state (J), without the contact term.
     pub fn energy(&self) -> f64 {
-        self.string.energy() + self.sho.energy(self.hand_prev, self.hand.at(self.k))
+        self.energies().1
+    }
+
+    /// The string's kinetic energy and the string and slide energy of the current state (J),
+    /// without the contact term, from one pass over the modes.
+    pub fn energies(&self) -> (f64, f64) {
+        let (kinetic, string) = self.string.energies();
+        (kinetic, string + self.sho.energy(self.hand_prev, self.hand.at(self.k)))
     }
 
     /// Work the controls have done on the string and the slide since the core was made (J):
@@ -599,6 +635,7 @@ impl SlideCore {
         // this block's start vector (the last block held the slide still at this position).
         self.slide_jumped = was.moving[SLIDE];
         let mut end_tracked = was.moving[SLIDE];
+        let mut swapped = false;
         for c in 0..3 {
             if !touching[c] {
                 continue;
@@ -607,6 +644,7 @@ impl SlideCore {
             if v.made_at[s] != start[c] {
                 if v.made_at[e] == start[c] {
                     v.swap_ends(c);
+                    swapped = true;
                     if c == SLIDE {
                         self.slide_state.swap(0, 1);
                         end_tracked = true;
@@ -626,6 +664,9 @@ impl SlideCore {
         let plan = Plan::new(touching, moving);
         self.plan = plan;
         if plan == was && fresh == [None; SLOTS] {
+            if swapped {
+                self.theta = block_theta(&plan, &self.vectors.gram);
+            }
             return;
         }
         // The state projections are needed for a fresh slide vector (the first in the Gram
@@ -647,6 +688,7 @@ impl SlideCore {
         } else if fresh[s].is_some() {
             self.slide_state[0] = state;
         }
+        self.theta = block_theta(&plan, &v.gram);
     }
 
     /// Start a new block: move the targets on and plan its vectors.
@@ -677,15 +719,16 @@ impl SlideCore {
         let shapes = &self.vectors.shapes;
         let projections: [f64; V] = self.string.history(std::array::from_fn(|j| &shapes[slots[j]][..]));
         // `ĥ_ζᵀz̃` and `θ_ζξ = ĥ_ζᵀ(C∘ĥ_ξ)` of the interpolated vectors `ĥ_ζ = Σ w_j h_j`.
-        let g = &self.vectors.gram;
-        let (mut z, mut th) = ([0.0; 3], [[0.0; 3]; 3]);
+        let mut z = [0.0; 3];
         for j in 0..V {
-            let c = contact(slots[j]);
-            z[c] += w[j] * projections[j];
-            for i in 0..V {
-                th[c][contact(slots[i])] += w[j] * w[i] * g[slots[j]][slots[i]];
-            }
+            z[contact(slots[j])] += w[j] * projections[j];
         }
+        let [c0, c1, c2] = &self.theta;
+        let th = if plan.moving == [false; 3] {
+            *c0
+        } else {
+            std::array::from_fn(|i| std::array::from_fn(|k| c0[i][k] + a * (c1[i][k] + a * c2[i][k])))
+        };
         // The slide's vector moved since the compression y^{n−1} was measured: the string under
         // it, `ĥ_oᵀũ^{n−1}`, differs from the carried `y^{n−1} + w_o^{n−1}` by `J`.
         if (k == 0 && self.slide_jumped) || (k > 0 && plan.moving[SLIDE]) {
@@ -727,6 +770,7 @@ impl SlideCore {
             (self.string.advance(forces, &self.pickup), Default::default())
         };
         // The slide vectors' projections follow the update ũ^{n+1} = ũ^{n−1} − z̃ + Σ C∘ĥ F.
+        let g = &self.vectors.gram;
         for j in 0..V {
             if contact(slots[j]) == SLIDE {
                 let mut next = self.slide_state[slots[j] % 2][0] - projections[j];

@@ -724,6 +724,13 @@ impl ModalString {
         self.kinetic_from(step2)
     }
 
+    /// [`kinetic_energy`](Self::kinetic_energy) and [`energy`](Self::energy) (J) from one pass
+    /// over the modes.
+    pub fn energies(&self) -> (f64, f64) {
+        let (step2, k_sum2) = kernel::energy_sums(self.isa, &self.u_prev, &self.u_now, &self.stiffness);
+        (self.kinetic_from(step2), self.stored_energy(step2, k_sum2))
+    }
+
     /// The string's energy `H^{n−1/2}` of the current state (J): the stored term between
     /// `ũ^{n−1}` and `ũ^n`, `½ m̃ ‖(ũ^n − ũ^{n−1})/Δt‖² + ½ Σ K̂ ((ũ^n + ũ^{n−1})/2)²`, from the
     /// unscaled sums in one pass (as [`advance_monitored`](Self::advance_monitored) does).
