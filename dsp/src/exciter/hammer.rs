@@ -47,8 +47,15 @@ pub struct Hammer {
 impl Hammer {
     /// A hammer at `w^0 = gap`, moving towards the string: `w^{−1} = gap + v Δt`.
     pub fn new(params: &HammerParams, sample_rate: f64) -> Self {
+        Self::above(0.0, params, sample_rate)
+    }
+
+    /// A hammer `gap` beyond the string point at `u` (m), moving towards it: `w^0 = u + gap`,
+    /// `w^{−1} = w^0 + v Δt`. Launched at a string that is already moving, it meets the string
+    /// wherever the string is, as a hammer flying free from the action does.
+    pub fn above(u: f64, params: &HammerParams, sample_rate: f64) -> Self {
         let dt = 1.0 / sample_rate;
-        Self { mass: params.mass, xi: dt * dt / params.mass, dt, w_now: params.gap, step: -params.velocity * dt }
+        Self { mass: params.mass, xi: dt * dt / params.mass, dt, w_now: u + params.gap, step: -params.velocity * dt }
     }
 
     /// `ξ_h = Δt²/m_h` (m/N): the hammer's share of the coupling `q`.

@@ -9,10 +9,12 @@
 //!   every sample rate.
 //! - Note velocity sets the hammer speed: `v = 0.3 · 20^velocity` m/s (0.3 to 6 m/s,
 //!   [`hammer_speed`]).
-//! - Note-off lets the damper down: an extra decay `σ_d` ramped towards `damper_rate` with time
-//!   constant `damper_time`, applied to the string once per control block, as a felt settling on
-//!   the string would. The sustain pedal (CC64 ≥ 64 on the note's channel) holds dampers off.
-//! - Striking a key that still sounds strikes the same string again, which keeps vibrating.
+//! - Note-off lets the damper down: a felt pad whose extra decay rises towards `damper_rate` (at
+//!   the fundamental, faster for higher modes) with time constant `damper_time`, changing how fast
+//!   the string decays, never its state. The sustain pedal (CC64 ≥ 64 on the note's channel) holds
+//!   dampers off.
+//! - Striking a key that still sounds strikes the same, still vibrating string: the hammer meets
+//!   it wherever it swings ([`PianoVoice`]).
 //!
 //! # Slide mode
 //!
@@ -24,9 +26,10 @@
 //! # Voices
 //!
 //! The pool is sized once ([`Instrument::new`]); nothing allocates after that. A note takes a free
-//! voice or, when none is free, steals the quietest voice whose key is up (else the oldest): that
-//! voice fades out over 5 ms with a strong damper before its new note starts, so stealing does not
-//! click. A voice is released when its energy falls 140 dB below its strike's.
+//! voice or, when none is free, steals the least audible one (the quietest output over its latest
+//! block): that voice fades out over 5 ms at a decay rate of 2000/s before its new note starts, so
+//! stealing does not click. A piano voice is released when its string's energy falls 140 dB below
+//! its strike's.
 //!
 //! # Timing
 //!
@@ -157,6 +160,8 @@ pub struct Instrument {
     in_block: usize,
     /// One control block of one voice's output.
     scratch: Vec<f64>,
+    /// Notes that had to take a busy voice.
+    steals: u64,
 }
 
 impl Instrument {
@@ -179,6 +184,7 @@ impl Instrument {
             now: 0,
             in_block: 0,
             scratch: vec![0.0; MAX_BLOCK],
+            steals: 0,
         }
     }
 
@@ -210,6 +216,11 @@ impl Instrument {
     pub fn sounding(&self) -> usize {
         self.voices.iter().filter(|v| v.sounding || v.fading()).count()
             + self.slides.iter().filter(|v| v.sounding).count()
+    }
+
+    /// How many notes have had to take a busy voice (a steal) since the instrument was made.
+    pub fn steals(&self) -> u64 {
+        self.steals
     }
 
     /// How many times the guard has silenced a voice since the instrument was made (see
@@ -291,18 +302,16 @@ impl Instrument {
             v.play(strike, &self.settings, now);
             return;
         }
-        // Steal: the quietest released voice, else the oldest.
-        let released = self
+        // Steal the least audible voice: the quietest output over its latest block.
+        let victim = self
             .voices
             .iter()
             .enumerate()
-            .filter(|(_, v)| !v.key_down && !v.fading())
-            .min_by(|(_, a), (_, b)| a.energy().total_cmp(&b.energy()))
+            .filter(|(_, v)| !v.fading())
+            .min_by(|(_, a), (_, b)| a.loudness().total_cmp(&b.loudness()))
             .map(|(i, _)| i);
-        let victim = released.or_else(|| {
-            self.voices.iter().enumerate().filter(|(_, v)| !v.fading()).min_by_key(|(_, v)| v.started).map(|(i, _)| i)
-        });
         if let Some(i) = victim {
+            self.steals += 1;
             self.voices[i].steal(strike, self.sample_rate, now);
         }
     }

@@ -1,4 +1,32 @@
 //! A piano voice: one string with its hammer, damper and solvers, reused note after note.
+//!
+//! # A note's life
+//!
+//! - **Strike.** The hammer is thrown at the string from just beyond where the string is under it
+//!   ([`HammerCore::strike`]): on a string at rest that is the usual small gap; on a string still
+//!   swinging from an earlier strike (a repeated note), the felt meets it wherever it is, at the
+//!   relative speed of the two, as a hammer flying free from the action does. The QSA fit spans
+//!   the hammer's kinetic energy plus the string's energy: all the energy there is, so no
+//!   compression the contact can reach lies beyond the fit's last knot.
+//! - **Damper.** Note-off lets the damper down unless the sustain pedal holds it. A damper is a
+//!   felt pad pressing along the string beside the strike point ([`DAMPER_WIDTH`] long): a
+//!   distributed dashpot, whose share of mode `i` is the mean of `sin²(β_i x)` under the pad.
+//!   Every mode decays at `σ_i + D·g_i`, with `g_i` that mean over mode 1's, so the damper takes
+//!   the high modes (which the pad sees at every phase, `g_i → ½/sin²`) two to four times faster
+//!   than the fundamental (a modelling choice: dashpot density uniform under the felt, modes
+//!   uncoupled). A mode with a node under a rigid pad would hardly be damped; felt is compliant
+//!   and touches the string beyond its nominal length, so no mode gets less than the fundamental
+//!   (`g_i ≥ 1`). `D`, the damper's rate at the fundamental, moves towards the `Damper` setting
+//!   with time constant `damper_time` as the felt settles (towards 0 as it lifts). The rates
+//!   change the string's coefficients, never its state ([`ModalString::set_extra_decay`]), so the
+//!   sound dies away continuously however fast the damper lands.
+//! - **Release.** A voice is free again once its string is silent: the string's energy (the
+//!   hammer flying off does not count) below [`RELEASE_ENERGY`] of its latest strike's, with the
+//!   hammer retired (out of the string's reach for good, see [`HammerCore`]).
+//! - **Stealing.** With every voice busy, a new note takes the least audible voice, judged by the
+//!   mean square of its output over its latest block ([`PianoVoice::loudness`]). The stolen voice
+//!   fades at [`STEAL_RATE`] (a decay rate added to every mode, again without touching the state)
+//!   for [`STEAL_TIME`], then its new note starts on a fresh string.
 
 use crate::contact::{Method, PowerLaw};
 use crate::exciter::HammerParams;
@@ -17,6 +45,14 @@ pub const STEAL_RATE: f64 = 2000.0;
 
 /// How long a stolen voice fades before its new note starts (s).
 pub const STEAL_TIME: f64 = 0.005;
+
+/// Length of a damper's felt pad along the string (m), from the strike point towards the bridge.
+pub const DAMPER_WIDTH: f64 = 0.025;
+
+/// Shortest interval between updates of the string's coefficients while a damper moves (s): the
+/// rates change smoothly, so recomputing them every ~0.7 ms (32 samples at 44.1 kHz) is enough,
+/// and at N_b = 1 it keeps a landing damper from costing a pass of exponentials every sample.
+pub const DAMPER_UPDATE: f64 = 0.000_7;
 
 /// A note to play: MIDI channel (0..16), key (0..128), velocity (0, 1].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,8 +78,16 @@ pub struct PianoVoice {
     pub key_down: bool,
     /// Sample index of its latest note-on (for stealing the oldest).
     pub started: u64,
-    /// Extra decay rate from the damper or a steal fade (1/s).
+    /// The damper's decay rate at the fundamental now, `D` (1/s), moving towards its target.
     damper: f64,
+    /// The extra decay at the fundamental the string's coefficients hold now (1/s).
+    applied: f64,
+    /// The damper's share of each mode relative to the fundamental, `g_i` (module docs).
+    damper_shape: Vec<f64>,
+    /// Scratch: the extra decay rate of each mode (1/s).
+    extra: Vec<f64>,
+    /// Seconds since the coefficients were last updated.
+    since_update: f64,
     /// Energy of the latest strike (J), the reference for releasing the voice.
     reference_energy: f64,
     /// Striking position of the latest strike (fraction of the length).
@@ -54,6 +98,8 @@ pub struct PianoVoice {
     pending: Option<Strike>,
     /// Whether the pending note's key was released while it waited.
     pending_released: bool,
+    /// Mean square of the output over the latest rendered block (N²).
+    loudness: f64,
 }
 
 impl PianoVoice {
@@ -68,7 +114,10 @@ impl PianoVoice {
             hammer: HammerParams { mass: note.hammer_mass, velocity: 0.0, position: note.strike_position, gap: 1e-3 },
             pickup: Pickup { kind: OutputKind::BridgeForce, position: 0.5 },
         };
+        let per_mode = || Vec::with_capacity(string.capacity());
         Self {
+            damper_shape: per_mode(),
+            extra: per_mode(),
             core: HammerCore::new(string, &params),
             solvers: Solvers::new(law),
             strike: Strike { channel: 0, key: 60, velocity: 0.0 },
@@ -76,11 +125,14 @@ impl PianoVoice {
             key_down: false,
             started: 0,
             damper: 0.0,
+            applied: 0.0,
+            since_update: 0.0,
             reference_energy: 0.0,
             position: note.strike_position,
             fade_left: 0,
             pending: None,
             pending_released: false,
+            loudness: 0.0,
         }
     }
 
@@ -112,16 +164,22 @@ impl PianoVoice {
             if self.core.retune(string, max_frequency, position, pickup).is_err() {
                 return;
             }
+            self.shape_damper(position);
+            self.damper = 0.0;
+            self.applied = 0.0;
+            self.loudness = 0.0;
         }
         let fs = self.core.string().sample_rate();
         let velocity = hammer_speed(strike.velocity);
         let mass = note.hammer_mass * settings.hammer_mass;
-        // The felt starts two samples of travel away, so the hammer lands almost at once.
+        // The felt starts two samples of travel beyond the string, so the hammer lands almost at once.
         let hammer = HammerParams { mass, velocity, position, gap: 2.0 * velocity / fs };
+        let string_energy = self.core.string().energy();
         self.core.strike(&hammer);
         self.position = position;
         let Ok(law) = PowerLaw::new(note.kappa * settings.hardness, note.alpha) else { return };
-        self.reference_energy = hammer.kinetic_energy().max(f64::MIN_POSITIVE);
+        // All the energy there is: the hammer's and the string's (a re-strike meets a moving string).
+        self.reference_energy = (hammer.kinetic_energy() + string_energy).max(f64::MIN_POSITIVE);
         let y_ref = law.compression_at_energy(self.reference_energy);
         if !self.solvers.restart(settings.method, law, y_ref, settings.segments, self.core.compressions()) {
             return;
@@ -130,7 +188,19 @@ impl PianoVoice {
         self.sounding = true;
         self.key_down = true;
         self.started = now;
-        self.damper = 0.0;
+    }
+
+    /// The damper's share of each mode, `g_i` (module docs), for a pad from the striking point
+    /// `position` (fraction of the length) towards the bridge.
+    fn shape_damper(&mut self, position: f64) {
+        let string = self.core.string();
+        let length = string.params().length;
+        let (a, b) = (position * length, (position * length + DAMPER_WIDTH).min(length));
+        // Mean of sin²(βx) over [a, b].
+        let mean = |beta: f64| 0.5 - ((2.0 * beta * b).sin() - (2.0 * beta * a).sin()) / (4.0 * beta * (b - a));
+        let first = string.wavenumbers().first().map_or(1.0, |&beta| mean(beta));
+        self.damper_shape.clear();
+        self.damper_shape.extend(string.wavenumbers().iter().map(|&beta| (mean(beta) / first).max(1.0)));
     }
 
     /// Fade out over [`STEAL_TIME`], then play `strike` (a stolen voice).
@@ -140,6 +210,11 @@ impl PianoVoice {
         self.pending_released = false;
         self.key_down = false;
         self.started = now;
+        self.extra.clear();
+        self.extra.resize(self.core.string().modes(), STEAL_RATE);
+        self.core.string_mut().set_extra_decay(&self.extra);
+        self.core.refresh_coupling();
+        self.applied = f64::NAN;
     }
 
     /// The key this voice will sound once any steal fade is over.
@@ -173,6 +248,7 @@ impl PianoVoice {
         self.pending = None;
         self.fade_left = 0;
         self.damper = 0.0;
+        self.loudness = 0.0;
     }
 
     /// Whether the hammer touches the string (or is about to) in a sounding voice.
@@ -190,8 +266,14 @@ impl PianoVoice {
         self.core.energy()
     }
 
+    /// How loud the voice is now: the mean square of its output (bridge force, N²) over its latest
+    /// rendered block; what stealing ranks voices by.
+    pub fn loudness(&self) -> f64 {
+        self.loudness
+    }
+
     /// Work at a control-block boundary: start a pending note, move the damper towards its
-    /// target and apply it for the coming `len` samples, release the voice once silent.
+    /// target for the coming `len` samples, release the voice once silent.
     pub fn begin_block(&mut self, settings: &Settings, sustained: bool, len: usize, now: u64) {
         if !self.sounding && self.pending.is_none() {
             return;
@@ -205,18 +287,27 @@ impl PianoVoice {
             self.play(strike, settings, now);
             self.key_down = !self.pending_released;
         }
-        let span = len as f64 / fs;
         if self.pending.is_some() {
-            self.damper = STEAL_RATE;
             self.fade_left = self.fade_left.saturating_sub(len);
-        } else {
-            let target = if self.key_down || sustained { 0.0 } else { settings.damper_rate };
-            self.damper += (target - self.damper) * (1.0 - (-span / settings.damper_time).exp());
+            return;
         }
-        if self.damper > 0.0 {
-            self.core.string_mut().scale_state((-self.damper * span).exp());
+        let span = len as f64 / fs;
+        let target = if self.key_down || sustained { 0.0 } else { settings.damper_rate };
+        self.damper += (target - self.damper) * (1.0 - (-span / settings.damper_time).exp());
+        if (target - self.damper).abs() <= 1e-3 * target.max(1.0) {
+            self.damper = target;
         }
-        if self.pending.is_none() && !self.core.in_contact() && self.energy() < RELEASE_ENERGY * self.reference_energy {
+        self.since_update += span;
+        if self.damper != self.applied && (self.since_update >= DAMPER_UPDATE || self.damper == target) {
+            self.since_update = 0.0;
+            self.applied = self.damper;
+            self.extra.clear();
+            self.extra.extend(self.damper_shape.iter().map(|g| self.damper * g));
+            self.core.string_mut().set_extra_decay(&self.extra);
+            self.core.refresh_coupling();
+        }
+        // Once the hammer is out of the string's reach for good, the string alone sounds.
+        if self.core.retired() && self.core.string().energy() < RELEASE_ENERGY * self.reference_energy {
             self.sounding = false;
         }
     }
@@ -239,6 +330,9 @@ impl PianoVoice {
             Method::Qsa => self.core.process_output(&mut s.qsa, out),
             Method::Imp => self.core.process_output(&mut s.imp, out),
             Method::Exp => self.core.process_output(&mut s.exp, out),
+        }
+        if !out.is_empty() {
+            self.loudness = out.iter().map(|x| x * x).sum::<f64>() / out.len() as f64;
         }
     }
 }

@@ -1,5 +1,9 @@
 //! A piano hammer striking a modal stiff string (seed §5, physics §6.4).
 //!
+//! The string runs from the agraffe at `x = 0`, near which the hammer strikes (`x_h` is measured
+//! from there: 0.12 L for the C4 of Chaigne and Askenfelt), to the bridge at `x = L`, whose
+//! transverse force is the default output (what drives a soundboard).
+//!
 //! With the mode shapes at the striking point `h_i = sin(β_i x_h)`, the compression is
 //! `y = hᵀũ − w` and one step reduces to the common scalar problem (seed eq. 42):
 //!
@@ -51,8 +55,9 @@ pub enum OutputKind {
     Displacement,
     /// String velocity at the pickup (m/s), `(u^{n+1} − u^n)/Δt`.
     Velocity,
-    /// Transverse force on the bridge (N): at `x = 0` for the hammer–string scene,
-    /// `Σ (Tβ_i + EIβ_i³) ũ_i`; at `x = L` for the slide–string scene.
+    /// Transverse force on the bridge (N) at `x = L`, `Σ (−1)^{i+1}(Tβ_i + EIβ_i³) ũ_i`: the far
+    /// end from the nut or agraffe at `x = 0`, from which strike, slide, finger and pickup
+    /// positions are measured.
     BridgeForce,
 }
 
@@ -229,7 +234,7 @@ impl HammerCore {
             OutputKind::Displacement | OutputKind::Velocity => {
                 s.mode_shapes(pickup.position * length, &mut self.pickup)
             }
-            OutputKind::BridgeForce => s.bridge_weights(false, &mut self.pickup),
+            OutputKind::BridgeForce => s.bridge_weights(true, &mut self.pickup),
         }
         self.kind = pickup.kind;
         self.q = s.project(&self.shape, &self.gain) + self.hammer.coupling();
@@ -284,13 +289,34 @@ impl HammerCore {
         Ok(())
     }
 
-    /// Throw the hammer again: `gap` away and moving in at `velocity`, with `mass`; the string
-    /// keeps its motion. Restart the solver with [`compressions`](Self::compressions) afterwards.
+    /// Throw the hammer again, moving in at `velocity` with `mass`, `gap` away from where the
+    /// string is under it now (`hᵀũ^n`, zero for a string at rest): the string keeps its motion,
+    /// and the felt meets it wherever it swings, at the relative speed of the two. Restart the
+    /// solver with [`compressions`](Self::compressions) afterwards.
     pub fn strike(&mut self, hammer: &HammerParams) {
         let old_coupling = self.hammer.coupling();
-        self.hammer = Hammer::new(hammer, self.string.sample_rate());
+        let under = self.string.project_state(&self.shape).1;
+        self.hammer = Hammer::above(under, hammer, self.string.sample_rate());
         self.q += self.hammer.coupling() - old_coupling;
         self.measure();
+    }
+
+    /// After the string's coefficients changed ([`ModalString::set_extra_decay`]): the contact
+    /// gains `C∘h` and the coupling `q` follow them; the state and the compressions stay.
+    pub fn refresh_coupling(&mut self) {
+        let s = &self.string;
+        for ((g, h), c) in self.gain.iter_mut().zip(&self.shape).zip(s.input_gains()) {
+            *g = h * c;
+        }
+        self.q = s.project(&self.shape, &self.gain) + self.hammer.coupling();
+        self.next_hz = None;
+    }
+
+    /// The string's displacement under the hammer `hᵀũ^n` (m) and its velocity there
+    /// `hᵀ(ũ^n − ũ^{n−1})/Δt` (m/s).
+    pub fn string_under_hammer(&self) -> (f64, f64) {
+        let (prev, now) = self.string.project_state(&self.shape);
+        (now, (now - prev) / self.dt)
     }
 
     /// `(y^{n−1}, y^n)` (m), to start a solver from.

@@ -239,6 +239,30 @@ impl Iterator for ModeCounter<'_> {
     }
 }
 
+/// The scheme's per-mode coefficients for a mode whose homogeneous recursion is
+/// `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}` (module docs), with time step `dt` (s) and modal mass `m̃` (kg).
+struct Coefficients {
+    a: f64,
+    b: f64,
+    c: f64,
+    stiffness: f64,
+    resistance: f64,
+}
+
+impl Coefficients {
+    #[inline]
+    fn new(p: f64, q: f64, dt: f64, modal_mass: f64) -> Self {
+        let den = 1.0 + 2.0 * p + q;
+        Self {
+            a: 2.0 * p,
+            b: 1.0 + q,
+            c: dt * dt * den / (4.0 * modal_mass),
+            stiffness: 4.0 * modal_mass / (dt * dt) * (1.0 - 2.0 * p + q) / den,
+            resistance: 4.0 * modal_mass / dt * (1.0 - q) / den,
+        }
+    }
+}
+
 /// A modal string prepared for one sample rate: coefficients and state.
 #[derive(Debug, Clone)]
 pub struct ModalString {
@@ -252,6 +276,10 @@ pub struct ModalString {
     omega0: Vec<f64>,
     /// Decay rates σ_i (1/s).
     sigma: Vec<f64>,
+    /// The string's own `P_i = e^{−σ_iΔt} cos(ω_iΔt)` and `Q_i = e^{−2σ_iΔt}`, before any extra
+    /// decay ([`ModalString::set_extra_decay`]).
+    own_p: Vec<f64>,
+    own_q: Vec<f64>,
     /// `A_i = 2P_i`.
     coef_a: Vec<f64>,
     /// `B_i = 1 + Q_i`.
@@ -340,6 +368,8 @@ impl ModalString {
             beta: v(),
             omega0: v(),
             sigma: v(),
+            own_p: v(),
+            own_q: v(),
             coef_a: v(),
             coef_b: v(),
             coef_c: v(),
@@ -370,6 +400,8 @@ impl ModalString {
         let limit = self.capacity();
         let all = [&mut self.beta, &mut self.omega0, &mut self.sigma, &mut self.coef_a, &mut self.coef_b];
         all.into_iter().for_each(Vec::clear);
+        self.own_p.clear();
+        self.own_q.clear();
         for v in [&mut self.coef_c, &mut self.stiffness, &mut self.resistance] {
             v.clear();
         }
@@ -386,15 +418,17 @@ impl ModalString {
                 0.5 * ((gamma - mode.sigma) * dt).exp() + 0.5 * ((-gamma - mode.sigma) * dt).exp()
             };
             let q = decay * decay;
-            let den = 1.0 + 2.0 * p + q;
+            let c = Coefficients::new(p, q, dt, modal_mass);
             self.beta.push(mode.beta);
             self.omega0.push(mode.omega0);
             self.sigma.push(mode.sigma);
-            self.coef_a.push(2.0 * p);
-            self.coef_b.push(1.0 + q);
-            self.coef_c.push(dt * dt * den / (4.0 * modal_mass));
-            self.stiffness.push(4.0 * modal_mass / (dt * dt) * (1.0 - 2.0 * p + q) / den);
-            self.resistance.push(4.0 * modal_mass / dt * (1.0 - q) / den);
+            self.own_p.push(p);
+            self.own_q.push(q);
+            self.coef_a.push(c.a);
+            self.coef_b.push(c.b);
+            self.coef_c.push(c.c);
+            self.stiffness.push(c.stiffness);
+            self.resistance.push(c.resistance);
         }
         let padded = self.beta.len().div_ceil(LANES) * LANES;
         for v in [&mut self.coef_a, &mut self.coef_b, &mut self.coef_c, &mut self.stiffness, &mut self.resistance] {
@@ -502,6 +536,28 @@ impl ModalString {
     pub fn scale_state(&mut self, factor: f64) {
         for u in self.u_prev.iter_mut().chain(self.u_now.iter_mut()) {
             *u *= factor;
+        }
+        self.history_ready = false;
+    }
+
+    /// Add the decay rates `extra` (1/s, ≥ 0, one per mode; missing entries count as 0) to the
+    /// string's own: each mode then decays at `σ_i + extra_i` and still rings at `ω_i`, since
+    /// `P = e^{−(σ+σ_e)Δt} cos(ωΔt)` and `Q = e^{−2(σ+σ_e)Δt}` are the string's own scaled by
+    /// `e^{−σ_eΔt}` and its square. The state is untouched, so the signal stays continuous: a
+    /// damper or a fade changes how fast the modes decay from here on, never where they are. All
+    /// zeros restore the string's own coefficients exactly. Changes `C` (and with it every contact
+    /// gain `C∘h` and coupling `q` built on it) and the stored-energy weights `K̂`. Never
+    /// allocates.
+    pub fn set_extra_decay(&mut self, extra: &[f64]) {
+        let (dt, m) = (1.0 / self.sample_rate, self.modal_mass);
+        for i in 0..self.modes() {
+            let d = (-extra.get(i).copied().unwrap_or(0.0) * dt).exp();
+            let c = Coefficients::new(self.own_p[i] * d, self.own_q[i] * (d * d), dt, m);
+            self.coef_a[i] = c.a;
+            self.coef_b[i] = c.b;
+            self.coef_c[i] = c.c;
+            self.stiffness[i] = c.stiffness;
+            self.resistance[i] = c.resistance;
         }
         self.history_ready = false;
     }
@@ -842,6 +898,42 @@ mod tests {
         let mut out = [0.0; 128];
         s.free_steps(&pickup, &mut out);
         assert!(s.state().iter().all(|u| u.is_finite() && u.abs() <= 1e-3), "the state decays and stays finite");
+    }
+
+    /// With an extra decay rate the free vibration of a mode is `e^{−(σ+σ_e)t} cos(ωt)` with the
+    /// string's own damped `ω` (the exact recursion, to 1e-10 over 4,410 steps as for the plain
+    /// string), and a zero extra rate gives back the string's own coefficients bit for bit.
+    #[test]
+    fn extra_decay_adds_to_each_modes_rate_and_keeps_its_frequency() {
+        let mut s = ModalString::new(c4(), 44100.0).unwrap();
+        let m = s.modes();
+        let own = (s.coef_a.clone(), s.coef_b.clone(), s.coef_c.clone(), s.stiffness.clone());
+        let extra: Vec<f64> = (0..m).map(|i| 30.0 + 5.0 * i as f64).collect();
+        s.set_extra_decay(&extra);
+        let dt = 1.0 / 44100.0;
+        for mode in [0, 7, m - 1] {
+            let (sigma, omega0) = (s.decay_rates()[mode] + extra[mode], s.angular_frequencies()[mode]);
+            let omega = (omega0 * omega0 - s.decay_rates()[mode].powi(2)).sqrt();
+            let exact = |n: f64| (-sigma * n * dt).exp() * (omega * n * dt).cos();
+            let (mut prev, mut now) = (vec![0.0; m], vec![0.0; m]);
+            prev[mode] = exact(-1.0);
+            now[mode] = exact(0.0);
+            let mut t = s.clone();
+            t.set_state(&prev, &now);
+            let mut out = vec![0.0; 4410];
+            let mut probe = t.vector();
+            probe[mode] = 1.0;
+            t.free_steps(&probe, &mut out);
+            for (n, &y) in out.iter().enumerate() {
+                assert!(
+                    (y - exact(n as f64 + 1.0)).abs() < 1e-10,
+                    "mode {mode}, step {n}: {y} vs {}",
+                    exact(n as f64 + 1.0)
+                );
+            }
+        }
+        s.set_extra_decay(&[]);
+        assert_eq!((s.coef_a.clone(), s.coef_b.clone(), s.coef_c.clone(), s.stiffness.clone()), own);
     }
 
     #[test]
