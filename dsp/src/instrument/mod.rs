@@ -218,6 +218,11 @@ impl Instrument {
             + self.slides.iter().filter(|v| v.sounding).count()
     }
 
+    /// The keys the piano voices sound (or will, after a steal fade), in pool order.
+    pub fn piano_keys(&self) -> impl Iterator<Item = u8> + '_ {
+        self.voices.iter().filter_map(PianoVoice::upcoming_key)
+    }
+
     /// How many notes have had to take a busy voice (a steal) since the instrument was made.
     pub fn steals(&self) -> u64 {
         self.steals

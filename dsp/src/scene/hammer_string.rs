@@ -289,13 +289,16 @@ impl HammerCore {
         Ok(())
     }
 
-    /// Throw the hammer again, moving in at `velocity` with `mass`, `gap` away from where the
-    /// string is under it now (`hᵀũ^n`, zero for a string at rest): the string keeps its motion,
-    /// and the felt meets it wherever it swings, at the relative speed of the two. Restart the
+    /// Throw the hammer again, moving in at `velocity` with `mass`, `gap` beyond where the string
+    /// is under it (zero for a string at rest): the string keeps its motion, and the felt meets it
+    /// wherever it swings, at the relative speed of the two. The felt is clear of the string at
+    /// both of the steps a solver starts from: `w^n − gap` is the higher of `hᵀũ^n` and
+    /// `hᵀũ^{n−1} − vΔt`, so that `w^{n−1} = w^n + vΔt` is above `hᵀũ^{n−1}` too. Restart the
     /// solver with [`compressions`](Self::compressions) afterwards.
     pub fn strike(&mut self, hammer: &HammerParams) {
         let old_coupling = self.hammer.coupling();
-        let under = self.string.project_state(&self.shape).1;
+        let (before, now) = self.string.project_state(&self.shape);
+        let under = now.max(before - hammer.velocity * self.dt);
         self.hammer = Hammer::above(under, hammer, self.string.sample_rate());
         self.q += self.hammer.coupling() - old_coupling;
         self.measure();
