@@ -492,18 +492,19 @@ fn wide(x: &[f32]) -> Vec<f64> {
 
 /// The click detector separates what the engine plays from a small artificial step: single notes
 /// from A0 to E7, pianissimo to fortissimo, each released after 0.2 s (the damper lands), stay
-/// below [`CLICK_DB`] outside their first 20 ms (the hammer's attack); the same renders with a step
+/// below [`CLICK_DB`] outside their attack (see [`attacks`]); the same renders with a step
 /// of 1 % of their peak added at 0.25 s are found above it, at that step.
 #[test]
 fn the_click_detector_finds_a_small_step_and_passes_a_clean_render() {
     for (key, velocity) in [(21u8, 0.3f32), (40, 0.7), (60, 0.5), (60, 1.0), (84, 0.8), (100, 0.6)] {
         let score: Score = vec![(0, on(key, velocity)), (9_600, off(key))];
         let x = wide(&play(&mut piano(4), &score, 24_000, || 64));
-        let (clean, at) = click_strength(&x, FS, &[0..960]);
+        let attack = attacks(&score);
+        let (clean, at) = click_strength(&x, FS, &attack);
         let peak = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let mut stepped = x.clone();
         stepped[12_000..].iter_mut().for_each(|v| *v += 0.01 * peak);
-        let (step, step_at) = click_strength(&stepped, FS, &[0..960]);
+        let (step, step_at) = click_strength(&stepped, FS, &attack);
         println!(
             "key {key} velocity {velocity}: clean {clean:.1} dB at {at}, with a 1 % step {step:.1} dB at {step_at}"
         );
