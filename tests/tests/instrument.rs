@@ -258,6 +258,7 @@ fn voices_are_released_after_their_tails() {
     println!("steals {}, sounding at the end {}", p.steals(), p.sounding());
     assert_eq!(p.steals(), 0, "notes stole voices while free ones could have been had");
     assert_eq!(p.sounding(), 0, "every voice is released after its tail");
+    assert_eq!(p.guard_trips(), 0, "the energy guard never fires");
     assert!(out.iter().all(|v| v.is_finite()));
 }
 

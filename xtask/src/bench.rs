@@ -514,10 +514,77 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
             emit(line, &mut lines);
         }
     }
+    if "piano/after-release".contains(&args.filter) {
+        writeln!(stdout, "{}", after_release(args.runs)).ok();
+    }
     if args.write {
         write_docs(&lines, peak, &isa)?;
     }
     Ok(lines)
+}
+
+/// The cost of a piano that has played and fallen silent against one that never played: 200
+/// short notes (50 ms each, one every 60 ms, seeded keys and velocities) on 32 voices, then 2 s
+/// for the release tails, then one more second of 64-sample calls, timed (fastest of `runs` per
+/// call, summed), against the same second of a fresh instrument. Released voices cost nothing,
+/// so the ratio is 1 within the noise.
+fn after_release(runs: usize) -> serde_json::Value {
+    use rand::{RngExt, SeedableRng};
+    let call = 64;
+    let second = (PIANO_RATE as usize) / call;
+    let settings = Settings::default();
+    let played = || {
+        let mut piano = Instrument::new(PIANO_RATE, 32, settings);
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(200);
+        let (mut left, mut right) = (vec![0.0f32; call], vec![0.0f32; call]);
+        let (note, gap) = ((0.05 * PIANO_RATE) as usize / call, (0.06 * PIANO_RATE) as usize / call);
+        for _ in 0..200 {
+            let key = rng.random_range(21..=108u8);
+            piano.handle(Event::NoteOn { channel: 0, key, velocity: rng.random_range(0.1..1.0f32) });
+            for n in 0..gap {
+                if n == note {
+                    piano.handle(Event::NoteOff { channel: 0, key });
+                }
+                piano.process(&mut left, &mut right);
+            }
+        }
+        for _ in 0..2 * second {
+            piano.process(&mut left, &mut right);
+        }
+        piano
+    };
+    let timed = |piano: &mut Instrument| {
+        let (mut left, mut right) = (vec![0.0f32; call], vec![0.0f32; call]);
+        (0..second)
+            .map(|_| {
+                let t = std::time::Instant::now();
+                piano.process(&mut left, &mut right);
+                t.elapsed().as_secs_f64()
+            })
+            .collect::<Vec<f64>>()
+    };
+    let (mut idle, mut after) = (vec![f64::INFINITY; second], vec![f64::INFINITY; second]);
+    let mut sounding = 0;
+    for _ in 0..runs.max(1) {
+        let mut fresh = Instrument::new(PIANO_RATE, 32, settings);
+        let mut used = played();
+        sounding = used.sounding();
+        for (best, t) in idle.iter_mut().zip(timed(&mut fresh)) {
+            *best = best.min(t);
+        }
+        for (best, t) in after.iter_mut().zip(timed(&mut used)) {
+            *best = best.min(t);
+        }
+    }
+    let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64 * 1e6;
+    serde_json::json!({
+        "name": "piano/after-release",
+        "voices": 32,
+        "sounding": sounding,
+        "idle_call_us": mean(&idle),
+        "after_call_us": mean(&after),
+        "ratio": mean(&after) / mean(&idle),
+    })
 }
 
 #[cfg(test)]

@@ -231,7 +231,8 @@ impl Instrument {
     /// How many times the guard has silenced a voice since the instrument was made (see
     /// [`SlideVoice`]'s guard): zero unless the physics misbehaved.
     pub fn guard_trips(&self) -> u32 {
-        self.slides.iter().map(SlideVoice::guard_trips).sum()
+        self.voices.iter().map(PianoVoice::guard_trips).sum::<u32>()
+            + self.slides.iter().map(SlideVoice::guard_trips).sum::<u32>()
     }
 
     /// Voices whose exciter touches the string (or is about to): hammers in contact and slides

@@ -27,10 +27,16 @@
 //!   mean square of its output over its latest block ([`PianoVoice::loudness`]). The stolen voice
 //!   fades at [`STEAL_RATE`] (a decay rate added to every mode, again without touching the state)
 //!   for [`STEAL_TIME`], then its new note starts on a fresh string.
+//! - **Guard.** With no source but the hammer, the string can never hold more than the energy of
+//!   the latest strike. A string found with more than [`GUARD_FACTOR`] times that fades out over
+//!   the control block and falls silent; a non-finite sample silences it at once (the samples
+//!   rendered with it are zero). Both are counted ([`PianoVoice::guard_trips`]): a last line of
+//!   defence that the tests check never fires.
 
 use crate::contact::{Method, PowerLaw};
 use crate::exciter::HammerParams;
 use crate::instrument::settings::{Settings, hammer_speed};
+use crate::instrument::slide_voice::GUARD_FACTOR;
 use crate::instrument::solvers::Solvers;
 use crate::preset::piano_note;
 use crate::scene::{HammerCore, HammerStringParams, OutputKind, Pickup};
@@ -100,6 +106,10 @@ pub struct PianoVoice {
     pending_released: bool,
     /// Mean square of the output over the latest rendered block (N²).
     loudness: f64,
+    /// While the guard fades the voice out: its gain now and its decrease per sample.
+    guard_fade: Option<(f64, f64)>,
+    /// How many times the guard has silenced this voice.
+    trips: u32,
 }
 
 impl PianoVoice {
@@ -133,6 +143,8 @@ impl PianoVoice {
             pending: None,
             pending_released: false,
             loudness: 0.0,
+            guard_fade: None,
+            trips: 0,
         }
     }
 
@@ -240,6 +252,18 @@ impl PianoVoice {
         self.pending_released = true;
     }
 
+    /// How many times the guard has silenced this voice.
+    pub fn guard_trips(&self) -> u32 {
+        self.trips
+    }
+
+    /// Silence the voice at once, counted as a guard trip.
+    fn trip(&mut self) {
+        self.trips += 1;
+        self.guard_fade = None;
+        self.silence();
+    }
+
     /// Stop at once: the string at rest, no pending note.
     pub fn silence(&mut self) {
         self.core.string_mut().reset();
@@ -278,6 +302,10 @@ impl PianoVoice {
         if !self.sounding && self.pending.is_none() {
             return;
         }
+        if self.guard_fade.is_some() {
+            self.trip();
+            return;
+        }
         let fs = self.core.string().sample_rate();
         if let Some(strike) = self.pending
             && self.fade_left == 0
@@ -306,8 +334,15 @@ impl PianoVoice {
             self.core.string_mut().set_extra_decay(&self.extra);
             self.core.refresh_coupling();
         }
+        let string_energy = self.core.string().energy();
+        // The guard: with no source but the hammer, the string never holds more than the strike's
+        // energy (the hammer's and what the string had); far more, or a non-finite state, is a
+        // fault to silence, not to play.
+        if !(string_energy <= GUARD_FACTOR * self.reference_energy) {
+            self.guard_fade = Some((1.0, 1.0 / len as f64));
+        }
         // Once the hammer is out of the string's reach for good, the string alone sounds.
-        if self.core.retired() && self.core.string().energy() < RELEASE_ENERGY * self.reference_energy {
+        if self.core.retired() && string_energy < RELEASE_ENERGY * self.reference_energy {
             self.sounding = false;
         }
     }
@@ -334,5 +369,80 @@ impl PianoVoice {
         if !out.is_empty() {
             self.loudness = out.iter().map(|x| x * x).sum::<f64>() / out.len() as f64;
         }
+        if !self.loudness.is_finite() {
+            out.fill(0.0);
+            self.trip();
+        } else if let Some((gain, step)) = &mut self.guard_fade {
+            for x in out {
+                *x *= *gain;
+                *gain = (*gain - *step).max(0.0);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const FS: f64 = 48000.0;
+
+    fn struck(blocks: usize) -> (PianoVoice, Settings) {
+        let settings = Settings::default();
+        let mut voice = PianoVoice::new(200, FS);
+        voice.play(Strike { channel: 0, key: 60, velocity: 0.7 }, &settings, 0);
+        let mut out = [0.0; 64];
+        for _ in 0..blocks {
+            voice.begin_block(&settings, false, 64, 0);
+            voice.render(&mut out);
+        }
+        (voice, settings)
+    }
+
+    /// A struck string holds at most the strike's energy (measured 0.50 of it after 50 blocks),
+    /// far inside the guard's bound of [`GUARD_FACTOR`] times it.
+    #[test]
+    fn a_struck_voice_stays_inside_its_energy_bound() {
+        let (voice, _) = struck(50);
+        let ratio = voice.core.string().energy() / voice.reference_energy;
+        println!("string energy / strike energy: {ratio}");
+        assert!(ratio <= 1.0);
+        assert_eq!(voice.guard_trips(), 0);
+    }
+
+    /// A string holding more than [`GUARD_FACTOR`] times its strike's energy (here: a reference
+    /// made a million times too small) fades out linearly over the next block, then the voice is
+    /// silent with its string at rest, and the trip is counted.
+    #[test]
+    fn the_guard_fades_a_piano_voice_over_its_bound_within_one_block() {
+        let (mut voice, settings) = struck(20);
+        let mut twin = voice.clone();
+        let (mut plain, mut faded) = ([0.0; 64], [0.0; 64]);
+        twin.begin_block(&settings, false, 64, 0);
+        twin.render(&mut plain);
+        voice.reference_energy *= 1e-6;
+        voice.begin_block(&settings, false, 64, 0);
+        voice.render(&mut faded);
+        for (i, (f, p)) in faded.iter().zip(&plain).enumerate() {
+            assert_eq!(*f, p * (1.0 - i as f64 / 64.0), "sample {i}");
+        }
+        voice.begin_block(&settings, false, 64, 0);
+        assert!(!voice.sounding);
+        assert_eq!(voice.guard_trips(), 1);
+        assert_eq!(voice.core.string().energy(), 0.0);
+    }
+
+    /// A non-finite state silences the voice in the same call: zeros, not NaN, and a trip.
+    #[test]
+    fn a_non_finite_piano_state_is_silenced_at_once() {
+        let (mut voice, _) = struck(20);
+        let m = voice.core.string().modes();
+        let bad = vec![f64::NAN; m];
+        voice.core.string_mut().set_state(&bad, &bad);
+        let mut out = [1.0; 64];
+        voice.render(&mut out);
+        assert!(out.iter().all(|&x| x == 0.0));
+        assert!(!voice.sounding);
+        assert_eq!(voice.guard_trips(), 1);
     }
 }
