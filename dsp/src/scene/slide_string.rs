@@ -642,7 +642,11 @@ impl SlideCore {
             }
             let (s, e) = (slot(c, false), slot(c, true));
             if v.made_at[s] != start[c] {
-                if v.made_at[e] == start[c] {
+                // The end slot's vector serves as the start only if the last block used it: then
+                // its projections and Gram entries are current. A vector left over from an older
+                // block (the slide back where it once was, after blocks that did not move it)
+                // is made afresh.
+                if was.moving[c] && v.made_at[e] == start[c] {
                     v.swap_ends(c);
                     swapped = true;
                     if c == SLIDE {
