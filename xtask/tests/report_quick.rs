@@ -1,7 +1,8 @@
 //! `cargo xtask report --quick`, run in-process: the committed error figures in
 //! `docs/report/error-vs-runtime.csv` must match fresh runs (within `QUICK_TOLERANCE`, leaving out
 //! the rows the report marks as sensitive to rounding), and a small seeded stability sweep must
-//! show no failure. A tampered copy of the CSV must be caught.
+//! show no failure. Tampered copies of the CSVs (the error table and the control-block table) must
+//! be caught.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -28,7 +29,7 @@ fn committed_error_figures_match_fresh_runs() {
 }
 
 #[test]
-fn a_changed_error_figure_is_caught() {
+fn changed_error_figures_are_caught() {
     let root = root();
     let committed = fs::read_to_string(root.join("docs/report/error-vs-runtime.csv")).expect("the committed CSV");
     // Move the Fig. 5 QSA N = 6 error against IMP at the base rate by twice the tolerance.
@@ -42,11 +43,27 @@ fn a_changed_error_figure_is_caught() {
     lines[row] = fields.join(",");
     let dir = tempfile::tempdir().expect("a temporary directory");
     fs::write(dir.path().join("error-vs-runtime.csv"), lines.join("\n") + "\n").expect("write the copy");
+    // Move the glide's QSA output error at N_b = 64 by twice the tolerance.
+    let blocks = fs::read_to_string(root.join("docs/report/control-block.csv")).expect("the committed CSV");
+    let blocks: Vec<String> = blocks
+        .lines()
+        .map(|l| match l.strip_prefix("glide,qsa,5,64,") {
+            Some(rest) => {
+                let mut fields: Vec<String> = rest.split(',').map(str::to_owned).collect();
+                let value: f64 = fields[0].parse().expect("a number");
+                fields[0] = format!("{:.4}", value + 2.0 * QUICK_TOLERANCE);
+                format!("glide,qsa,5,64,{}", fields.join(","))
+            }
+            None => l.to_owned(),
+        })
+        .collect();
+    fs::write(dir.path().join("control-block.csv"), blocks.join("\n") + "\n").expect("write the copy");
     match quick_check(&root.join("scenes"), dir.path()) {
-        Err(ReportError::Mismatch(1, message)) => {
+        Err(ReportError::Mismatch(2, message)) => {
             println!("{message}");
             assert!(message.contains("fig5-hammer qsa N=6 1x: error_vs_imp"), "{message}");
+            assert!(message.contains("glide/qsa/N_b 64: output error"), "{message}");
         }
-        other => panic!("expected exactly one mismatch, got {other:?}"),
+        other => panic!("expected exactly two mismatches, got {other:?}"),
     }
 }

@@ -53,7 +53,9 @@ pub use slide_voice::{
     ChannelState, GUARD_FACTOR, HAND_SPEED, OPEN_KEY, PLUCK_TIME, REST_FORCE, SLIDE_SPEED, SlideVoice, TRAIL,
 };
 pub use solvers::Solvers;
-pub use voice::{PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike};
+pub use voice::{
+    DAMPER_UPDATE, DAMPER_WIDTH, PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike, damper_shares,
+};
 
 use crate::string::ModalString;
 

@@ -71,6 +71,19 @@ pub struct Strike {
     pub velocity: f64,
 }
 
+/// The damper's share of each mode relative to the fundamental, `g_i` (module docs), for a pad
+/// [`DAMPER_WIDTH`] long from `position` (fraction of the length) towards the bridge, written
+/// into `out` (one entry per mode of `string`; never allocates within `out`'s capacity).
+pub fn damper_shares(string: &ModalString, position: f64, out: &mut Vec<f64>) {
+    let length = string.params().length;
+    let (a, b) = (position * length, (position * length + DAMPER_WIDTH).min(length));
+    // Mean of sin²(βx) over [a, b].
+    let mean = |beta: f64| 0.5 - ((2.0 * beta * b).sin() - (2.0 * beta * a).sin()) / (4.0 * beta * (b - a));
+    let first = string.wavenumbers().first().map_or(1.0, |&beta| mean(beta));
+    out.clear();
+    out.extend(string.wavenumbers().iter().map(|&beta| (mean(beta) / first).max(1.0)));
+}
+
 /// One piano voice.
 #[derive(Debug, Clone)]
 pub struct PianoVoice {
@@ -202,17 +215,9 @@ impl PianoVoice {
         self.started = now;
     }
 
-    /// The damper's share of each mode, `g_i` (module docs), for a pad from the striking point
-    /// `position` (fraction of the length) towards the bridge.
+    /// The damper's share of each mode for a pad from the striking point `position`.
     fn shape_damper(&mut self, position: f64) {
-        let string = self.core.string();
-        let length = string.params().length;
-        let (a, b) = (position * length, (position * length + DAMPER_WIDTH).min(length));
-        // Mean of sin²(βx) over [a, b].
-        let mean = |beta: f64| 0.5 - ((2.0 * beta * b).sin() - (2.0 * beta * a).sin()) / (4.0 * beta * (b - a));
-        let first = string.wavenumbers().first().map_or(1.0, |&beta| mean(beta));
-        self.damper_shape.clear();
-        self.damper_shape.extend(string.wavenumbers().iter().map(|&beta| (mean(beta) / first).max(1.0)));
+        damper_shares(self.core.string(), position, &mut self.damper_shape);
     }
 
     /// Fade out over [`STEAL_TIME`], then play `strike` (a stolen voice).

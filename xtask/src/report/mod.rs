@@ -8,6 +8,9 @@
 //!   16×), the output-signal errors, the real-time factor (median of 9 runs) and the solver's work
 //!   per step. Files: `error-vs-runtime.csv`, `convergence.csv` (least-squares orders, [`fit`]),
 //!   `pareto-<case>.png`, `fig5-right.png`, `fig4-trajectories.png` ([`fig4`], [`plot`]).
+//! - **Control block** ([`control_block`]): the slide's glide and vibrato at N_b ∈ {1, 8, 64,
+//!   256} with QSA and IMP, the errors against N_b = 1 and the run times. File:
+//!   `control-block.csv`.
 //! - **Stability** ([`stability`]): a seeded sweep of random parameter sets per scene and method
 //!   plus hand-picked corners. Files: `stability.csv`, `stability.md`.
 //! - `README.md` ([`readme`]): the tables, the plots, the fitted orders and, in plain words, which
@@ -25,11 +28,14 @@
 
 pub mod analysis;
 pub mod cases;
+pub mod control_block;
 pub mod error;
 pub mod fig4;
 pub mod fit;
+pub mod gestures;
 pub mod plot;
 pub mod readme;
+pub mod restrike;
 pub mod sim;
 pub mod stability;
 
@@ -189,7 +195,13 @@ pub fn quick_check(scenes: &Path, report_dir: &Path) -> Result<QuickOutcome, Rep
         fresh.extend(error::sweep_case(case, &configs, 0, &|| bar.inc(1)));
     }
     bar.finish_and_clear();
-    let comparison = error::compare(&fresh, &stored, QUICK_TOLERANCE, QUICK_MAX_SENSITIVITY);
+    let mut comparison = error::compare(&fresh, &stored, QUICK_TOLERANCE, QUICK_MAX_SENSITIVITY);
+    let blocks_path = report_dir.join(readme::CONTROL_BLOCK_CSV);
+    let blocks_text = std::fs::read_to_string(&blocks_path)
+        .map_err(|source| ReportError::Io { path: blocks_path.clone(), source })?;
+    let blocks = control_block::study(0, &|| {});
+    comparison.problems.extend(control_block::compare(&blocks, &blocks_text, QUICK_TOLERANCE));
+    comparison.compared += blocks.len();
     if !comparison.problems.is_empty() {
         return Err(ReportError::Mismatch(comparison.problems.len(), comparison.problems.join("\n")));
     }
@@ -232,6 +244,9 @@ fn full(args: &ReportArgs) -> Result<Vec<PathBuf>, ReportError> {
     bar.finish_and_clear();
     let error_seconds = start.elapsed().as_secs_f64();
     let fig4 = fig4::study(&cases[0].scene);
+    let bar = progress(2 * control_block::METHODS.len() * control_block::BLOCKS.len(), "control block");
+    let blocks = control_block::study(error::TIMING_RUNS, &|| bar.inc(1));
+    bar.finish_and_clear();
     let stability_start = Instant::now();
     let bar = progress(stability::sets_per_kind(args.sets, true).iter().sum(), "stability sweep");
     let sweep = stability::sweep(args.sets, excerpt(&cases), &|| bar.inc(1));
@@ -242,6 +257,7 @@ fn full(args: &ReportArgs) -> Result<Vec<PathBuf>, ReportError> {
         rows: &rows,
         reference_checks: &reference_checks,
         fig4: &fig4,
+        blocks: &blocks,
         sweep: &sweep,
         timing: readme::Timing { error_seconds, stability_seconds, total_seconds: 0.0 },
     };
