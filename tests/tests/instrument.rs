@@ -237,6 +237,33 @@ fn dampers_land_without_clicks() {
     }
 }
 
+/// The hardest damper on the bass does not trip the energy guard: a damper of 500 1/s landing
+/// 2 ms after the strike of keys 21 to 33 struck near the agraffe (Strike position ×0.25) damps
+/// the high modes, which the pad sees at every phase, up to 80 times faster than the
+/// fundamental, far beyond their own frequencies; the scheme's numerical energy of an unchanged
+/// state then jumps by hundreds of times (its modal stiffness depends on the decay rate), and a
+/// guard reading it silenced the note. The voice judges its string by the energy weighed with
+/// its own stiffnesses, which only falls as the damper works: no trip, for every control block
+/// length, and the note still sounds until the damper has taken it.
+#[test]
+fn a_hard_damper_on_the_bass_does_not_trip_the_guard() {
+    for key in [21u8, 24, 28, 33] {
+        for block in [1, 64, 256] {
+            let settings = Settings { block, strike_position: 0.25, damper_rate: 500.0, ..Default::default() };
+            let mut p = Instrument::new(FS, 2, settings);
+            let score: Score = vec![(0, on(key, 1.0)), (96, off(key))];
+            let out = play(&mut p, &score, 9_600, || 64);
+            println!(
+                "key {key} N_b {block}: guard trips {}, peak {:.2e}",
+                p.guard_trips(),
+                out.iter().fold(0f32, |m, v| m.max(v.abs()))
+            );
+            assert_eq!(p.guard_trips(), 0, "key {key}, N_b {block}: the guard fired");
+            assert!(rms(&out[96..480]) > 0.05 * rms(&out[..96]), "key {key}, N_b {block}: silenced at once");
+        }
+    }
+}
+
 /// Voices end when their strings fall silent: 200 short notes in a row (50 ms each, one every
 /// 60 ms, keys and velocities seeded at random) on 32 voices never need to steal, since the
 /// dampers silence each note within its release tail and the voice is free again; and 2 s after

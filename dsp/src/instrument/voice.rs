@@ -22,7 +22,10 @@
 //!   sound dies away continuously however fast the damper lands.
 //! - **Release.** A voice is free again once its string is silent: the string's energy (the
 //!   hammer flying off does not count) below [`RELEASE_ENERGY`] of its latest strike's, with the
-//!   hammer retired (out of the string's reach for good, see [`HammerCore`]).
+//!   hammer retired (out of the string's reach for good, see [`HammerCore`]). The string's energy
+//!   here and in the guard is weighed with its own modal stiffnesses
+//!   ([`ModalString::own_energy`]): the scheme's numerical energy depends on the decay rates, so
+//!   a damper landing would make it jump although the string has not moved.
 //! - **Stealing.** With every voice busy, a new note takes the least audible voice, judged by the
 //!   mean square of its output over its latest block ([`PianoVoice::loudness`]). The stolen voice
 //!   fades at [`STEAL_RATE`] (a decay rate added to every mode, again without touching the state)
@@ -199,7 +202,7 @@ impl PianoVoice {
         let mass = note.hammer_mass * settings.hammer_mass;
         // The felt starts two samples of travel beyond the string, so the hammer lands almost at once.
         let hammer = HammerParams { mass, velocity, position, gap: 2.0 * velocity / fs };
-        let string_energy = self.core.string().energy();
+        let string_energy = self.core.string().own_energy();
         self.core.strike(&hammer);
         self.position = position;
         let Ok(law) = PowerLaw::new(note.kappa * settings.hardness, note.alpha) else { return };
@@ -339,7 +342,7 @@ impl PianoVoice {
             self.core.string_mut().set_extra_decay(&self.extra);
             self.core.refresh_coupling();
         }
-        let string_energy = self.core.string().energy();
+        let string_energy = self.core.string().own_energy();
         // The guard: with no source but the hammer, the string never holds more than the strike's
         // energy (the hammer's and what the string had); far more, or a non-finite state, is a
         // fault to silence, not to play.

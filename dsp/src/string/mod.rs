@@ -288,6 +288,8 @@ pub struct ModalString {
     coef_c: Vec<f64>,
     /// `K̂_i` (N/m).
     stiffness: Vec<f64>,
+    /// The string's own `K̂_i` (N/m), before any extra decay.
+    own_stiffness: Vec<f64>,
     /// `R̂_i` (kg/s).
     resistance: Vec<f64>,
     /// `ũ^{n−1}` (m).
@@ -374,6 +376,7 @@ impl ModalString {
             coef_b: v(),
             coef_c: v(),
             stiffness: v(),
+            own_stiffness: v(),
             resistance: v(),
             u_prev: v(),
             u_now: v(),
@@ -402,7 +405,7 @@ impl ModalString {
         all.into_iter().for_each(Vec::clear);
         self.own_p.clear();
         self.own_q.clear();
-        for v in [&mut self.coef_c, &mut self.stiffness, &mut self.resistance] {
+        for v in [&mut self.coef_c, &mut self.stiffness, &mut self.own_stiffness, &mut self.resistance] {
             v.clear();
         }
         let mut counter = ModeCounter::new(&params, sample_rate, max_frequency);
@@ -428,10 +431,12 @@ impl ModalString {
             self.coef_b.push(c.b);
             self.coef_c.push(c.c);
             self.stiffness.push(c.stiffness);
+            self.own_stiffness.push(c.stiffness);
             self.resistance.push(c.resistance);
         }
         let padded = self.beta.len().div_ceil(LANES) * LANES;
-        for v in [&mut self.coef_a, &mut self.coef_b, &mut self.coef_c, &mut self.stiffness, &mut self.resistance] {
+        let coefficients = [&mut self.coef_a, &mut self.coef_b, &mut self.coef_c, &mut self.stiffness];
+        for v in coefficients.into_iter().chain([&mut self.own_stiffness, &mut self.resistance]) {
             v.resize(padded, 0.0);
         }
         for v in [&mut self.u_prev, &mut self.u_now, &mut self.history] {
@@ -785,6 +790,18 @@ impl ModalString {
     pub fn energies(&self) -> (f64, f64) {
         let (step2, k_sum2) = kernel::energy_sums(self.isa, &self.u_prev, &self.u_now, &self.stiffness);
         (self.kinetic_from(step2), self.stored_energy(step2, k_sum2))
+    }
+
+    /// The string's energy of the current state weighed with its own modal stiffnesses (J): as
+    /// [`energy`](Self::energy), but with the `K̂_i` the string has without any extra decay
+    /// ([`set_extra_decay`](Self::set_extra_decay)). A damper or a fade changes `K̂` (it depends
+    /// on the decay rate), so the numerical energy of an unchanged state jumps when they land, by
+    /// up to hundreds of times for a low mode damped far beyond its frequency; this measure does
+    /// not, and it decays as the damped motion does (docs/physics.md §6.5). What a voice judges
+    /// its string's loudness and health by.
+    pub fn own_energy(&self) -> f64 {
+        let (step2, k_sum2) = kernel::energy_sums(self.isa, &self.u_prev, &self.u_now, &self.own_stiffness);
+        self.stored_energy(step2, k_sum2)
     }
 
     /// The string's energy `H^{n−1/2}` of the current state (J): the stored term between
