@@ -428,3 +428,73 @@ fn a_slide_back_where_it_was_after_the_block_shrank_meets_current_vectors() {
         slide - probe.displacement
     );
 }
+
+/// Slide mode with `voices` voices and `base` settings: `events` at their samples, `changed`
+/// settings from `change_at` on (none if `changed` is `None`); the left channel's peak and the
+/// guard's count.
+fn pluck_after_change(
+    voices: usize,
+    base: Settings,
+    changed: Option<Settings>,
+    events: &[(usize, Event)],
+) -> (f32, u32) {
+    let base = Settings { mode: Mode::Slide, ..base };
+    let mut instrument = Instrument::new(48_000.0, voices, base);
+    let samples = 144_000;
+    let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
+    let change_at = events[1].0 - 100;
+    let mut t = 0;
+    while t < samples {
+        if t == change_at
+            && let Some(c) = changed
+        {
+            instrument.set_settings(&Settings { mode: Mode::Slide, ..c });
+        }
+        for (at, e) in events {
+            if *at == t {
+                instrument.handle(*e);
+            }
+        }
+        let next = events.iter().map(|e| e.0).chain([change_at]).filter(|&at| at > t).min().unwrap_or(samples);
+        let n = 64.min(next - t).min(samples - t);
+        instrument.process(&mut left[t..t + n], &mut right[t..t + n]);
+        t += n;
+    }
+    (left.iter().fold(0.0f32, |m, v| m.max(v.abs())), instrument.guard_trips())
+}
+
+/// A new note never inherits a pressed slide under a stiffer contact or hand: with the hand
+/// pressing 3 mm on a stiff hand spring (1e6 N/m) and a soft contact (κ 1e6, α 3), raising κ to
+/// 1e13 just before the next note re-weighed the energy the pressed slide held, by up to joules
+/// (+32 dBFS against −9 dBFS for the same notes without the change), whether the note re-plucked
+/// the sounding voice or started on the released one. A sounding voice keeps its note's law and
+/// a silent one starts from rest with the new law, so the peak stays within 6 dB of the render
+/// without the change (measured below) and the guard never fires.
+#[test]
+fn a_stiffer_contact_set_between_notes_adds_no_energy() {
+    let base = Settings {
+        follow_key: false,
+        slide_kappa: 1e6,
+        slide_alpha: 3.0,
+        hand_height: -3e-3,
+        hand_stiffness: 1e6,
+        ..Default::default()
+    };
+    let stiff = Settings { slide_kappa: 1e13, ..base };
+    let note = |key| Event::NoteOn { channel: 0, key, velocity: 1.0 };
+    let cases: [(&str, usize, Vec<(usize, Event)>); 2] = [
+        ("re-plucking the sounding voice", 1, vec![(0, note(50)), (24_100, note(52))]),
+        (
+            "on the released voice",
+            32,
+            vec![(0, note(50)), (24_000, Event::NoteOff { channel: 0, key: 50 }), (120_512, note(52))],
+        ),
+    ];
+    for (name, voices, events) in cases {
+        let (plain, plain_trips) = pluck_after_change(voices, base, None, &events);
+        let (changed, trips) = pluck_after_change(voices, base, Some(stiff), &events);
+        println!("{name}: peak {changed:.3e} with κ raised, {plain:.3e} without");
+        assert_eq!((plain_trips, trips), (0, 0), "{name}: the guard fired");
+        assert!(changed <= 2.0 * plain, "{name}: peak {changed:e} against {plain:e}");
+    }
+}

@@ -18,8 +18,12 @@
 //!   with 0.3 N, muting the string.
 //!
 //! The slide's mass, the hand's stiffness and damping and the contact law (κ, α) belong to the
-//! note: changes take effect at the next pluck, as the solver and its segments do. (Stiffening a
-//! stretched hand spring in the middle of a note would release its energy at once.)
+//! voice's note: a note on a silent voice takes the current ones, and a voice plucked again while
+//! it sounds keeps its own. Changed under a pressed slide they would re-weigh the energy it holds
+//! (a stiffer contact or hand spring stores more at the same compression or stretch, a heavier
+//! slide more at the same speed): energy from nowhere, up to joules. So a silent voice whose note
+//! asks for others starts from rest, the slide lifted, and the hand lowers it at [`HAND_SPEED`].
+//! The solver and its segments change at every pluck.
 //!
 //! # Guard
 //!
@@ -97,6 +101,8 @@ pub struct SlideVoice {
     hand: f64,
     /// The slide and hand of the current note.
     slide: SlideParams,
+    /// The contact law of the current note.
+    law: PowerLaw,
     /// Energy at the latest pluck, string, slide and contact (J).
     energy_at_pluck: f64,
     /// The controls' work at the latest pluck (J).
@@ -153,6 +159,7 @@ impl SlideVoice {
             x_o,
             hand: HAND_RANGE.0,
             slide,
+            law,
             energy_at_pluck: 0.0,
             work_at_pluck: 0.0,
             guard_fade: None,
@@ -188,14 +195,18 @@ impl SlideVoice {
             self.x_o = Self::slide_position(self.length, self.semitones(settings));
         }
         let Ok(law) = PowerLaw::new(settings.slide_kappa, settings.slide_alpha) else { return };
+        let slide = Self::slide_params(settings);
+        if !self.sounding && (law != self.law || slide != self.slide) {
+            self.rest_lifted();
+            (self.law, self.slide) = (law, slide);
+        }
         // The QSA fit spans twice the largest static push the hand and fingers can make
         // (the scene-file rule of `SlideStringDescription::default_v_ref`).
-        let push = 2.0 * (settings.hand_stiffness * (-HAND_RANGE.1 + 1e-3) + 3.0 + REST_FORCE);
-        let y_ref = (push / law.kappa()).powf(1.0 / law.alpha());
-        if !self.solvers.restart(settings.method, law, y_ref, settings.segments, self.core.compressions()) {
+        let push = 2.0 * (self.slide.stiffness * (-HAND_RANGE.1 + 1e-3) + 3.0 + REST_FORCE);
+        let y_ref = (push / self.law.kappa()).powf(1.0 / self.law.alpha());
+        if !self.solvers.restart(settings.method, self.law, y_ref, settings.segments, self.core.compressions()) {
             return;
         }
-        self.slide = Self::slide_params(settings);
         self.core.set_params(self.slide, [settings.finger_damping; 2], settings.block);
         self.energy_at_pluck = self.energy();
         self.work_at_pluck = self.core.control_work();
@@ -260,6 +271,11 @@ impl SlideVoice {
         self.trips += 1;
         self.guard_fade = None;
         self.silence();
+        self.rest_lifted();
+    }
+
+    /// Bring the string and the slide to rest, the slide lifted and the fingers off.
+    fn rest_lifted(&mut self) {
         let lifted = SlideControls { hand_height: HAND_RANGE.0, left_force: 0.0, right_force: 0.0, ..self.live.0 };
         self.live.0 = lifted;
         self.hand = lifted.hand_height;
