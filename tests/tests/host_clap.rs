@@ -14,38 +14,31 @@
 //!   (an allocation in `process`) shows as a failing test with the child's output.
 //!
 //! The bundles are built by `cargo xtask bundle qsa-plugin --release` (and `.ci/run`); a missing
-//! or stale bundle fails the tests with that instruction.
-//!
-//! `unsafe` is allowed for one reason: loading a plugin binary (`PluginEntry::load`) runs foreign
-//! code, which no compiler can check.
-#![allow(unsafe_code)] // loading a plugin binary is inherently unsafe (clack-host's `PluginEntry::load`)
+//! or stale bundle fails the tests with that instruction. The host harness is shared with
+//! `host_fuzz.rs` (`support/host.rs`).
 
 use std::ffi::CString;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use clack_extensions::audio_ports::{AudioPortInfoBuffer, PluginAudioPorts};
 use clack_extensions::note_ports::{NoteDialect, NotePortInfoBuffer, PluginNotePorts};
-use clack_extensions::params::{ParamInfoBuffer, ParamInfoFlags, PluginParams};
-use clack_extensions::state::PluginState;
-use clack_host::events::Match;
-use clack_host::events::event_types::{MidiEvent, NoteOffEvent, NoteOnEvent, ParamValueEvent};
+use clack_extensions::params::{ParamInfoBuffer, ParamInfoFlags};
 use clack_host::prelude::*;
 use qsa_tests::{fundamental, seeded_rng, spectral_peak};
 use rand::RngExt;
 
 #[path = "support/bundle.rs"]
 mod bundle;
-use bundle::{BUILD_RELEASE, checked_bundle, target_dir};
+#[path = "support/host.rs"]
+mod host;
+use bundle::{checked_bundle, target_dir};
+use host::{Audio, Ev, PARAMETERS, Plugin, Score, clap_id, param, release_bundle};
 
 // ------------------------------------------------------------------------------------------------
 // Bundles
 // ------------------------------------------------------------------------------------------------
-
-/// The plugin's CLAP id (`ClapPlugin::CLAP_ID`).
-const PLUGIN_ID: &str = "org.qsa-strings.qsa-strings";
 
 /// Environment variable naming the bundle the ignored child test runs against.
 const CHILD_BUNDLE_ENV: &str = "QSA_HOST_TEST_BUNDLE";
@@ -58,251 +51,14 @@ const BUILD_DEBUG: &str = "cargo xtask bundle qsa-plugin --features assert_proce
                            target/bundled-debug && cp -r target/bundled target/bundled-debug && cargo xtask bundle \
                            qsa-plugin --release";
 
-/// The release bundle.
-fn release_bundle() -> PathBuf {
-    checked_bundle(target_dir().join("bundled/QSA Strings.clap"), BUILD_RELEASE)
-}
-
 /// Where `.ci/run` copies the debug `assert_process_allocs` bundle.
 fn debug_bundle_path() -> PathBuf {
     target_dir().join("bundled-debug/QSA Strings.clap")
 }
 
-// ------------------------------------------------------------------------------------------------
-// The host
-// ------------------------------------------------------------------------------------------------
-
-/// The host's handlers: nothing but a flag for the plugin's main-thread callback requests.
-struct TestHost;
-
-struct Shared {
-    callback_requested: AtomicBool,
-}
-
-impl<'a> SharedHandler<'a> for Shared {
-    fn request_restart(&self) {}
-    fn request_process(&self) {}
-    fn request_callback(&self) {
-        self.callback_requested.store(true, Ordering::SeqCst);
-    }
-}
-
-impl HostHandlers for TestHost {
-    type Shared<'a> = Shared;
-    type MainThread<'a> = ();
-    type AudioProcessor<'a> = ();
-}
-
-/// A parameter's CLAP id: nice-plug derives it from the stable string id with this hash
-/// (`hash_param_id` in nice-plug 0.4.2, `wrapper/util.rs`; VST3 uses the same), so the documented
-/// string ids determine the ids a host stores in its automation.
-fn clap_id(id: &str) -> u32 {
-    id.bytes().fold(0u32, |h, b| h.wrapping_mul(31).wrapping_add(u32::from(b))) & !(1 << 31)
-}
-
-/// One host event.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Ev {
-    /// CLAP note-on (channel, key, velocity 0..1).
-    On(u8, u8, f64),
-    /// CLAP note-off (channel, key).
-    Off(u8, u8),
-    /// A raw MIDI 1.0 message.
-    Midi([u8; 3]),
-    /// A parameter value (CLAP id, CLAP value: normalised 0..1, or the step index of stepped ones).
-    Param(u32, f64),
-}
-
-/// Timed events: (sample from the start of a render, event), in time order.
-type Score = Vec<(usize, Ev)>;
-
-/// A parameter change by string id.
-fn param(id: &str, value: f64) -> Ev {
-    Ev::Param(clap_id(id), value)
-}
-
 /// The CLAP value of `Slide position` `p` semitones (a linear 0..=24 st range).
 fn slide_value(p: f64) -> f64 {
     p / 24.0
-}
-
-/// Audio of one render: left and right channels.
-struct Audio {
-    left: Vec<f32>,
-    right: Vec<f32>,
-}
-
-impl Audio {
-    fn peak(&self) -> f32 {
-        self.left.iter().chain(&self.right).fold(0.0f32, |m, v| m.max(v.abs()))
-    }
-
-    fn assert_finite(&self, what: &str) {
-        let bad = self.left.iter().chain(&self.right).position(|v| !v.is_finite());
-        assert!(bad.is_none(), "{what}: non-finite sample at index {bad:?}");
-    }
-
-    /// The left channel from `from` samples on, as f64.
-    fn tail(&self, from: usize) -> Vec<f64> {
-        self.left[from..].iter().map(|&v| f64::from(v)).collect()
-    }
-}
-
-/// A plugin instance in clack-host, active and processing.
-struct Plugin {
-    instance: PluginInstance<TestHost>,
-    processor: Option<StartedPluginAudioProcessor<TestHost>>,
-    max_block: usize,
-}
-
-impl Plugin {
-    /// Load `bundle`, instantiate the plugin, set `setup` (by flushing parameter events while
-    /// inactive, as a host restoring a project does), activate at `sample_rate` with blocks of up
-    /// to `max_block` samples and start processing.
-    fn new(bundle: &Path, sample_rate: f64, max_block: usize, setup: &[Ev]) -> Self {
-        // SAFETY: loading a plugin binary runs its initialisation code; the bundle is this
-        // project's own build.
-        let entry =
-            unsafe { PluginEntry::load(bundle) }.unwrap_or_else(|e| panic!("loading {}: {e:?}", bundle.display()));
-        let factory = entry.get_plugin_factory().expect("the entry has a plugin factory");
-        let ids: Vec<String> =
-            factory.plugin_descriptors().filter_map(|d| d.id().map(|id| id.to_string_lossy().into_owned())).collect();
-        assert_eq!(ids, [PLUGIN_ID], "plugins in the bundle");
-        let host_info = HostInfo::new("qsa-tests", "QSA Strings", "https://example.invalid", "0.1.0").expect("host");
-        let id = CString::new(PLUGIN_ID).expect("id");
-        let mut instance = PluginInstance::<TestHost>::new(
-            |_| Shared { callback_requested: AtomicBool::new(false) },
-            |_| (),
-            &entry,
-            &id,
-            &host_info,
-        )
-        .expect("instantiate");
-        if !setup.is_empty() {
-            let params: PluginParams = instance.plugin_handle().get_extension().expect("params extension");
-            let mut events = EventBuffer::new();
-            for ev in setup {
-                let Ev::Param(id, value) = *ev else { panic!("setup takes parameter values only") };
-                events.push(&ParamValueEvent::new(0, ClapId::new(id), Pckn::match_all(), value));
-            }
-            let mut output = EventBuffer::new();
-            let mut handle = instance.inactive_plugin_handle().expect("inactive");
-            params.flush(&mut handle, &events.as_input(), &mut output.as_output());
-        }
-        let config = PluginAudioConfiguration { sample_rate, min_frames_count: 1, max_frames_count: max_block as u32 };
-        let processor = instance.activate(|_, _| (), config).expect("activate").start_processing().expect("start");
-        Self { instance, processor: Some(processor), max_block }
-    }
-
-    /// A 48 kHz instance taking blocks of up to 8192 samples.
-    fn at_48k(bundle: &Path, setup: &[Ev]) -> Self {
-        Self::new(bundle, 48_000.0, 8192, setup)
-    }
-
-    fn params(&mut self) -> PluginParams {
-        self.instance.plugin_handle().get_extension().expect("params extension")
-    }
-
-    /// Current CLAP value of a parameter.
-    fn value(&mut self, id: u32) -> Option<f64> {
-        let params = self.params();
-        params.get_value(&self.instance.plugin_handle(), ClapId::new(id))
-    }
-
-    /// Render `samples` samples with `score`, calling `process` with blocks of the sizes `sizes`
-    /// yields (at most `max_block`), on a separate audio thread. Events go to the block holding
-    /// their sample, with block-relative times.
-    fn render(&mut self, score: &[(usize, Ev)], samples: usize, mut sizes: impl FnMut() -> usize + Send) -> Audio {
-        assert!(score.windows(2).all(|w| w[0].0 <= w[1].0), "score out of order");
-        assert!(score.iter().all(|e| e.0 < samples), "event after the end of the render");
-        let max_block = self.max_block;
-        let processor = self.processor.as_mut().expect("processing");
-        let audio = std::thread::scope(|s| {
-            s.spawn(move || {
-                let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
-                let mut ports = AudioPorts::with_capacity(2, 1);
-                let mut events = EventBuffer::with_capacity(score.len().min(20_000));
-                let mut output_events = EventBuffer::new();
-                let (mut t, mut next) = (0, 0);
-                while t < samples {
-                    let n = sizes().clamp(1, max_block).min(samples - t);
-                    events.clear();
-                    while next < score.len() && score[next].0 < t + n {
-                        push_event(&mut events, (score[next].0 - t) as u32, score[next].1);
-                        next += 1;
-                    }
-                    let (l, r) = (&mut left[t..t + n], &mut right[t..t + n]);
-                    let mut outputs = ports.with_output_buffers([AudioPortBuffer {
-                        latency: 0,
-                        channels: AudioPortBufferType::f32_output_only([l, r].into_iter()),
-                    }]);
-                    output_events.clear();
-                    processor
-                        .process(
-                            &InputAudioBuffers::empty(),
-                            &mut outputs,
-                            &events.as_input(),
-                            &mut output_events.as_output(),
-                            None,
-                            None,
-                        )
-                        .expect("process");
-                    t += n;
-                }
-                Audio { left, right }
-            })
-            .join()
-            .expect("the audio thread panicked")
-        });
-        self.main_thread_callback();
-        audio
-    }
-
-    /// Render with blocks of one size.
-    fn render_blocks(&mut self, score: &[(usize, Ev)], samples: usize, block: usize) -> Audio {
-        self.render(score, samples, || block)
-    }
-
-    /// Run the plugin's main-thread callback if it asked for one.
-    fn main_thread_callback(&mut self) {
-        if self.instance.access_shared_handler(|s| s.callback_requested.swap(false, Ordering::SeqCst)) {
-            self.instance.call_on_main_thread_callback();
-        }
-    }
-
-    /// Saved state (the state extension).
-    fn save(&mut self) -> Vec<u8> {
-        let state: PluginState = self.instance.plugin_handle().get_extension().expect("state extension");
-        let mut bytes = Vec::new();
-        state.save(&self.instance.plugin_handle(), &mut bytes).expect("save state");
-        bytes
-    }
-
-    /// Load state; whether the plugin accepted it.
-    fn load(&mut self, bytes: &[u8]) -> bool {
-        let state: PluginState = self.instance.plugin_handle().get_extension().expect("state extension");
-        let accepted = state.load(&self.instance.plugin_handle(), &mut &bytes[..]).is_ok();
-        self.main_thread_callback();
-        accepted
-    }
-}
-
-impl Drop for Plugin {
-    fn drop(&mut self) {
-        if let Some(processor) = self.processor.take() {
-            self.instance.deactivate(processor.stop_processing());
-        }
-    }
-}
-
-fn push_event(buffer: &mut EventBuffer, time: u32, ev: Ev) {
-    let note = |channel: u8, key: u8| Pckn::new(0u16, u16::from(channel), u16::from(key), Match::All);
-    match ev {
-        Ev::On(channel, key, velocity) => buffer.push(&NoteOnEvent::new(time, note(channel, key), velocity)),
-        Ev::Off(channel, key) => buffer.push(&NoteOffEvent::new(time, note(channel, key), 0.0)),
-        Ev::Midi(data) => buffer.push(&MidiEvent::new(time, 0, data)),
-        Ev::Param(id, value) => buffer.push(&ParamValueEvent::new(time, ClapId::new(id), Pckn::match_all(), value)),
-    }
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -505,37 +261,6 @@ fn debug_bundle_does_not_allocate_in_process() {
 // ------------------------------------------------------------------------------------------------
 // Parameters
 // ------------------------------------------------------------------------------------------------
-
-/// The documented parameters (plugin/src/params.rs): string id, name, and the step count of the
-/// stepped ones (CLAP value range 0..=steps; continuous ones span 0..=1).
-const PARAMETERS: [(&str, &str, Option<u32>); 26] = [
-    ("mode", "Mode", Some(1)),
-    ("solver", "Solver", Some(2)),
-    ("segs", "QSA segments", Some(63)),
-    ("nb", "Control block", Some(255)),
-    ("voices", "Voices", Some(127)),
-    ("hard", "Hardness", None),
-    ("hmass", "Hammer mass", None),
-    ("strike", "Strike position", None),
-    ("damp", "String damping", None),
-    ("bright", "Brightness", None),
-    ("damper", "Damper", None),
-    ("slide", "Slide position", None),
-    ("follow", "Slide follows key", Some(1)),
-    ("glide", "Glide time", None),
-    ("bend", "Bend range", None),
-    ("hand", "Hand height", None),
-    ("handsrc", "Hand height from", Some(3)),
-    ("smass", "Slide mass", None),
-    ("hstiff", "Hand stiffness", None),
-    ("hdamp", "Hand damping", None),
-    ("fdamp", "Finger damping", None),
-    ("kappa", "Slide stiffness", None),
-    ("alpha", "Slide exponent", None),
-    ("pluck", "Pluck position", None),
-    ("pickup", "Pickup position", None),
-    ("gain", "Output gain", None),
-];
 
 /// The host's view of the plugin: an instrument (no audio input, one stereo main output, one note
 /// input taking CLAP notes and MIDI), and exactly the documented parameters.

@@ -17,13 +17,15 @@
 //!   [`PLUCK_TIME`] to `0.3 + 2.7·velocity` N and is then released; note-off lays the finger on
 //!   with 0.3 N, muting the string.
 //!
-//! The slide's mass, the hand's stiffness and damping and the contact law (κ, α) belong to the
-//! voice's note: a note on a silent voice takes the current ones, and a voice plucked again while
-//! it sounds keeps its own. Changed under a pressed slide they would re-weigh the energy it holds
-//! (a stiffer contact or hand spring stores more at the same compression or stretch, a heavier
-//! slide more at the same speed): energy from nowhere, up to joules. So a silent voice whose note
-//! asks for others starts from rest, the slide lifted, and the hand lowers it at [`HAND_SPEED`].
-//! The solver and its segments change at every pluck.
+//! The slide's mass, the hand's stiffness and damping, the contact law (κ, α), the solver and
+//! its segments belong to the voice's note: a note on a silent voice takes the current ones, and
+//! a voice plucked again while it sounds keeps its own, solver state and all. Changed under a
+//! pressed slide they would re-weigh the energy it holds: a stiffer contact or hand spring stores
+//! more at the same compression or stretch, a heavier slide more at the same speed, and a solver
+//! taking over from EXP (whose auxiliary variable, not the compression, carries the potential)
+//! evaluates the potential at a compression EXP may have let grow far beyond it; energy from
+//! nowhere, up to thousands of joules. So a silent voice whose note asks for other ones starts
+//! from rest, the slide lifted, and the hand lowers it at [`HAND_SPEED`].
 //!
 //! # Guard
 //!
@@ -103,6 +105,8 @@ pub struct SlideVoice {
     slide: SlideParams,
     /// The contact law of the current note.
     law: PowerLaw,
+    /// The solver settings of the current note: method and QSA segments.
+    solver: (Method, usize),
     /// Energy at the latest pluck, string, slide and contact (J).
     energy_at_pluck: f64,
     /// The controls' work at the latest pluck (J).
@@ -160,6 +164,7 @@ impl SlideVoice {
             hand: HAND_RANGE.0,
             slide,
             law,
+            solver: (settings.method, settings.segments),
             energy_at_pluck: 0.0,
             work_at_pluck: 0.0,
             guard_fade: None,
@@ -194,18 +199,20 @@ impl SlideVoice {
             self.glided = self.keys_and_bends(settings, &ChannelState::default());
             self.x_o = Self::slide_position(self.length, self.semitones(settings));
         }
-        let Ok(law) = PowerLaw::new(settings.slide_kappa, settings.slide_alpha) else { return };
-        let slide = Self::slide_params(settings);
-        if !self.sounding && (law != self.law || slide != self.slide) {
-            self.rest_lifted();
-            (self.law, self.slide) = (law, slide);
-        }
-        // The QSA fit spans twice the largest static push the hand and fingers can make
-        // (the scene-file rule of `SlideStringDescription::default_v_ref`).
-        let push = 2.0 * (self.slide.stiffness * (-HAND_RANGE.1 + 1e-3) + 3.0 + REST_FORCE);
-        let y_ref = (push / self.law.kappa()).powf(1.0 / self.law.alpha());
-        if !self.solvers.restart(settings.method, self.law, y_ref, settings.segments, self.core.compressions()) {
-            return;
+        if !self.sounding {
+            let Ok(law) = PowerLaw::new(settings.slide_kappa, settings.slide_alpha) else { return };
+            let (slide, solver) = (Self::slide_params(settings), (settings.method, settings.segments));
+            if (law, slide, solver) != (self.law, self.slide, self.solver) {
+                self.rest_lifted();
+            }
+            // The QSA fit spans twice the largest static push the hand and fingers can make
+            // (the scene-file rule of `SlideStringDescription::default_v_ref`).
+            let push = 2.0 * (slide.stiffness * (-HAND_RANGE.1 + 1e-3) + 3.0 + REST_FORCE);
+            let y_ref = (push / law.kappa()).powf(1.0 / law.alpha());
+            if !self.solvers.restart(solver.0, law, y_ref, solver.1, self.core.compressions()) {
+                return;
+            }
+            (self.law, self.slide, self.solver) = (law, slide, solver);
         }
         self.core.set_params(self.slide, [settings.finger_damping; 2], settings.block);
         self.energy_at_pluck = self.energy();
