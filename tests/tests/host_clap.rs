@@ -631,3 +631,33 @@ fn midi_file_renders_the_same_offline_and_in_the_host() {
         }
     }
 }
+
+/// A state saved by a later version (a newer version string, a parameter this version does not
+/// know, values beyond this version's ranges and a choice it does not have) loads what this
+/// version understands: unknown parameters are left out, numbers are clamped into their ranges,
+/// an unknown choice keeps the current one, and the instrument plays finite samples.
+#[test]
+fn a_state_from_a_later_version_loads_what_it_can() {
+    let mut p = Plugin::at_48k(&release_bundle(), &[]);
+    let saved = p.save();
+    let mut state: serde_json::Value = serde_json::from_slice(&saved[8..]).expect("the state is JSON after its length");
+    state["version"] = serde_json::json!("99.0.0");
+    let params = state["params"].as_object_mut().expect("a params object");
+    params.insert("harmonics".into(), serde_json::json!({ "f32": 3.0 }));
+    params.insert("slide".into(), serde_json::json!({ "f32": 1e9 }));
+    params.insert("segs".into(), serde_json::json!({ "i32": 100_000 }));
+    params.insert("hand".into(), serde_json::json!({ "f32": -1e30 }));
+    params.insert("solver".into(), serde_json::json!({ "string": "harp" }));
+    let body = serde_json::to_vec(&state).expect("JSON");
+    let bytes = [&(body.len() as u64).to_le_bytes()[..], &body].concat();
+    assert!(p.load(&bytes), "a later version's state loads");
+    let value = |p: &mut Plugin, id: &str| p.value(clap_id(id)).expect(id);
+    assert_eq!(value(&mut p, "slide"), 1.0, "Slide position clamped to its top");
+    assert_eq!(value(&mut p, "hand"), 0.0, "Hand height clamped to its bottom");
+    assert_eq!(value(&mut p, "segs"), 63.0, "QSA segments clamped to 64");
+    assert_eq!(value(&mut p, "solver"), 0.0, "an unknown solver keeps QSA");
+    let audio =
+        p.render_blocks(&[(0, param("mode", 1.0)), (0, Ev::On(0, 57, 0.8)), (0, Ev::On(0, 60, 0.8))], 19_200, 512);
+    audio.assert_finite("after a later version's state");
+    assert!(audio.peak() > AUDIBLE, "the instrument plays after a later version's state");
+}

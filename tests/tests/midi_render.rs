@@ -89,3 +89,78 @@ fn bad_midi_input_is_refused() {
         assert!(!out.exists(), "no output for {needle}");
     }
 }
+
+/// A standard MIDI file with one track holding `body` (the track's bytes).
+fn smf(body: &[u8]) -> Vec<u8> {
+    let mut out = b"MThd\0\0\0\x06\0\0\0\x01\x01\xe0MTrk".to_vec();
+    out.extend_from_slice(&(body.len() as u32).to_be_bytes());
+    out.extend_from_slice(body);
+    out
+}
+
+/// A MIDI file with garbage events renders safely or is refused with a clear error, and never
+/// panics, hangs or writes a non-finite sample: (1) well-formed tracks of random channel
+/// messages (notes on every channel with any key and velocity, controllers including the
+/// sustain pedal and all-notes-off, pitch bends, pressures, program changes), system-exclusive
+/// messages, unknown meta events and extreme tempo changes (1 µs to 16.7 s per quarter note);
+/// (2) tracks of random bytes; (3) a track shorter than its header says. Seeded.
+#[test]
+fn midi_files_with_garbage_events_render_safely_or_are_refused() {
+    use rand::RngExt;
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = qsa_tests::seeded_rng(0x6a7b);
+    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
+    for f in 0..3 {
+        let mut body = Vec::new();
+        for _ in 0..600 {
+            body.push(rng.random_range(0..40u8)); // delta time, one byte
+            match rng.random_range(0..10) {
+                0 => body.extend_from_slice(&[0xf0, 3, rng.random(), rng.random(), 0xf7]),
+                1 => body.extend_from_slice(&[0xff, rng.random_range(0x10..0x7f), 2, rng.random(), rng.random()]),
+                2 => {
+                    let tempo: u32 = if rng.random_bool(0.5) { 1 } else { 0x00ff_ffff };
+                    body.extend_from_slice(&[0xff, 0x51, 3]);
+                    body.extend_from_slice(&tempo.to_be_bytes()[1..]);
+                }
+                _ => {
+                    let status = rng.random_range(0x80..=0xefu8);
+                    body.push(status);
+                    body.push(rng.random_range(0..128u8));
+                    if !matches!(status & 0xf0, 0xc0 | 0xd0) {
+                        body.push(rng.random_range(0..128u8));
+                    }
+                }
+            }
+        }
+        body.extend_from_slice(&[0, 0xff, 0x2f, 0]);
+        files.push((format!("structured-{f}"), smf(&body)));
+        let noise: Vec<u8> = (0..2000).map(|_| rng.random()).collect();
+        files.push((format!("noise-{f}"), smf(&noise)));
+    }
+    let mut short = smf(&[0, 0x90, 60, 100, 0x60, 0x80, 60, 0]);
+    short.truncate(short.len() - 3);
+    files.push(("truncated".into(), short));
+    let (mut rendered, mut refused) = (0, 0);
+    for (name, bytes) in files {
+        let path = dir.path().join(format!("{name}.mid"));
+        std::fs::write(&path, &bytes).unwrap();
+        let out = dir.path().join(format!("{name}.wav"));
+        let args = RenderArgs { midi: Some(path), out: Some(out.clone()), tail: 0.5, ..RenderArgs::default() };
+        match run(&args, &mut Vec::new()) {
+            Ok(_) => {
+                let mut reader = hound::WavReader::open(&out).unwrap();
+                let samples: Vec<f32> = reader.samples::<f32>().map(Result::unwrap).collect();
+                assert!(samples.iter().all(|v| v.is_finite()), "{name}: a non-finite sample");
+                rendered += 1;
+            }
+            Err(e) => {
+                let message = e.to_string();
+                println!("{name}: refused: {message}");
+                assert!(!message.is_empty() && !out.exists(), "{name}: a clear error and no output");
+                refused += 1;
+            }
+        }
+    }
+    println!("{rendered} rendered, {refused} refused");
+    assert!(rendered >= 3, "the well-formed files with garbage events render");
+}
