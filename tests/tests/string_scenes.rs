@@ -256,15 +256,7 @@ fn band_limited_string_has_the_same_modes_at_every_rate() {
 }
 
 fn slide_params(block: usize) -> SlideStringParams {
-    let g = slide_guitar();
-    SlideStringParams {
-        string: g.string,
-        slide: g.slide,
-        left: g.left,
-        right: g.right,
-        block,
-        pickup: Pickup { kind: OutputKind::Displacement, position: 0.9 },
-    }
+    xtask::report::gestures::preset_params(block)
 }
 
 /// Slide–string with fixed positions and constant controls (slide pressed, both fingers
