@@ -797,8 +797,8 @@ impl ModalString {
     /// ([`set_extra_decay`](Self::set_extra_decay)). A damper or a fade changes `K̂` (it depends
     /// on the decay rate), so the numerical energy of an unchanged state jumps when they land, by
     /// up to hundreds of times for a low mode damped far beyond its frequency; this measure does
-    /// not, and it decays as the damped motion does (docs/physics.md §6.5). What a voice judges
-    /// its string's loudness and health by.
+    /// not, and it decays as the damped motion does (docs/physics.md §6.5). What a piano voice's
+    /// guard and release test read.
     pub fn own_energy(&self) -> f64 {
         let (step2, k_sum2) = kernel::energy_sums(self.isa, &self.u_prev, &self.u_now, &self.own_stiffness);
         self.stored_energy(step2, k_sum2)

@@ -110,12 +110,13 @@ impl Gesture {
     /// The gesture as a report case at control block `block`, with the preset's contact law.
     pub fn scene(&self, block: usize) -> CaseScene {
         let g = slide_guitar();
+        let law = PowerLaw::new(g.kappa, g.alpha).expect("the preset's law is valid");
         CaseScene {
             setup: Setup::Slide(preset_params(block), SlideAutomation::new(self.lanes.clone(), FS)),
-            law: PowerLaw::new(g.kappa, g.alpha).expect("the preset's law is valid"),
+            law,
             sample_rate: FS as u32,
             samples: (self.seconds * FS).round() as usize,
-            v_ref: PowerLaw::new(g.kappa, g.alpha).expect("the preset's law is valid").potential(preset_y_ref()),
+            v_ref: law.potential(preset_y_ref()),
         }
     }
 
