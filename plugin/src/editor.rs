@@ -6,6 +6,9 @@
 //! [`crate::meter::Shared`] (a lock-free queue and atomics) and sets the repaint flag, which the
 //! editor's window polls. The editor drains the queue each frame into its own [`History`].
 
+mod presets;
+#[cfg(test)]
+mod tests;
 mod views;
 
 use std::sync::Arc;
@@ -26,7 +29,7 @@ use crate::params::{ModeParam, QsaParams};
 use views::History;
 
 /// Editor window size (logical pixels).
-pub const SIZE: (f64, f64) = (1000.0, 700.0);
+pub const SIZE: (f64, f64) = (1000.0, 720.0);
 
 /// Width of the parameter sliders (logical pixels).
 const SLIDER_WIDTH: f32 = 100.0;
@@ -43,14 +46,7 @@ pub fn create(
     state: Arc<EguiEditorState>,
 ) -> Option<EguiEditor<EditorApp>> {
     let repaint = shared.repaint.clone();
-    let app = EditorApp {
-        params,
-        shared,
-        gui: None,
-        latest: Monitor::default(),
-        history: History::default(),
-        peak_hold: (0.0, 0.0),
-    };
+    let app = EditorApp::new(params, shared);
     create_egui_editor(state, repaint, EguiNiceSettings::new().with_tile("QSA Strings"), app)
 }
 
@@ -81,6 +77,29 @@ impl NiceEguiApp for EditorApp {
     }
 
     fn ui(&mut self, ui: &mut Ui, _frame: &mut nice_plug_egui::Frame) {
+        self.show(ui);
+    }
+
+    fn editor_closed(&mut self) {
+        self.gui = None;
+    }
+}
+
+impl EditorApp {
+    /// The app before its window opens.
+    fn new(params: Arc<QsaParams>, shared: Arc<Shared>) -> Self {
+        Self {
+            params,
+            shared,
+            gui: None,
+            latest: Monitor::default(),
+            history: History::default(),
+            peak_hold: (0.0, 0.0),
+        }
+    }
+
+    /// A frame of the editor (what [`NiceEguiApp::ui`] draws; the tests draw it headless).
+    fn show(&mut self, ui: &mut Ui) {
         // Snapshots arrive with a repaint request; this keeps the load moving when they do not.
         ui.ctx().request_repaint_after(Duration::from_millis(250));
         while let Some(monitor) = self.shared.monitors.pop() {
@@ -108,10 +127,6 @@ impl NiceEguiApp for EditorApp {
             parameters(ui, params, &setter);
         });
     }
-
-    fn editor_closed(&mut self) {
-        self.gui = None;
-    }
 }
 
 /// Title, what the loudest voice is, how many voices the energy guard silenced (if any), and
@@ -138,7 +153,7 @@ fn header(ui: &mut Ui, m: &Monitor, load: f32, peak: f32) {
         if m.guard_trips > 0 {
             // The energy guard silenced voices whose physics misbehaved: worth a bug report.
             let text = format!("guard silenced {}", plural(m.guard_trips as usize, "voice"));
-            ui.label(RichText::new(text).color(egui::Color32::from_rgb(230, 120, 40)));
+            ui.label(RichText::new(text).color(Color32::from_rgb(230, 120, 40)));
         }
         ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
             ui.label(RichText::new(format!("{:5.1} % (peak {:.1} %)", load * 100.0, peak * 100.0)).monospace());
@@ -176,44 +191,49 @@ fn live_view(ui: &mut Ui, m: &Monitor, history: &History) {
 
 /// The parameters in three columns: Engine and Output, Piano, Slide.
 fn parameters(ui: &mut Ui, p: &QsaParams, setter: &ParamSetter) {
-    let mode = p.mode.value();
+    let mode = p.engine.mode.value();
     ui.columns(3, |columns| {
         let ui = &mut columns[0];
         section(ui, "Engine", None, |ui| {
-            row(ui, &p.mode, setter);
-            row(ui, &p.solver, setter);
-            row(ui, &p.segments, setter);
-            row(ui, &p.block, setter);
-            row(ui, &p.voices, setter);
+            row(ui, &p.engine.mode, setter);
+            row(ui, &p.engine.solver, setter);
+            row(ui, &p.engine.segments, setter);
+            row(ui, &p.engine.block, setter);
+            row(ui, &p.engine.voices, setter);
         });
         ui.label(RichText::new("Voices take effect when the plugin is next activated.").small().weak());
         ui.add_space(10.0);
-        section(ui, "Output", None, |ui| row(ui, &p.gain, setter));
+        section(ui, "Output", None, |ui| {
+            row(ui, &p.output.gain, setter);
+            row(ui, &p.output.limiter, setter);
+        });
+        ui.add_space(10.0);
+        presets::section(ui, p, setter);
 
         section(&mut columns[1], "Piano", Some(mode == ModeParam::Piano), |ui| {
-            row(ui, &p.hardness, setter);
-            row(ui, &p.hammer_mass, setter);
-            row(ui, &p.strike_position, setter);
-            row(ui, &p.damping, setter);
-            row(ui, &p.brightness, setter);
-            row(ui, &p.damper, setter);
+            row(ui, &p.piano.hardness, setter);
+            row(ui, &p.piano.hammer_mass, setter);
+            row(ui, &p.piano.strike_position, setter);
+            row(ui, &p.piano.damping, setter);
+            row(ui, &p.piano.brightness, setter);
+            row(ui, &p.piano.damper, setter);
         });
 
         section(&mut columns[2], "Slide", Some(mode == ModeParam::Slide), |ui| {
-            row(ui, &p.slide_position, setter);
-            row(ui, &p.follow_key, setter);
-            row(ui, &p.glide, setter);
-            row(ui, &p.bend_range, setter);
-            row(ui, &p.hand_height, setter);
-            row(ui, &p.hand_source, setter);
-            row(ui, &p.slide_mass, setter);
-            row(ui, &p.hand_stiffness, setter);
-            row(ui, &p.hand_damping, setter);
-            row(ui, &p.finger_damping, setter);
-            row(ui, &p.kappa, setter);
-            row(ui, &p.alpha, setter);
-            row(ui, &p.pluck_position, setter);
-            row(ui, &p.pickup_position, setter);
+            row(ui, &p.slide.slide_position, setter);
+            row(ui, &p.slide.follow_key, setter);
+            row(ui, &p.slide.glide, setter);
+            row(ui, &p.slide.bend_range, setter);
+            row(ui, &p.slide.hand_height, setter);
+            row(ui, &p.slide.hand_source, setter);
+            row(ui, &p.slide.slide_mass, setter);
+            row(ui, &p.slide.hand_stiffness, setter);
+            row(ui, &p.slide.hand_damping, setter);
+            row(ui, &p.slide.finger_damping, setter);
+            row(ui, &p.slide.kappa, setter);
+            row(ui, &p.slide.alpha, setter);
+            row(ui, &p.slide.pluck_position, setter);
+            row(ui, &p.slide.pickup_position, setter);
         });
     });
 }
@@ -222,11 +242,9 @@ fn parameters(ui: &mut Ui, p: &QsaParams, setter: &ParamSetter) {
 fn section(ui: &mut Ui, title: &str, active: Option<bool>, rows: impl FnOnce(&mut Ui)) {
     ui.horizontal(|ui| {
         ui.label(RichText::new(title).size(16.0).strong());
-        match active {
-            Some(true) => ui.label(RichText::new("● active mode").color(Color32::from_rgb(90, 200, 90)).small()),
-            Some(false) => ui.label(RichText::new("○ other mode").weak().small()),
-            None => ui.label(""),
-        };
+        if let Some(active) = active {
+            views::mode_mark(ui, active);
+        }
     });
     egui::Grid::new(title).num_columns(2).spacing([8.0, 4.0]).show(ui, |ui| rows(ui));
 }

@@ -11,6 +11,12 @@
 //!   change the output.
 //! - MIDI: notes; CC64 sustain, CC1 mod wheel, CC120 all sound off, CC123 all notes off; pitch bend
 //!   moves the slide; channel and poly pressure can press it (per channel, so MPE works).
+//! - Per note (slide mode): CLAP and VST3 tuning expressions move the note's slide, CLAP pressure
+//!   expressions (nice-plug delivers them, like MIDI poly aftertouch and VST3 poly pressure, as
+//!   `PolyPressure`) are its poly pressure, and CLAP polyphonic modulation offsets its `slide` and
+//!   `hand` ([`params`]). Notes are addressed by the host's voice id, else channel and key. Every
+//!   note's end goes back to the host as `VoiceTerminated` (CLAP note-end), which CLAP
+//!   polyphonic modulation needs to free its per-voice modulators.
 //!
 //! - The editor ([`editor`]) shows the parameters and the loudest voice. `process` times itself
 //!   and, every 1/30 s of audio while the editor is open, hands the engine's monitor snapshot to
@@ -27,10 +33,10 @@ use std::num::NonZeroU32;
 use std::sync::Arc;
 use std::time::Instant;
 
-use nice_plug::midi::{Channel, Key};
+use nice_plug::midi::{Channel, Key, VoiceID};
 use nice_plug::prelude::*;
 use nice_plug_egui::{EguiEditor, EguiEditorState};
-use qsa_dsp::instrument::{Event, Instrument};
+use qsa_dsp::instrument::{Event, Instrument, Note, NoteTarget};
 
 use meter::{Shared, Tap};
 use params::QsaParams;
@@ -58,10 +64,20 @@ impl Default for QsaStrings {
     }
 }
 
+/// The notes a host's per-note event addresses: its voice id (a negative one is none) and its
+/// channel and key, each a wildcard when absent.
+fn target(voice_id: VoiceID, channel: Channel, key: Key) -> NoteTarget {
+    NoteTarget { voice: voice_id.id().filter(|&v| v >= 0), channel: channel.number(), key: key.number() }
+}
+
 /// The engine event for a host note event, if it is one the engine plays.
 fn engine_event<S>(event: &NoteEvent<S>) -> Option<Event> {
     let note = |channel: &Channel, key: &Key| Some((channel.number().unwrap_or(0), key.number()?));
     Some(match *event {
+        NoteEvent::NoteOn { voice_id: VoiceID::ID(voice), channel, key, velocity, .. } if voice >= 0 => {
+            let (channel, key) = note(&channel, &key)?;
+            Event::NoteOnWithId { channel, key, velocity, voice }
+        }
         NoteEvent::NoteOn { channel, key, velocity, .. } => {
             let (channel, key) = note(&channel, &key)?;
             Event::NoteOn { channel, key, velocity }
@@ -70,9 +86,24 @@ fn engine_event<S>(event: &NoteEvent<S>) -> Option<Event> {
             let (channel, key) = note(&channel, &key)?;
             Event::NoteOff { channel, key }
         }
-        NoteEvent::PolyPressure { channel, key, pressure, .. } => {
-            let (channel, key) = note(&channel, &key)?;
-            Event::PolyPressure { channel, key, value: pressure }
+        // MIDI poly aftertouch (and VST3 poly pressure without a note id): as the offline renderer.
+        NoteEvent::PolyPressure {
+            voice_id: VoiceID::Wildcard,
+            channel: Channel::Number(channel),
+            key: Key::Number(key),
+            pressure,
+            ..
+        } => Event::PolyPressure { channel, key, value: pressure },
+        // CLAP pressure expressions and VST3 poly pressure with a note id.
+        NoteEvent::PolyPressure { voice_id, channel, key, pressure, .. } => {
+            Event::NotePressure { note: target(voice_id, channel, key), value: pressure }
+        }
+        NoteEvent::PolyTuning { voice_id, channel, key, tuning, .. } => {
+            Event::NoteTuning { note: target(voice_id, channel, key), semitones: tuning }
+        }
+        NoteEvent::PolyModulation { voice_id, poly_modulation_id, normalized_offset, .. } => {
+            let (param, offset) = params::poly_offset(poly_modulation_id, normalized_offset)?;
+            Event::NoteModulation { note: NoteTarget::voice(voice_id), param, offset }
         }
         NoteEvent::MidiChannelPressure { channel, pressure, .. } => Event::ChannelPressure { channel, value: pressure },
         NoteEvent::MidiPitchBend { channel, value, .. } => Event::PitchBend { channel, value: 2.0 * value - 1.0 },
@@ -85,6 +116,23 @@ fn engine_event<S>(event: &NoteEvent<S>) -> Option<Event> {
         },
         _ => return None,
     })
+}
+
+/// Tell the host about the notes whose voices have ended (CLAP note-end events; VST3 has none),
+/// at their samples relative to the buffer that began at engine sample `origin`.
+fn report_ended<P: Plugin>(engine: &mut Instrument, context: &mut impl ProcessContext<P>, origin: u64) {
+    for ended in engine.drain_ended() {
+        let Note { voice, channel, key } = ended.note;
+        let timing = u32::try_from(ended.at.saturating_sub(origin)).unwrap_or(u32::MAX);
+        let voice_id = voice.map_or(VoiceID::Wildcard, VoiceID::ID);
+        // A full host queue drops the notice; the host then ends the voice itself.
+        let _ = context.try_send_event(NoteEvent::VoiceTerminated {
+            timing,
+            voice_id,
+            channel: Channel::Number(channel),
+            key: Key::Number(key),
+        });
+    }
 }
 
 impl Plugin for QsaStrings {
@@ -122,13 +170,17 @@ impl Plugin for QsaStrings {
         &mut self,
         _audio_io_layout: &AudioIOLayout,
         buffer_config: &BufferConfig,
-        _context: &mut impl ActivateContext<Self>,
+        context: &mut impl ActivateContext<Self>,
     ) -> bool {
-        let voices = self.params.voices.value().clamp(1, 128) as usize;
+        let voices = self.params.engine.voices.value().clamp(1, 128) as usize;
+        context.set_current_voice_capacity(voices as u32);
         let fs = f64::from(buffer_config.sample_rate);
         let reuse = self.engine.as_ref().is_some_and(|e| e.sample_rate() == fs && e.voices() == voices);
         if !reuse {
             self.engine = Some(Instrument::new(fs, voices, self.params.settings()));
+        }
+        if let Some(engine) = &self.engine {
+            context.set_latency_samples(engine.latency() as u32);
         }
         self.tap.set_sample_rate(fs);
         true
@@ -158,6 +210,7 @@ impl Plugin for QsaStrings {
             [left, right, ..] => (left, right),
             _ => return ProcessStatus::Normal,
         };
+        let origin = engine.now();
         let mut done = 0;
         let mut next = context.next_event();
         while done < samples {
@@ -167,17 +220,20 @@ impl Plugin for QsaStrings {
                 }
                 if let Some(e) = engine_event(&event) {
                     engine.handle(e);
+                    report_ended(engine, context, origin);
                 }
                 next = context.next_event();
             }
             let until = next.map_or(samples, |e| (e.timing() as usize).clamp(done + 1, samples));
             engine.process(&mut left[done..until], &mut right[done..until]);
+            report_ended(engine, context, origin);
             done = until;
         }
         // Events stamped at the very end of the buffer.
         while let Some(event) = next {
             if let Some(e) = engine_event(&event) {
                 engine.handle(e);
+                report_ended(engine, context, origin);
             }
             next = context.next_event();
         }
@@ -196,6 +252,10 @@ impl ClapPlugin for QsaStrings {
     const CLAP_SUPPORT_URL: Option<&'static str> = None;
     const CLAP_FEATURES: &'static [ClapFeature] =
         &[ClapFeature::Instrument, ClapFeature::Synthesizer, ClapFeature::Stereo];
+    /// Polyphonic modulation of `slide` and `hand`. Note-offs reach notes by channel and key, so
+    /// the plugin does not claim overlapping notes (notes on one key told apart by voice id alone).
+    const CLAP_POLY_MODULATION_CONFIG: Option<PolyModulationConfig> =
+        Some(PolyModulationConfig { max_voice_capacity: 128, supports_overlapping_voices: false });
 }
 
 impl Vst3Plugin for QsaStrings {

@@ -33,5 +33,5 @@ fn pedalboard_plays_the_vst3() {
          --- stdout\n{stdout}\n--- stderr\n{stderr}",
         output.status
     );
-    assert!(stdout.contains("4 passed"), "pytest did not run the 4 VST3 tests:\n{stdout}");
+    assert!(stdout.contains("5 passed"), "pytest did not run the 5 VST3 tests:\n{stdout}");
 }

@@ -10,7 +10,7 @@ use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use qsa_dsp::contact::Method;
-use qsa_dsp::instrument::{Event, Instrument, Mode, Settings};
+use qsa_dsp::instrument::{Event, Instrument, Mode, NoteParam, NoteTarget, Settings};
 use qsa_dsp::preset::key_frequency;
 use qsa_tests::{CLICK_DB, click_strength, fundamental, seeded_rng, spectral_peak};
 use rand::RngExt;
@@ -462,7 +462,8 @@ fn mpe_voices_glide_independently() {
     assert!(worst <= 1e-6 * peak, "mixture differs from the sum of the voices by {worst} (peak {peak})");
 }
 
-/// Slide mode renders the same for any host buffer size and allocates nothing while playing.
+/// Slide mode renders the same for any host buffer size and allocates nothing while playing
+/// (per-note expression included).
 #[test]
 fn slide_mode_is_buffer_invariant_and_allocation_free() {
     let score: Score = vec![
@@ -486,6 +487,15 @@ fn slide_mode_is_buffer_invariant_and_allocation_free() {
             if i % 7 == 0 {
                 s.handle(on(45 + (i % 19) as u8, 0.6));
                 s.handle(Event::PolyPressure { channel: 0, key: 50, value: 0.5 });
+            }
+            // Per-note expression and the ended-note queue allocate nothing either.
+            if i % 5 == 0 {
+                let note = NoteTarget::voice(i as i32 - 5);
+                s.handle(Event::NoteOnWithId { channel: 1, key: 40 + (i % 23) as u8, velocity: 0.5, voice: i as i32 });
+                s.handle(Event::NoteTuning { note, semitones: 1.5 });
+                s.handle(Event::NoteModulation { note, param: NoteParam::HandHeight, offset: f32::NAN });
+                s.handle(Event::NotePressure { note: NoteTarget::default(), value: 0.3 });
+                s.drain_ended().for_each(drop);
             }
             if i % 11 == 0 {
                 s.handle(off(45 + (i % 13) as u8));

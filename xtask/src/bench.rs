@@ -287,9 +287,9 @@ pub fn measure(name: &str, scene: &SceneDescription, runs: usize) -> Result<Benc
 /// Sample rate of the instrument cases (Hz).
 const PIANO_RATE: f64 = 48_000.0;
 
-/// Velocities of the re-strikes (0..1, as the instrument takes them): hammer speeds of 0.4 to
-/// 2.4 m/s (`0.3·20^velocity`), soft enough that the 16 contacts of a strike often overlap for
-/// whole 16-sample calls (27 such calls in the 50 strikes with seed 6).
+/// Velocities of the re-strikes (0..1, as the instrument takes them): hammer speeds of 0.64 to
+/// 2.85 m/s ([`qsa_dsp::instrument::hammer_speed`]), soft enough that the 16 contacts of a strike
+/// often overlap for whole 16-sample calls.
 pub const RESTRIKE_VELOCITIES: std::ops::Range<f32> = 0.1..0.7;
 
 /// What an instrument case plays: `keys` together with the pedal down at velocity 0.7, and, with

@@ -5,10 +5,18 @@
 //! - `bench`: real-time factors of whole voices, one JSON line per case. See [`bench`].
 //! - `report`: the error-against-run-time and stability report in `docs/report/`, or with
 //!   `--quick` the CI check of its error figures. See [`report`].
+//! - `presets`: list the factory presets (id, category, name, description). See [`presets`].
+//! - `examples`: render one example per preset category into `docs/examples/` (WAV, spectrogram
+//!   PNG and a README table). See [`examples`].
+//! - `loudness`: loudness per key across the keyboard (EBU R128) and the voicing table. See
+//!   [`loudness`].
 //!
 //! The tasks are a library so the test harness can run them in-process.
 
 pub mod bench;
+pub mod examples;
+pub mod loudness;
+pub mod presets;
 pub mod render;
 pub mod report;
 
@@ -28,6 +36,13 @@ pub enum Cli {
     /// Run the error-against-run-time and stability sweeps and write docs/report/ (or, with
     /// --quick, check the committed error figures against fresh runs).
     Report(report::ReportArgs),
+    /// Measure the piano's loudness per key (EBU R128) at three velocities and its fortissimo
+    /// chords; write the report's loudness plot or re-voice the keyboard.
+    Loudness(loudness::LoudnessArgs),
+    /// List the factory presets: id, category, name and description.
+    Presets,
+    /// Render an audio example and spectrogram per preset category into docs/examples/.
+    Examples(examples::ExamplesArgs),
 }
 
 /// Run the command line `args` (without the program name), writing the task's report to
@@ -44,6 +59,9 @@ pub fn run(args: impl IntoIterator<Item = OsString>, stdout: &mut dyn Write, std
         Cli::Render(args) => render::run(&args, stdout).map(|_| ()).map_err(|e| e.to_string()),
         Cli::Bench(args) => bench::run(&args, stdout).map(|_| ()).map_err(|e| e.to_string()),
         Cli::Report(args) => report::run(&args, stdout).map_err(|e| e.to_string()),
+        Cli::Presets => presets::run(stdout).map_err(|e| e.to_string()),
+        Cli::Examples(args) => examples::run(&args, stdout).map(|_| ()).map_err(|e| e.to_string()),
+        Cli::Loudness(args) => loudness::run(&args, stdout),
     };
     match result {
         Ok(()) => 0,

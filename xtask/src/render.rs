@@ -1,9 +1,10 @@
 //! `cargo xtask render <scene.toml> [--out PATH.wav] [--csv] [--chunk N]`
-//! `cargo xtask render --midi FILE.mid [--mode piano|slide] [--set ID=VALUE ...] [--rate HZ] [--tail S] [--out PATH.wav]`
+//! `cargo xtask render --midi FILE.mid [--preset NAME] [--mode piano|slide] [--set ID=VALUE ...] [--rate HZ] [--tail S] [--out PATH.wav]`
 //!
 //! With `--midi` the file plays through the instrument engine as the plugin would (see [`midi`]):
 //! a stereo 32-bit float WAV, not normalised, and the same summary line, with `scene = "midi"`,
-//! `contacts` = notes played, and `null` for what a MIDI render does not measure.
+//! `contacts` = notes played, and `null` for what a MIDI render does not measure. The parameters
+//! start from the defaults or from a factory preset (`--preset`), then `--mode` and `--set` apply.
 //!
 //! Renders a scene file through the dsp engine ([`qsa_dsp::render`]) and
 //! - writes a mono 32-bit float WAV (default: next to the scene file, with extension `.wav`),
@@ -45,6 +46,10 @@ pub struct RenderArgs {
     /// Render a MIDI file through the instrument engine instead of a scene.
     #[arg(long, value_name = "FILE.mid")]
     pub midi: Option<PathBuf>,
+    /// Start --midi from a factory preset (its id or name; `cargo xtask presets` lists them);
+    /// --mode and --set apply on top of it.
+    #[arg(long, value_name = "NAME", requires = "midi")]
+    pub preset: Option<String>,
     /// Instrument mode for --midi (same as --set mode=...).
     #[arg(long, value_parser = ["piano", "slide"], requires = "midi")]
     pub mode: Option<String>,
@@ -73,6 +78,7 @@ impl Default for RenderArgs {
         Self {
             scene: None,
             midi: None,
+            preset: None,
             mode: None,
             set: Vec::new(),
             rate: 48_000,

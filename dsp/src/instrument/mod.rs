@@ -7,8 +7,9 @@
 //!   adjusted by the relative [`Settings`] (hardness, hammer mass, striking position, damping,
 //!   brightness), every string band-limited to `max_frequency` so that the sound is the same at
 //!   every sample rate.
-//! - Note velocity sets the hammer speed: `v = 0.3 · 20^velocity` m/s (0.3 to 6 m/s,
-//!   [`hammer_speed`]).
+//! - Note velocity sets the hammer speed: `v = 0.5 · 12^velocity` m/s (0.5 to 6 m/s,
+//!   [`hammer_speed`]); the voicing ([`voicing_gain`]) evens the loudness of the keys at every
+//!   velocity.
 //! - Note-off lets the damper down: a felt pad whose extra decay rises towards `damper_rate` (at
 //!   the fundamental, faster for higher modes) with time constant `damper_time`, changing how fast
 //!   the string decays, never its state. The sustain pedal (CC64 ≥ 64 on the note's channel) holds
@@ -23,6 +24,16 @@
 //! from the setting or from the mod wheel, channel pressure or poly pressure. Bend and pressure
 //! are kept per channel, so with MPE (a channel per note) every voice glides on its own.
 //!
+//! # Per-note expression
+//!
+//! Hosts that address single notes (CLAP note expressions and polyphonic modulation, VST3 note
+//! expressions) reach a voice by the voice id given at note-on ([`Event::NoteOnWithId`]) or by
+//! channel and key ([`NoteTarget`]). In slide mode a note's tuning moves its slide
+//! ([`Event::NoteTuning`]), its pressure is its poly pressure ([`Event::NotePressure`]), and
+//! polyphonic modulation offsets its `slide_position` and `hand_height` ([`Event::NoteModulation`]);
+//! see [`SlideVoice`]. Piano mode ignores them: a struck string keeps its tuning. Whatever the
+//! mode, every note's end is queued for the host ([`Instrument::drain_ended`]).
+//!
 //! # Voices
 //!
 //! The pool is sized once ([`Instrument::new`]); nothing allocates after that. A note takes a free
@@ -30,6 +41,13 @@
 //! block): that voice fades out over 5 ms at a decay rate of 2000/s before its new note starts, so
 //! stealing does not click. A piano voice is released when its string's energy falls 140 dB below
 //! its strike's.
+//!
+//! # Output
+//!
+//! The voices are summed (each scaled to full scale by [`OUTPUT_SCALE`] or [`SLIDE_SCALE`]), then
+//! pass the output stage ([`OutputStage`]): the gain, ramped across each control block, and the
+//! safety limiter, which holds every sample at or below −0.1 dBFS when it is on. The limiter looks
+//! 1 ms ahead, so the output is late by [`Instrument::latency`] samples, on or off.
 //!
 //! # Timing
 //!
@@ -39,15 +57,24 @@
 
 mod midi;
 mod monitor;
+mod notes;
+mod output;
 mod params;
+mod presets;
 mod settings;
 mod slide_voice;
 mod solvers;
 mod voice;
+mod voicing;
 
 pub use midi::event_from_midi;
 pub use monitor::{Monitor, SHAPE_POINTS};
+pub use notes::{EndedNote, MAX_TUNING, Note, NoteParam, NoteTarget};
+pub use output::{CEILING, LOOKAHEAD, OutputStage, RELEASE, lookahead_samples};
 pub use params::{PARAM_IDS, ParamError, ParamValues};
+pub use presets::{
+    CATEGORIES, FACTORY_PRESETS, Preset, PresetError, factory_presets, find_preset, load_factory_presets, parse_preset,
+};
 pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, hammer_speed};
 pub use slide_voice::{
     ChannelState, GUARD_FACTOR, HAND_SPEED, OPEN_KEY, PLUCK_TIME, REST_FORCE, SLIDE_SPEED, SlideVoice, TRAIL,
@@ -56,22 +83,33 @@ pub use solvers::Solvers;
 pub use voice::{
     DAMPER_UPDATE, DAMPER_WIDTH, PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike, damper_shares,
 };
+pub use voicing::{VOICING_DB, VOICING_VELOCITIES, voicing_gain};
 
 use crate::string::ModalString;
+use notes::NoteBook;
+
+/// Time constant with which a voice struck again moves to its new voicing gain (s).
+pub const VOICING_TIME: f64 = 0.005;
+
+/// Fastest the slide guitar's pickup moves along the string when its parameter changes (string
+/// lengths per second): a jump across the whole range takes half a second.
+pub const PICKUP_SPEED: f64 = 1.0;
 
 /// Most voices an instrument may have.
 pub const MAX_VOICES: usize = 128;
 
-/// Output scale of the piano (1/N): bridge force to full scale. A fortissimo C4 (6 m/s) peaks
-/// near 0.5.
+/// Output scale of the piano (1/N): bridge force to full scale, before each key's voicing
+/// ([`voicing_gain`]), which sets the loudness (−40.5 LUFS for a key struck alone at velocity 80).
 pub const OUTPUT_SCALE: f64 = 0.016;
 
 /// Output scale of the slide guitar (s/m): string velocity at the pickup to full scale. The
 /// slide voice listens as a magnetic pickup does, whose coil's voltage follows the rate of change
 /// of the flux the string modulates, so the string's velocity under it: a slide or finger holding
 /// the string deflected gives no signal, where a displacement output would carry that
-/// deflection as a DC offset and step at every press and release. A plucked note peaks near 0.5.
-pub const SLIDE_SCALE: f64 = 0.3;
+/// deflection as a DC offset and step at every press and release. A note plucked at velocity 80
+/// (D3, the slide pressed) measures −34 LUFS over 2 s and peaks near 0.1: a little louder than a
+/// piano key at the same velocity, as a guitar plays fewer notes at once.
+pub const SLIDE_SCALE: f64 = 0.06;
 
 /// A note or controller event, as MIDI delivers them.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -133,6 +171,43 @@ pub enum Event {
         /// Position, 0..=1.
         value: f32,
     },
+    /// Key pressed, with the host's voice (note) id, which per-note events can address. Velocity
+    /// 0 is a note-off.
+    NoteOnWithId {
+        /// MIDI channel, 0..=15.
+        channel: u8,
+        /// MIDI key, 0..=127.
+        key: u8,
+        /// Velocity, 0..=1.
+        velocity: f32,
+        /// The host's voice (note) id.
+        voice: i32,
+    },
+    /// Tuning of the addressed notes (semitones, clamped to ±[`MAX_TUNING`]; NaN is 0): moves
+    /// their slides (slide mode).
+    NoteTuning {
+        /// The notes.
+        note: NoteTarget,
+        /// Tuning (semitones).
+        semitones: f32,
+    },
+    /// Pressure of the addressed notes, 0..=1: their poly pressure.
+    NotePressure {
+        /// The notes.
+        note: NoteTarget,
+        /// Pressure, 0..=1.
+        value: f32,
+    },
+    /// Polyphonic modulation: an offset of a slide setting for the addressed notes, in the
+    /// setting's unit (semitones, metres), clamped to ± the setting's span (NaN is 0).
+    NoteModulation {
+        /// The notes.
+        note: NoteTarget,
+        /// The setting.
+        param: NoteParam,
+        /// Offset added to the setting (the sum is clamped to its range).
+        offset: f32,
+    },
 }
 
 /// A controller value from a host, made safe: NaN gives 0, the rest is clamped to `[lo, 1]`.
@@ -164,6 +239,12 @@ pub struct Instrument {
     scratch: Vec<f64>,
     /// Notes that had to take a busy voice.
     steals: u64,
+    /// Gain ramp and safety limiter.
+    output: OutputStage,
+    /// Fraction of the way a voice's voicing gain moves to its target each sample.
+    voicing_rate: f64,
+    /// The host note on each voice (piano voices first, then slide voices) and the ended ones.
+    notes: NoteBook,
 }
 
 impl Instrument {
@@ -187,6 +268,9 @@ impl Instrument {
             in_block: 0,
             scratch: vec![0.0; MAX_BLOCK],
             steals: 0,
+            output: OutputStage::new(sample_rate, settings.gain),
+            voicing_rate: 1.0 - (-1.0 / (VOICING_TIME * sample_rate)).exp(),
+            notes: NoteBook::new(2 * count),
         }
     }
 
@@ -207,6 +291,12 @@ impl Instrument {
     /// Sample rate (Hz).
     pub fn sample_rate(&self) -> f64 {
         self.sample_rate
+    }
+
+    /// Samples by which the output is late: the safety limiter's look-ahead, the same whether
+    /// the limiter is on or off (a host compensates it).
+    pub fn latency(&self) -> usize {
+        self.output.latency()
     }
 
     /// Size of the voice pool.
@@ -251,17 +341,33 @@ impl Instrument {
         self.requested = settings.sanitized();
     }
 
+    /// Samples rendered since the instrument was made (the time [`EndedNote::at`] counts in).
+    pub fn now(&self) -> u64 {
+        self.now
+    }
+
+    /// The notes whose voices have ended since the last call, oldest first: each once, with the
+    /// sample it ended at. Never allocates: between calls the queue holds 8 × [`Self::voices`]
+    /// notes (four per piano and per slide voice); notes ending while it is full go unreported.
+    pub fn drain_ended(&mut self) -> impl Iterator<Item = EndedNote> + '_ {
+        self.notes.drain_ended()
+    }
+
     /// Handle one event at the current sample.
     pub fn handle(&mut self, event: Event) {
+        self.handle_event(event);
+        self.check_ended();
+    }
+
+    fn handle_event(&mut self, event: Event) {
         match event {
-            Event::NoteOn { channel, key, velocity } if velocity > 0.0 => {
-                let strike = Strike { channel: channel & 15, key: key & 127, velocity: f64::from(velocity.min(1.0)) };
-                match self.settings.mode {
-                    Mode::Piano => self.note_on(strike),
-                    Mode::Slide => self.slide_on(strike),
-                }
+            Event::NoteOn { channel, key, velocity } if velocity > 0.0 => self.play(channel, key, velocity, None),
+            Event::NoteOnWithId { channel, key, velocity, voice } if velocity > 0.0 => {
+                self.play(channel, key, velocity, Some(voice))
             }
-            Event::NoteOn { channel, key, .. } | Event::NoteOff { channel, key } => {
+            Event::NoteOn { channel, key, .. }
+            | Event::NoteOnWithId { channel, key, .. }
+            | Event::NoteOff { channel, key } => {
                 let (channel, key) = (channel & 15, key & 127);
                 for v in &mut self.voices {
                     v.key_up(channel, key);
@@ -276,10 +382,20 @@ impl Instrument {
             }
             Event::ModWheel { channel, value } => self.channels[usize::from(channel & 15)].mod_wheel = unit(value, 0.0),
             Event::PolyPressure { channel, key, value } => {
-                let (channel, key) = (channel & 15, key & 127);
-                for v in self.slides.iter_mut().filter(|v| v.strike.channel == channel && v.strike.key == key) {
-                    v.poly_pressure = unit(value, 0.0);
-                }
+                let value = unit(value, 0.0);
+                self.each_slide(NoteTarget::key(channel, key), |v, _| v.poly_pressure = value);
+            }
+            Event::NotePressure { note, value } => {
+                let value = unit(value, 0.0);
+                self.each_slide(note, |v, _| v.poly_pressure = value);
+            }
+            Event::NoteTuning { note, semitones } => {
+                let semitones = notes::sanitize_tuning(semitones);
+                self.each_slide(note, |v, settings| v.set_tuning(semitones, settings));
+            }
+            Event::NoteModulation { note, param, offset } => {
+                let offset = param.sanitize(offset);
+                self.each_slide(note, |v, settings| v.set_offset(param, offset, settings));
             }
             Event::Sustain { channel, down } => self.sustain[usize::from(channel & 15)] = down,
             Event::AllNotesOff => {
@@ -291,24 +407,62 @@ impl Instrument {
                 self.sustain = [false; 16];
                 self.voices.iter_mut().for_each(PianoVoice::silence);
                 self.slides.iter_mut().for_each(SlideVoice::silence);
+                self.output.clear();
             }
         }
     }
 
-    fn note_on(&mut self, strike: Strike) {
+    /// Play a note (velocity above 0) in the current mode, and note which voice took it.
+    fn play(&mut self, channel: u8, key: u8, velocity: f32, voice: Option<i32>) {
+        let strike = Strike { channel: channel & 15, key: key & 127, velocity: f64::from(velocity.min(1.0)) };
+        let note = Note { voice, channel: strike.channel, key: strike.key };
+        let index = match self.settings.mode {
+            Mode::Piano => self.note_on(strike),
+            Mode::Slide => self.slide_on(strike).map(|i| self.voices.len() + i),
+        };
+        if let Some(i) = index {
+            self.notes.start(i, note, self.now);
+        }
+    }
+
+    /// Apply `f` (with the settings in force) to the slide voices playing the addressed notes.
+    fn each_slide(&mut self, target: NoteTarget, mut f: impl FnMut(&mut SlideVoice, &Settings)) {
+        let offset = self.voices.len();
+        for (i, v) in self.slides.iter_mut().enumerate() {
+            if self.notes.get(offset + i).is_some_and(|n| target.matches(&n)) {
+                f(v, &self.settings);
+            }
+        }
+    }
+
+    /// Queue the notes of voices that have fallen silent.
+    fn check_ended(&mut self) {
+        let now = self.now;
+        for (i, v) in self.voices.iter().enumerate() {
+            self.notes.check(i, v.sounding || v.fading(), now);
+        }
+        let offset = self.voices.len();
+        for (i, v) in self.slides.iter().enumerate() {
+            self.notes.check(offset + i, v.sounding, now);
+        }
+    }
+
+    /// Strike `strike` on a piano voice; the index of the voice that took it.
+    fn note_on(&mut self, strike: Strike) -> Option<usize> {
         let now = self.now;
         // The same key again: strike the same string.
-        if let Some(v) = self.voices.iter_mut().find(|v| v.upcoming_key() == Some(strike.key)) {
+        if let Some(i) = self.voices.iter().position(|v| v.upcoming_key() == Some(strike.key)) {
+            let v = &mut self.voices[i];
             if v.fading() {
                 v.steal(strike, self.sample_rate, now);
             } else {
                 v.play(strike, &self.settings, now);
             }
-            return;
+            return Some(i);
         }
-        if let Some(v) = self.voices.iter_mut().find(|v| !v.sounding && !v.fading()) {
-            v.play(strike, &self.settings, now);
-            return;
+        if let Some(i) = self.voices.iter().position(|v| !v.sounding && !v.fading()) {
+            self.voices[i].play(strike, &self.settings, now);
+            return Some(i);
         }
         // Steal the least audible voice: the quietest output over its latest block.
         let victim = self
@@ -322,18 +476,20 @@ impl Instrument {
             self.steals += 1;
             self.voices[i].steal(strike, self.sample_rate, now);
         }
+        victim
     }
 
-    fn slide_on(&mut self, strike: Strike) {
+    /// Pluck `strike` on a slide voice; the index of the voice that took it.
+    fn slide_on(&mut self, strike: Strike) -> Option<usize> {
         let now = self.now;
         let settings = self.settings;
         // Following keys, a new key while another is held on the channel glides there (legato).
         if settings.follow_key
-            && let Some(v) =
-                self.slides.iter_mut().find(|v| v.sounding && v.key_down && v.strike.channel == strike.channel)
+            && let Some(i) =
+                self.slides.iter().position(|v| v.sounding && v.key_down && v.strike.channel == strike.channel)
         {
-            v.play(strike, &settings, true, now);
-            return;
+            self.slides[i].play(strike, &settings, true, now);
+            return Some(i);
         }
         // A free voice, else the oldest: its string keeps its motion, so reuse does not click.
         let index = self
@@ -344,6 +500,7 @@ impl Instrument {
         if let Some(i) = index {
             self.slides[i].play(strike, &settings, false, now);
         }
+        index
     }
 
     /// Render into `left` and `right` (the same length), replacing their contents.
@@ -357,17 +514,17 @@ impl Instrument {
                 self.begin_block();
             }
             let len = (self.settings.block - self.in_block).min(n - done);
-            let (piano_scale, slide_scale) = (OUTPUT_SCALE * self.settings.gain, SLIDE_SCALE * self.settings.gain);
             let scratch = &mut self.scratch[..len];
             let (l, r) = (&mut left[done..done + len], &mut right[done..done + len]);
             for voice in self.voices.iter_mut().filter(|v| v.sounding) {
                 voice.render(scratch);
-                mix(scratch, piano_scale, l, r);
+                mix_voiced(scratch, OUTPUT_SCALE, voice.voicing, &mut voice.voiced, self.voicing_rate, l, r);
             }
             for voice in self.slides.iter_mut().filter(|v| v.sounding) {
                 voice.render(scratch);
-                mix(scratch, slide_scale, l, r);
+                mix(scratch, SLIDE_SCALE, l, r);
             }
+            self.output.process(l, r, self.settings.limiter);
             done += len;
             self.now += len as u64;
             self.in_block += len;
@@ -380,12 +537,17 @@ impl Instrument {
     fn begin_block(&mut self) {
         self.settings = self.requested;
         let len = self.settings.block;
+        self.output.begin_block(self.settings.gain, len);
         for v in &mut self.voices {
             let sustained = self.sustain[usize::from(v.strike.channel)];
             v.begin_block(&self.settings, sustained, len, self.now);
         }
-        let move_pickup = self.pickup != self.settings.pickup_position;
-        self.pickup = self.settings.pickup_position;
+        // The pickup slides to a new position instead of jumping: its weights change a little at
+        // each block, never in one audible step.
+        let reach = PICKUP_SPEED * len as f64 / self.sample_rate;
+        let pickup = self.pickup + (self.settings.pickup_position - self.pickup).clamp(-reach, reach);
+        let move_pickup = self.pickup != pickup;
+        self.pickup = pickup;
         for v in &mut self.slides {
             if move_pickup {
                 v.set_pickup(self.pickup);
@@ -394,7 +556,22 @@ impl Instrument {
                 v.begin_block(&self.settings, &self.channels[usize::from(v.strike.channel)], len);
             }
         }
+        self.check_ended();
     }
+}
+
+/// Add `x · scale · g` to both channels, with `g` moving from `voiced` towards `voicing` by the
+/// fraction `rate` each sample (a voice struck again at another dynamic level changes its gain
+/// smoothly, not in a step).
+fn mix_voiced(x: &[f64], scale: f64, voicing: f64, voiced: &mut f64, rate: f64, left: &mut [f32], right: &mut [f32]) {
+    let mut g = *voiced;
+    for ((l, r), &v) in left.iter_mut().zip(right.iter_mut()).zip(x) {
+        g += (voicing - g) * rate;
+        let y = (v * scale * g) as f32;
+        *l += y;
+        *r += y;
+    }
+    *voiced = g;
 }
 
 /// Add `x · scale` to both channels.

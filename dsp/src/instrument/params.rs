@@ -8,10 +8,10 @@ use crate::contact::Method;
 use crate::instrument::settings::{HandSource, Mode, Settings};
 
 /// The plugin's parameter ids, in display order.
-pub const PARAM_IDS: [&str; 26] = [
+pub const PARAM_IDS: [&str; 27] = [
     "mode", "solver", "segs", "nb", "voices", "hard", "hmass", "strike", "damp", "bright", "damper", "slide", "follow",
     "glide", "bend", "hand", "handsrc", "smass", "hstiff", "hdamp", "fdamp", "kappa", "alpha", "pluck", "pickup",
-    "gain",
+    "gain", "limit",
 ];
 
 /// Plain parameter values (the plugin's units: ms, mm, g, linear gain).
@@ -69,6 +69,8 @@ pub struct ParamValues {
     pub pickup_position: f32,
     /// `gain` (linear).
     pub gain: f32,
+    /// `limit`.
+    pub limiter: bool,
 }
 
 impl Default for ParamValues {
@@ -101,6 +103,7 @@ impl Default for ParamValues {
             pluck_position: d.pluck_position as f32,
             pickup_position: d.pickup_position as f32,
             gain: d.gain as f32,
+            limiter: d.limiter,
         }
     }
 }
@@ -153,18 +156,24 @@ impl ParamValues {
             pluck_position: f(self.pluck_position),
             pickup_position: f(self.pickup_position),
             gain: f(self.gain),
+            limiter: self.limiter,
             ..Settings::default()
         }
     }
 
     /// Set parameter `id` from text: numbers in the parameter's unit (`gain` in dB, like the
-    /// plugin shows it), `on`/`off` for `follow`, names for the choices (`piano`/`slide`,
+    /// plugin shows it), `on`/`off` for `follow` and `limit`, names for the choices (`piano`/`slide`,
     /// `qsa`/`exp`/`imp`, `param`/`modwheel`/`chanpress`/`polypress`).
     pub fn set(&mut self, id: &str, value: &str) -> Result<(), ParamError> {
         let bad = |expected| ParamError::BadValue { id: id.to_owned(), value: value.to_owned(), expected };
         let number =
             || value.trim().parse::<f32>().ok().filter(|v| v.is_finite()).ok_or_else(|| bad("a finite number"));
         let whole = || value.trim().parse::<i32>().map_err(|_| bad("a whole number"));
+        let switch = || match value.trim() {
+            "on" | "true" | "1" => Some(true),
+            "off" | "false" | "0" => Some(false),
+            _ => None,
+        };
         match id {
             "mode" => {
                 self.mode = match value {
@@ -190,13 +199,8 @@ impl ParamValues {
                     _ => return Err(bad("param, modwheel, chanpress or polypress")),
                 }
             }
-            "follow" => {
-                self.follow_key = match value {
-                    "on" | "true" | "1" => true,
-                    "off" | "false" | "0" => false,
-                    _ => return Err(bad("on or off")),
-                }
-            }
+            "follow" => self.follow_key = switch().ok_or_else(|| bad("on or off"))?,
+            "limit" => self.limiter = switch().ok_or_else(|| bad("on or off"))?,
             "segs" => self.segments = whole()?,
             "nb" => self.block = whole()?,
             "voices" => self.voices = whole()?,
@@ -223,6 +227,67 @@ impl ParamValues {
         }
         Ok(())
     }
+
+    /// The plugin's plain value of parameter `id` as an `f32`, as a host-facing parameter holds it:
+    /// numbers in the parameter's unit (`gain` linear, not dB), whole numbers as themselves,
+    /// `follow` and `limit` as 0 or 1, and choices as their index in the plugin's order (`mode`:
+    /// piano, slide; `solver`: qsa, exp, imp; `handsrc`: param, modwheel, chanpress, polypress).
+    /// `None` for an unknown id. This is how a preset is applied to the plugin's parameters.
+    pub fn plain(&self, id: &str) -> Option<f32> {
+        let switch = |on: bool| if on { 1.0 } else { 0.0 };
+        Some(match id {
+            "mode" => match self.mode {
+                Mode::Piano => 0.0,
+                Mode::Slide => 1.0,
+            },
+            "solver" => match self.method {
+                Method::Qsa => 0.0,
+                Method::Exp => 1.0,
+                Method::Imp => 2.0,
+            },
+            "handsrc" => match self.hand_source {
+                HandSource::Parameter => 0.0,
+                HandSource::ModWheel => 1.0,
+                HandSource::ChannelPressure => 2.0,
+                HandSource::PolyPressure => 3.0,
+            },
+            "follow" => switch(self.follow_key),
+            "limit" => switch(self.limiter),
+            "segs" => self.segments as f32,
+            "nb" => self.block as f32,
+            "voices" => self.voices as f32,
+            "hard" => self.hardness,
+            "hmass" => self.hammer_mass,
+            "strike" => self.strike_position,
+            "damp" => self.damping,
+            "bright" => self.brightness,
+            "damper" => self.damper,
+            "slide" => self.slide_position,
+            "glide" => self.glide_ms,
+            "bend" => self.bend_range,
+            "hand" => self.hand_mm,
+            "smass" => self.slide_mass_g,
+            "hstiff" => self.hand_stiffness,
+            "hdamp" => self.hand_damping,
+            "fdamp" => self.finger_damping,
+            "kappa" => self.kappa,
+            "alpha" => self.alpha,
+            "pluck" => self.pluck_position,
+            "pickup" => self.pickup_position,
+            "gain" => self.gain,
+            _ => return None,
+        })
+    }
+
+    /// The first parameter (in [`PARAM_IDS`] order) whose plain value differs from `other`'s by
+    /// more than a host's `f32` normalisation can account for (relative 1e-4, or 1e-5 absolute
+    /// near zero), or `None` when they match. Used to mark a preset as modified.
+    pub fn first_difference(&self, other: &Self) -> Option<&'static str> {
+        PARAM_IDS.into_iter().find(|id| {
+            let (a, b) = (self.plain(id).unwrap_or(0.0), other.plain(id).unwrap_or(0.0));
+            (a - b).abs() > 1e-5f32.max(1e-4 * a.abs().max(b.abs()))
+        })
+    }
 }
 
 #[cfg(test)]
@@ -245,7 +310,7 @@ mod tests {
                 "mode" => "slide",
                 "solver" => "imp",
                 "handsrc" => "modwheel",
-                "follow" => "off",
+                "follow" | "limit" => "off",
                 _ => "2",
             };
             p.set(id, value).unwrap_or_else(|e| panic!("{id}: {e}"));
@@ -255,5 +320,34 @@ mod tests {
         assert!(matches!(p.set("kapa", "1"), Err(ParamError::UnknownId(_))));
         assert!(p.set("hard", "nan").is_err());
         assert!(p.set("mode", "banjo").is_err());
+    }
+
+    /// `plain` knows every id, reads back what `set` stored (gain linear, choices as indices) and
+    /// `first_difference` names the one parameter that changed.
+    #[test]
+    fn plain_values_read_back_what_set_stored() {
+        let defaults = ParamValues::default();
+        assert!(PARAM_IDS.iter().all(|id| defaults.plain(id).is_some()));
+        assert_eq!(defaults.plain("kapa"), None);
+        let mut p = defaults;
+        for (id, text, plain) in [
+            ("mode", "slide", 1.0),
+            ("solver", "imp", 2.0),
+            ("handsrc", "polypress", 3.0),
+            ("follow", "off", 0.0),
+            ("segs", "13", 13.0),
+            ("hard", "0.25", 0.25),
+            ("gain", "-6", 0.501_187_2),
+        ] {
+            p.set(id, text).unwrap();
+            let got = p.plain(id).unwrap();
+            assert!((got - plain).abs() < 1e-6, "{id}: {got}, expected {plain}");
+        }
+        assert_eq!(defaults.first_difference(&defaults), None);
+        let mut q = defaults;
+        q.kappa *= 1.000_01;
+        assert_eq!(defaults.first_difference(&q), None, "f32 normalisation noise is no change");
+        q.alpha = 2.0;
+        assert_eq!(defaults.first_difference(&q), Some("alpha"));
     }
 }

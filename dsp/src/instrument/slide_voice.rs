@@ -6,11 +6,19 @@
 //! - slide position `x_o = L(1 − 2^(−p/12))` for `p` semitones above the open string: the
 //!   `slide_position` setting, followed as it comes (host automation is already a gesture), or,
 //!   when following keys, the played key's distance from the open string, glided towards with time
-//!   constant `glide_time`; plus pitch bend × bend range, glided as well. A hand moves a slide at
-//!   a few metres per second at most, so the slide never travels faster than [`SLIDE_SPEED`]
-//!   (a jump of the setting becomes a fast slide); it is kept between 5 mm and 0.8 L;
+//!   constant `glide_time`; plus pitch bend × bend range, glided as well; plus the note's own
+//!   tuning (a host's per-note tuning expression, in semitones, followed as it comes). A hand
+//!   moves a slide at a few metres per second at most, so the slide never travels faster than
+//!   [`SLIDE_SPEED`] (a jump of the setting or the tuning becomes a fast slide); it is kept
+//!   between 5 mm and 0.8 L;
 //! - hand height from the setting or a controller (0 lifts the slide by 2 mm, full presses it
 //!   2 mm in: [`HAND_RANGE`]), moving at most [`HAND_SPEED`];
+//! - per note, a host's polyphonic modulation offsets the `slide_position` and `hand_height`
+//!   settings (where they act: not following keys, and the hand height from the parameter), the
+//!   sums clamped to the settings' ranges. Tuning, offsets and poly pressure belong to the note:
+//!   every note-on starts them at 0. A voice that has not rendered since it was plucked from
+//!   silence takes a new tuning or slide offset at once (a host sends a note's modulation right
+//!   after its note-on); later they move the slide at its speed limit;
 //! - the left finger trails the slide by 2 cm with 0.3 N while the voice sounds, damping the
 //!   dead part of the string;
 //! - note-on plucks with the right finger at the plucking position: the force ramps up over
@@ -38,6 +46,7 @@
 use crate::contact::{Method, PowerLaw};
 use crate::control::Live;
 use crate::exciter::SlideParams;
+use crate::instrument::notes::NoteParam;
 use crate::instrument::settings::{HAND_RANGE, HandSource, Settings};
 use crate::instrument::solvers::Solvers;
 use crate::instrument::voice::{RELEASE_ENERGY, Strike};
@@ -95,6 +104,14 @@ pub struct SlideVoice {
     pub started: u64,
     /// Poly pressure of its key, 0..=1.
     pub poly_pressure: f64,
+    /// The note's tuning (semitones), added to the slide position.
+    tuning: f64,
+    /// The note's offset of the `slide_position` setting (semitones).
+    slide_offset: f64,
+    /// The note's offset of the `hand_height` setting (m).
+    hand_offset: f64,
+    /// Plucked from silence and not rendered since: per-note changes set the slide at once.
+    fresh: bool,
     /// The part of the slide position that keys and bends ask for (semitones), after the glide.
     glided: f64,
     /// Slide position x_o (m), after the speed limit.
@@ -159,6 +176,10 @@ impl SlideVoice {
             key_down: false,
             started: 0,
             poly_pressure: 0.0,
+            tuning: 0.0,
+            slide_offset: 0.0,
+            hand_offset: 0.0,
+            fresh: false,
             glided: 0.0,
             x_o,
             hand: HAND_RANGE.0,
@@ -191,13 +212,14 @@ impl SlideVoice {
     pub fn play(&mut self, strike: Strike, settings: &Settings, legato: bool, now: u64) {
         self.strike = strike;
         self.key_down = true;
-        self.poly_pressure = 0.0;
+        (self.poly_pressure, self.tuning, self.slide_offset, self.hand_offset) = (0.0, 0.0, 0.0, 0.0);
         if legato && self.sounding {
             return;
         }
         if !self.sounding {
             self.glided = self.keys_and_bends(settings, &ChannelState::default());
             self.x_o = Self::slide_position(self.length, self.semitones(settings));
+            self.fresh = true;
         }
         if !self.sounding {
             let Ok(law) = PowerLaw::new(settings.slide_kappa, settings.slide_alpha) else { return };
@@ -226,6 +248,30 @@ impl SlideVoice {
         self.pluck = Some(0.0);
         self.sounding = true;
         self.started = now;
+    }
+
+    /// Set the note's tuning (semitones; the caller sanitizes it).
+    pub fn set_tuning(&mut self, semitones: f64, settings: &Settings) {
+        self.tuning = semitones;
+        self.settle_if_fresh(settings);
+    }
+
+    /// Set the note's polyphonic modulation offset of `param` (in the setting's unit; the caller
+    /// sanitizes it).
+    pub fn set_offset(&mut self, param: NoteParam, offset: f64, settings: &Settings) {
+        match param {
+            NoteParam::SlidePosition => self.slide_offset = offset,
+            NoteParam::HandHeight => self.hand_offset = offset,
+        }
+        self.settle_if_fresh(settings);
+    }
+
+    /// A voice plucked from silence that has not rendered yet starts where its note's tuning and
+    /// offsets put the slide, as if they had come with the note-on.
+    fn settle_if_fresh(&mut self, settings: &Settings) {
+        if self.fresh && self.sounding {
+            self.x_o = Self::slide_position(self.length, self.semitones(settings));
+        }
     }
 
     /// Release the key.
@@ -259,9 +305,12 @@ impl SlideVoice {
     }
 
     /// The slide position (semitones above the open string): the glided keys and bends, plus the
-    /// `slide_position` setting as it comes when not following keys.
+    /// note's tuning, plus the `slide_position` setting (with the note's offset, clamped to its
+    /// 0..=24 range) as it comes when not following keys.
     fn semitones(&self, settings: &Settings) -> f64 {
-        self.glided + if settings.follow_key { 0.0 } else { settings.slide_position }
+        let setting =
+            if settings.follow_key { 0.0 } else { (settings.slide_position + self.slide_offset).clamp(0.0, 24.0) };
+        self.glided + self.tuning + setting
     }
 
     /// Whether the guard must silence the voice: its state is not finite, or its energy `energy`
@@ -299,6 +348,7 @@ impl SlideVoice {
             self.trip();
             return;
         }
+        self.fresh = false;
         let fs = self.core.string().sample_rate();
         let span = len as f64 / fs;
         let target = self.keys_and_bends(settings, channel);
@@ -313,7 +363,7 @@ impl SlideVoice {
         self.x_o += (x_o - self.x_o).clamp(-step, step);
         let pressed = |v: f64| HAND_RANGE.0 + (HAND_RANGE.1 - HAND_RANGE.0) * v.clamp(0.0, 1.0);
         let hand_height = match settings.hand_source {
-            HandSource::Parameter => settings.hand_height,
+            HandSource::Parameter => (settings.hand_height + self.hand_offset).clamp(-3e-3, 3e-3),
             HandSource::ModWheel => pressed(channel.mod_wheel),
             HandSource::ChannelPressure => pressed(channel.pressure),
             HandSource::PolyPressure => pressed(self.poly_pressure),

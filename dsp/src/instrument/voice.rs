@@ -100,6 +100,10 @@ pub struct PianoVoice {
     pub key_down: bool,
     /// Sample index of its latest note-on (for stealing the oldest).
     pub started: u64,
+    /// Output gain of the key at the dynamic level it was last struck at ([`super::voicing_gain`]).
+    pub voicing: f64,
+    /// Output gain now: moves to `voicing` after a re-strike at another level.
+    pub voiced: f64,
     /// The damper's decay rate at the fundamental now, `D` (1/s), moving towards its target.
     damper: f64,
     /// The extra decay at the fundamental the string's coefficients hold now (1/s).
@@ -150,6 +154,8 @@ impl PianoVoice {
             sounding: false,
             key_down: false,
             started: 0,
+            voicing: 1.0,
+            voiced: 1.0,
             damper: 0.0,
             applied: 0.0,
             since_update: 0.0,
@@ -183,7 +189,9 @@ impl PianoVoice {
         let note = piano_note(strike.key);
         let position = (note.strike_position * settings.strike_position).clamp(0.02, 0.5);
         let restrike = self.sounding && self.strike.key == strike.key && self.pending.is_none();
+        self.voicing = super::voicing_gain(strike.key, strike.velocity);
         if !restrike {
+            self.voiced = self.voicing;
             let fs = self.core.string().sample_rate();
             let string = Self::string_for(strike.key, settings);
             let max_frequency = settings.max_frequency.min(0.5 * fs);

@@ -4,7 +4,7 @@
 
 use std::collections::VecDeque;
 
-use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, StrokeKind, Ui, Vec2, pos2, vec2};
+use egui::{Align, Align2, Color32, FontId, Pos2, Rect, RichText, Sense, Stroke, StrokeKind, Ui, Vec2, pos2, vec2};
 use qsa_dsp::instrument::Monitor;
 
 /// Snapshots kept for the traces: 5 s at the audio thread's 30 per second.
@@ -14,9 +14,14 @@ pub const HISTORY: usize = 150;
 pub const STRING_COLOR: Color32 = Color32::from_rgb(120, 200, 255);
 pub const CONTACT_COLOR: Color32 = Color32::from_rgb(255, 150, 60);
 pub const ENERGY_COLOR: Color32 = Color32::from_rgb(120, 220, 120);
+pub const ACTIVE_COLOR: Color32 = Color32::from_rgb(90, 200, 90);
 const GRID_COLOR: Color32 = Color32::from_gray(60);
+const AXIS_COLOR: Color32 = Color32::from_gray(120);
 const BACKGROUND: Color32 = Color32::from_gray(18);
 const TEXT: Color32 = Color32::from_gray(200);
+
+/// Width of the traces' left margin, where their axis labels go (logical pixels).
+const AXIS_GUTTER: f32 = 40.0;
 
 /// Smallest energy the log trace shows (J).
 const ENERGY_FLOOR: f64 = 1e-12;
@@ -111,13 +116,10 @@ pub fn string_shape(ui: &mut Ui, size: Vec2, monitor: &Monitor, history: &Histor
         painter.circle_stroke(p, 5.0, Stroke::new(1.5, CONTACT_COLOR));
     }
     let label = format!("contact at {:.2} L{}", c, if touching { ", touching" } else { "" });
-    painter.text(
-        pos2(x + 6.0, area.bottom() - 2.0),
-        if c > 0.7 { Align2::RIGHT_BOTTOM } else { Align2::LEFT_BOTTOM },
-        label,
-        FontId::proportional(11.0),
-        CONTACT_COLOR,
-    );
+    // Beside the contact line, on the side with more room, at the edge the string is away from.
+    let (label_x, h) = if c > 0.7 { (x - 6.0, Align::RIGHT) } else { (x + 6.0, Align::LEFT) };
+    let (label_y, v) = if p.y > mid { (area.top() + 2.0, Align::TOP) } else { (area.bottom() - 2.0, Align::BOTTOM) };
+    painter.text(pos2(label_x, label_y), Align2([h, v]), label, FontId::proportional(11.0), CONTACT_COLOR);
 }
 
 /// A history trace: `values` mapped to 0..1 by `map`, newest at the right.
@@ -141,34 +143,70 @@ pub fn force_trace(ui: &mut Ui, size: Vec2, monitor: &Monitor, history: &History
     let title = format!("Contact force (last {:.0} s)", HISTORY as f64 / 30.0);
     let value = format!("{:.3} N, peak {:.2} N", monitor.force.abs(), top);
     let (painter, area) = plot_area(ui, size, &title, &value);
-    painter.hline(area.x_range(), area.bottom(), Stroke::new(1.0, GRID_COLOR));
+    let area = area.with_min_x(area.left() + AXIS_GUTTER);
     let top = if top > 0.0 { top } else { 1.0 };
+    for (y, label, align) in
+        [(area.top(), newtons(top), Align2::RIGHT_TOP), (area.bottom(), "0 N".to_owned(), Align2::RIGHT_BOTTOM)]
+    {
+        painter.hline(area.x_range(), y, Stroke::new(1.0, GRID_COLOR));
+        axis_label(&painter, pos2(area.left(), y), align, label);
+    }
     trace(&painter, area, &history.force, |f| (f / top) as f32, CONTACT_COLOR);
 }
 
-/// The loudest voice's energy over the last seconds on a log scale, a grid line per decade.
+/// The loudest voice's energy over the last seconds on a log scale, a grid line per decade. The
+/// top decade follows the largest energy, but the scale never reaches below the floor: at rest
+/// the trace lies on the bottom line.
 pub fn energy_trace(ui: &mut Ui, size: Vec2, monitor: &Monitor, history: &History) {
     let max = history.energy.iter().fold(ENERGY_FLOOR, |m, &e| m.max(e));
-    let top = max.log10().ceil();
+    let top = max.log10().ceil().max(ENERGY_FLOOR.log10() + ENERGY_DECADES);
     let bottom = top - ENERGY_DECADES;
     let value = format!("{:.3e} J", monitor.energy);
     let (painter, area) = plot_area(ui, size, "Energy of the loudest voice (log)", &value);
-    for d in 0..=ENERGY_DECADES as i32 {
+    let area = area.with_min_x(area.left() + AXIS_GUTTER);
+    let decades = ENERGY_DECADES as i32;
+    for d in 0..=decades {
         let y = area.bottom() - area.height() * d as f32 / ENERGY_DECADES as f32;
         painter.hline(area.x_range(), y, Stroke::new(1.0, GRID_COLOR));
-        if d % 2 == 0 {
-            let label = format!("1e{}", bottom as i32 + d);
-            painter.text(
-                pos2(area.left() + 2.0, y),
-                Align2::LEFT_BOTTOM,
-                label,
-                FontId::proportional(10.0),
-                GRID_COLOR,
-            );
+        // Every other decade; not the top line, whose label would reach into the title.
+        if d % 2 == 0 && d < decades {
+            axis_label(&painter, pos2(area.left(), y), Align2::RIGHT_CENTER, format!("1e{} J", bottom as i32 + d));
         }
     }
     let map = |e: f64| ((e.max(ENERGY_FLOOR).log10() - bottom) / ENERGY_DECADES) as f32;
     trace(&painter, area, &history.energy, map, ENERGY_COLOR);
+}
+
+/// An axis label in the gutter left of a trace, `align`ed to the point `at` on the trace's
+/// left edge.
+fn axis_label(painter: &egui::Painter, at: Pos2, align: Align2, label: String) {
+    painter.text(at - vec2(4.0, 0.0), align, label, FontId::proportional(10.0), AXIS_COLOR);
+}
+
+/// A force with three significant digits.
+fn newtons(f: f64) -> String {
+    if f >= 99.95 {
+        format!("{f:.0} N")
+    } else if f >= 9.995 {
+        format!("{f:.1} N")
+    } else {
+        format!("{f:.2} N")
+    }
+}
+
+/// A section's mode mark: a dot (filled for the mode playing, hollow for the other) and the
+/// words. The dot is drawn, as egui's default fonts have no circle glyphs.
+pub fn mode_mark(ui: &mut Ui, active: bool) {
+    ui.spacing_mut().item_spacing.x = 4.0;
+    let (rect, _) = ui.allocate_exact_size(vec2(8.0, 8.0), Sense::hover());
+    if active {
+        ui.painter().circle_filled(rect.center(), 4.0, ACTIVE_COLOR);
+        ui.label(RichText::new("active mode").color(ACTIVE_COLOR).small());
+    } else {
+        let color = ui.visuals().weak_text_color();
+        ui.painter().circle_stroke(rect.center(), 3.5, Stroke::new(1.0, color));
+        ui.label(RichText::new("other mode").weak().small());
+    }
 }
 
 /// The DSP load as a bar (green, then yellow above 50 %, red above 80 %) with a peak tick.
@@ -192,12 +230,13 @@ pub fn load_bar(ui: &mut Ui, size: Vec2, load: f32, peak: f32) {
     painter.rect_stroke(rect, 3.0, Stroke::new(1.0, GRID_COLOR), StrokeKind::Inside);
 }
 
-/// A length with a readable unit.
+/// A length with a readable unit. A value that would round up to 1000 of a unit is written in
+/// the next (1e-6 as an `f32` is 999.99997 nm: "1.00 µm", not "1000.0 nm").
 pub fn metres(x: f64) -> String {
     let a = x.abs();
-    if a >= 1e-3 {
+    if a >= 0.999_995e-3 {
         format!("{:.2} mm", x * 1e3)
-    } else if a >= 1e-6 {
+    } else if a >= 0.999_95e-6 {
         format!("{:.2} µm", x * 1e6)
     } else {
         format!("{:.1} nm", x * 1e9)
@@ -222,6 +261,12 @@ mod tests {
         assert_eq!(metres(2.5e-3), "2.50 mm");
         assert_eq!(metres(-3e-6), "-3.00 µm");
         assert_eq!(metres(4e-9), "4.0 nm");
+        assert_eq!(metres(f64::from(MIN_SHAPE_SCALE)), "1.00 µm");
+        assert_eq!(metres(f64::from(1e-3f32)), "1.00 mm");
+        assert_eq!(metres(999.9e-6), "999.90 µm");
+        assert_eq!(newtons(0.5), "0.50 N");
+        assert_eq!(newtons(9.999), "10.0 N");
+        assert_eq!(newtons(123.4), "123 N");
     }
 
     #[test]

@@ -1,7 +1,8 @@
 //! The clack-host harness the real-host CLAP tests share (`host_clap.rs`, `host_fuzz.rs`): the
 //! release bundle's path, a host that loads, activates and processes the plugin on an audio
 //! thread, parameter ids by their documented string ids, and timed note, MIDI and parameter
-//! events.
+//! events, CLAP note expressions and polyphonic modulation; renders collect the note-end events
+//! the plugin sends.
 //!
 //! Used as `#[path = "support/host.rs"] mod host;` next to `#[path = "support/bundle.rs"] mod
 //! bundle;` (this module finds the bundle through `crate::bundle`).
@@ -19,7 +20,10 @@ use std::sync::{Mutex, PoisonError};
 use clack_extensions::params::PluginParams;
 use clack_extensions::state::PluginState;
 use clack_host::events::Match;
-use clack_host::events::event_types::{MidiEvent, NoteOffEvent, NoteOnEvent, ParamValueEvent};
+use clack_host::events::event_types::{
+    MidiEvent, NoteEndEvent, NoteExpressionEvent, NoteExpressionType, NoteOffEvent, NoteOnEvent, ParamModEvent,
+    ParamValueEvent,
+};
 use clack_host::prelude::*;
 
 use crate::bundle::{BUILD_RELEASE, checked_bundle, target_dir};
@@ -90,7 +94,53 @@ pub enum Ev {
     Midi([u8; 3]),
     /// A parameter value (CLAP id, CLAP value: normalised 0..1, or the step index of stepped ones).
     Param(u32, f64),
+    /// CLAP note-on with a note id (channel, key, velocity 0..1, note id).
+    OnId(u8, u8, f64, u32),
+    /// A CLAP note expression for the notes `target` addresses.
+    Expr(Expression, Target, f64),
+    /// CLAP polyphonic modulation: parameter (CLAP id), the note id it modulates, amount (in CLAP
+    /// value units, like `Param`).
+    Mod(u32, u32, f64),
 }
+
+/// The CLAP note expressions the tests send.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Expression {
+    /// Tuning, semitones.
+    Tuning,
+    /// Pressure, 0..=1.
+    Pressure,
+}
+
+/// The notes a CLAP note event addresses: note id, channel and key, each a wildcard when `None`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Target {
+    pub note_id: Option<u32>,
+    pub channel: Option<u8>,
+    pub key: Option<u8>,
+}
+
+impl Target {
+    /// The note with host note id `id` (channel and key wildcards).
+    pub fn id(id: u32) -> Self {
+        Self { note_id: Some(id), channel: None, key: None }
+    }
+
+    /// The notes on `channel` and `key` (note id wildcard).
+    pub fn key(channel: u8, key: u8) -> Self {
+        Self { note_id: None, channel: Some(channel), key: Some(key) }
+    }
+
+    fn pckn(self) -> Pckn {
+        let channel = self.channel.map_or(Match::All, |c| Match::Specific(u16::from(c)));
+        let key = self.key.map_or(Match::All, |k| Match::Specific(u16::from(k)));
+        Pckn::new(0u16, channel, key, self.note_id.map_or(Match::All, Match::Specific))
+    }
+}
+
+/// A note-end event the plugin sent: (sample from the start of the render, note id or −1, channel,
+/// key).
+pub type NoteEnd = (usize, i32, i16, i16);
 
 /// Timed events: (sample from the start of a render, event), in time order.
 pub type Score = Vec<(usize, Ev)>;
@@ -100,10 +150,11 @@ pub fn param(id: &str, value: f64) -> Ev {
     Ev::Param(clap_id(id), value)
 }
 
-/// Audio of one render: left and right channels.
+/// Audio of one render: left and right channels, and the note-end events the plugin sent.
 pub struct Audio {
     pub left: Vec<f32>,
     pub right: Vec<f32>,
+    pub note_ends: Vec<NoteEnd>,
 }
 
 impl Audio {
@@ -195,6 +246,14 @@ impl Plugin {
             .map_or_else(|e| format!("<value_to_text failed: {e:?}>"), |t| String::from_utf8_lossy(t).into_owned())
     }
 
+    /// The CLAP value the plugin reads from `text` for a parameter (its own text-to-value
+    /// conversion, as a host's text entry uses), if it reads one.
+    pub fn text_value(&mut self, id: u32, text: &str) -> Option<f64> {
+        let params = self.params();
+        let text = CString::new(text).ok()?;
+        params.text_to_value(&self.instance.plugin_handle(), ClapId::new(id), &text)
+    }
+
     /// Current CLAP value of a parameter.
     pub fn value(&mut self, id: u32) -> Option<f64> {
         let params = self.params();
@@ -214,7 +273,10 @@ impl Plugin {
                 let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
                 let mut ports = AudioPorts::with_capacity(2, 1);
                 let mut events = EventBuffer::with_capacity(score.len().min(20_000));
-                let mut output_events = EventBuffer::new();
+                // Room for a note-end per event of a flood: a host's output queue must not grow
+                // inside `process` (the debug bundle aborts on any allocation there).
+                let mut output_events = EventBuffer::with_capacity(20_000);
+                let mut note_ends = Vec::new();
                 let (mut t, mut next) = (0, 0);
                 while t < samples {
                     let n = sizes().clamp(1, max_block).min(samples - t);
@@ -239,9 +301,16 @@ impl Plugin {
                             None,
                         )
                         .expect("process");
+                    for event in output_events.iter() {
+                        if let Some(end) = event.as_event::<NoteEndEvent>() {
+                            let pckn = end.pckn();
+                            let time = t + end.header().time() as usize;
+                            note_ends.push((time, pckn.raw_note_id(), pckn.raw_channel(), pckn.raw_key()));
+                        }
+                    }
                     t += n;
                 }
-                Audio { left, right }
+                Audio { left, right, note_ends }
             })
             .join()
             .expect("the audio thread panicked")
@@ -294,12 +363,27 @@ pub fn push_event(buffer: &mut EventBuffer, time: u32, ev: Ev) {
         Ev::Off(channel, key) => buffer.push(&NoteOffEvent::new(time, note(channel, key), 0.0)),
         Ev::Midi(data) => buffer.push(&MidiEvent::new(time, 0, data)),
         Ev::Param(id, value) => buffer.push(&ParamValueEvent::new(time, ClapId::new(id), Pckn::match_all(), value)),
+        Ev::OnId(channel, key, velocity, id) => buffer.push(&NoteOnEvent::new(
+            time,
+            Target { note_id: Some(id), ..Target::key(channel, key) }.pckn(),
+            velocity,
+        )),
+        Ev::Expr(expression, target, value) => {
+            let kind = match expression {
+                Expression::Tuning => NoteExpressionType::Tuning,
+                Expression::Pressure => NoteExpressionType::Pressure,
+            };
+            buffer.push(&NoteExpressionEvent::new(time, target.pckn(), kind, value));
+        }
+        Ev::Mod(param, id, amount) => {
+            buffer.push(&ParamModEvent::new(time, ClapId::new(param), Target::id(id).pckn(), amount))
+        }
     }
 }
 
 /// The documented parameters (plugin/src/params.rs): string id, name, and the step count of the
 /// stepped ones (CLAP value range 0..=steps; continuous ones span 0..=1).
-pub const PARAMETERS: [(&str, &str, Option<u32>); 26] = [
+pub const PARAMETERS: [(&str, &str, Option<u32>); 27] = [
     ("mode", "Mode", Some(1)),
     ("solver", "Solver", Some(2)),
     ("segs", "QSA segments", Some(63)),
@@ -326,4 +410,5 @@ pub const PARAMETERS: [(&str, &str, Option<u32>); 26] = [
     ("pluck", "Pluck position", None),
     ("pickup", "Pickup position", None),
     ("gain", "Output gain", None),
+    ("limit", "Safety limiter", Some(1)),
 ];

@@ -4,12 +4,13 @@
 //! Every track is merged into one timeline; times follow the file's tempo map (metrical files) or
 //! its SMPTE rate, and land on the nearest sample. Channel messages become engine events with
 //! [`event_from_midi`], the conversion a host and the plugin apply, and the parameters come from
-//! [`ParamValues`] with `--set ID=VALUE` applied, so the samples equal those of the plugin given
+//! [`ParamValues`] (the defaults, or a factory preset's with `--preset`) with `--mode` and
+//! `--set ID=VALUE` applied, so the samples equal those of the plugin given
 //! the same parameters and events at the same samples. The render runs until the last event
 //! plus `--tail` seconds.
 
 use midly::{MetaMessage, MidiMessage, Smf, Timing, TrackEventKind};
-use qsa_dsp::instrument::{Event, Instrument, ParamValues, event_from_midi};
+use qsa_dsp::instrument::{Event, Instrument, ParamValues, event_from_midi, factory_presets, find_preset};
 
 /// A MIDI file turned into engine events at sample offsets.
 #[derive(Debug, Clone, PartialEq)]
@@ -153,11 +154,23 @@ pub struct MidiSummary {
     pub rtf: f64,
 }
 
+/// The values of the factory preset `name` (its id or display name), or an error listing the
+/// presets there are.
+pub fn preset_values(name: &str) -> Result<ParamValues, String> {
+    find_preset(name).map(|p| p.values).ok_or_else(|| {
+        let ids: Vec<&str> = factory_presets().iter().map(|p| p.id.as_str()).collect();
+        format!("--preset {name}: no such preset; the factory presets are: {}", ids.join(", "))
+    })
+}
+
 /// `render --midi`: read, render, write the WAV; return the summary.
 pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSummary, super::RenderError> {
     use super::RenderError;
     let bytes = std::fs::read(path).map_err(|source| RenderError::Read { path: path.to_owned(), source })?;
-    let mut params = ParamValues::default();
+    let mut params = match &args.preset {
+        None => ParamValues::default(),
+        Some(name) => preset_values(name).map_err(RenderError::Midi)?,
+    };
     if let Some(mode) = &args.mode {
         params.set("mode", mode).map_err(|e| RenderError::Midi(e.to_string()))?;
     }

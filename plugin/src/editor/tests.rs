@@ -1,0 +1,153 @@
+//! The editor drawn headless, as a host opens it (default size), at rest, with voices sounding
+//! and with each factory preset chosen: every character is in egui's default fonts (no
+//! missing-glyph boxes), no text is drawn over other text, and nothing is cut off by the window.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use egui::{MissingGlyphPolicy, Pos2, RawInput, Rect, Shape, Vec2, vec2};
+use nice_plug::context::gui::{GuiContext, GuiContextInner};
+use nice_plug::prelude::{ParamPtr, PluginApi, PluginState};
+use qsa_dsp::instrument::{Mode, Monitor, factory_presets};
+
+use super::{EditorApp, SIZE};
+use crate::meter::Shared;
+use crate::params::QsaParams;
+
+/// A host that ignores what the editor asks of it.
+struct NoHost;
+
+// nice-plug declares the parameter callbacks `unsafe`; these do nothing.
+#[allow(unsafe_code)]
+impl GuiContextInner for NoHost {
+    fn plugin_api(&self) -> PluginApi {
+        PluginApi::Clap
+    }
+
+    unsafe fn raw_begin_set_parameter(&self, _: ParamPtr) {}
+
+    unsafe fn raw_set_parameter_normalized(&self, _: ParamPtr, _: f32) {}
+
+    unsafe fn raw_end_set_parameter(&self, _: ParamPtr) {}
+
+    fn get_state(&self) -> PluginState {
+        PluginState { version: String::new(), params: BTreeMap::new(), fields: BTreeMap::new() }
+    }
+
+    fn set_state(&self, _: PluginState) {}
+
+    fn request_restart(&self) {}
+}
+
+/// Twelve voices sounding, the loudest of `mode` with its contact at `contact` of the length.
+fn sounding(mode: Mode, contact: f64, guard_trips: u32) -> Monitor {
+    let mut m = Monitor {
+        sounding: 12,
+        guard_trips,
+        mode,
+        key: 97,
+        energy: 2.5e-3,
+        compression: 1.2e-5,
+        force: -12.5,
+        contact_position: contact,
+        length: 0.65,
+        ..Monitor::default()
+    };
+    // A slide presses the string down, a hammer pushes it up: the contact label goes to the
+    // other edge.
+    let amplitude = match mode {
+        Mode::Slide => -2e-4,
+        Mode::Piano => 2e-4,
+    };
+    let last = (m.shape.len() - 1) as f32;
+    for (k, y) in m.shape.iter_mut().enumerate() {
+        *y = amplitude * (std::f32::consts::PI * k as f32 / last).sin();
+    }
+    m
+}
+
+/// What the editor draws in a window of `size` with the factory preset `preset` chosen (empty:
+/// none), after the audio thread sent `monitors`: its texts, each with the bounds of its glyphs,
+/// and the bounds of everything but the panel's background (which grows with what it holds).
+/// Panics on a character no font has.
+pub(super) fn draw(monitors: &[Monitor], preset: &str, size: Vec2) -> (Vec<(String, Rect)>, Rect) {
+    let shared = Arc::new(Shared::default());
+    for m in monitors {
+        shared.monitors.force_push(*m);
+    }
+    let params = QsaParams::default();
+    *params.preset.write().unwrap() = preset.to_owned();
+    let mut app = EditorApp::new(Arc::new(params), shared);
+    app.gui = Some(GuiContext::new(Arc::new(NoHost)));
+
+    let ctx = egui::Context::default();
+    ctx.set_theme(egui::Theme::Dark);
+    ctx.set_missing_glyph_policy(MissingGlyphPolicy::Panic);
+    let input = RawInput { screen_rect: Some(Rect::from_min_size(Pos2::ZERO, size)), ..RawInput::default() };
+    // Grids and columns settle their sizes over the first passes.
+    for _ in 0..2 {
+        let _ = ctx.run_ui(input.clone(), |ui| app.show(ui));
+    }
+    let output = ctx.run_ui(input, |ui| app.show(ui));
+
+    fn collect(shape: &Shape, texts: &mut Vec<(String, Rect)>) {
+        match shape {
+            Shape::Text(t) if !t.galley.text().trim().is_empty() => {
+                texts.push((t.galley.text().to_owned(), t.visual_bounding_rect()));
+            }
+            Shape::Vec(shapes) => shapes.iter().for_each(|s| collect(s, texts)),
+            _ => {}
+        }
+    }
+    let mut texts = Vec::new();
+    let mut drawn = Rect::NOTHING;
+    for clipped in &output.shapes {
+        collect(&clipped.shape, &mut texts);
+        let bounds = clipped.shape.visual_bounding_rect();
+        if bounds.min != Pos2::ZERO {
+            drawn = drawn.union(bounds);
+        }
+    }
+    (texts, drawn)
+}
+
+/// Draws the editor in its default window and in a taller one, and checks what it drew.
+fn check(case: &str, monitors: &[Monitor], preset: &str) {
+    let window = vec2(SIZE.0 as f32, SIZE.1 as f32);
+    let screen = Rect::from_min_size(Pos2::ZERO, window);
+    // The panel's margin, less half a stroke.
+    let margin = egui::Frame::central_panel(&egui::Style::default()).inner_margin.bottom as f32 - 0.5;
+    let (shown, drawn) = draw(monitors, preset, window);
+    assert!(shown.iter().any(|(t, _)| t == "QSA Strings"), "{case}: nothing drawn");
+    assert!(
+        screen.shrink(margin).contains_rect(drawn),
+        "{case}: the editor draws over {drawn:?}, beyond the {SIZE:?} window's margin"
+    );
+    for (i, (a, ra)) in shown.iter().enumerate() {
+        for (b, rb) in &shown[i + 1..] {
+            assert!(!ra.shrink(0.5).intersects(rb.shrink(0.5)), "{case}: {a:?} at {ra:?} overlaps {b:?} at {rb:?}");
+        }
+    }
+    // A taller window shows nothing more: nothing lies wholly below the default one.
+    let mut all: Vec<String> =
+        draw(monitors, preset, vec2(window.x, 3.0 * window.y)).0.into_iter().map(|(t, _)| t).collect();
+    let mut shown: Vec<String> = shown.into_iter().map(|(t, _)| t).collect();
+    all.sort();
+    shown.sort();
+    assert_eq!(shown, all, "{case}: the default window hides some of the editor");
+}
+
+#[test]
+fn the_editor_fits_its_window_without_missing_glyphs_or_overlaps() {
+    check("at rest", &[], "");
+    check("slide", &[sounding(Mode::Slide, 0.3, 0); 20], "");
+    check("slide, contact near the bridge", &[sounding(Mode::Slide, 0.9, 0); 20], "");
+    check("piano, guard tripped", &[sounding(Mode::Piano, 0.12, 3); 20], "");
+}
+
+#[test]
+fn every_factory_preset_fits_the_editor() {
+    for preset in factory_presets() {
+        check(&format!("preset {}", preset.id), &[], &preset.id);
+    }
+}

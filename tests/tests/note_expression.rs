@@ -1,0 +1,271 @@
+//! Per-note expression in the engine (slide mode): a note's tuning, pressure and polyphonic
+//! modulation offsets reach that note alone, addressed by the host's voice id or by channel and
+//! key; host garbage (NaN, infinities) is clamped; ended notes are reported once each; host
+//! buffer sizes change nothing.
+//!
+//! References come from the engine itself without per-note events: a note whose tuning or offset
+//! arrives with its note-on must render exactly as the note the offset describes (another key, or
+//! the setting changed for everyone), and two notes are independent voices, so a pair renders as
+//! the sum of the two notes rendered alone (to f32 rounding; the output stage is linear below its
+//! ceiling, and these mezzo-piano notes peak far below it).
+
+use qsa_dsp::instrument::{Event, HandSource, Instrument, Mode, NoteParam, NoteTarget, Settings};
+use qsa_dsp::preset::key_frequency;
+use qsa_tests::fundamental;
+
+const FS: f64 = 48_000.0;
+
+type Score = Vec<(usize, Event)>;
+
+/// A slide instrument of 4 voices.
+fn slide(settings: Settings) -> Instrument {
+    Instrument::new(FS, 4, Settings { mode: Mode::Slide, ..settings })
+}
+
+/// A note-on with a host voice id, mezzo-piano: a pair of them stays far below the output
+/// stage's ceiling, where the stage is linear.
+fn on(channel: u8, key: u8, voice: i32) -> Event {
+    Event::NoteOnWithId { channel, key, velocity: 0.3, voice }
+}
+
+/// Render `samples` samples of `score` in host calls of `chunk` samples (split at events).
+fn play(instrument: &mut Instrument, score: &Score, samples: usize, chunk: usize) -> Vec<f32> {
+    let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
+    let (mut next, mut t) = (0, 0);
+    while t < samples {
+        while next < score.len() && score[next].0 <= t {
+            instrument.handle(score[next].1);
+            next += 1;
+        }
+        let until = score.get(next).map_or(samples, |e| e.0);
+        let n = chunk.min(until - t).min(samples - t).max(1);
+        instrument.process(&mut left[t..t + n], &mut right[t..t + n]);
+        t += n;
+    }
+    left
+}
+
+/// Pitch (Hz) of a slide note in `out[from..to]`: the period of the running sum (the string's
+/// displacement at the pickup) by autocorrelation, searched within 20 % of `expected` (as in
+/// `instrument.rs`).
+fn pitch(out: &[f32], from: usize, to: usize, expected: f64) -> f64 {
+    let signal: Vec<f64> = out[from..to]
+        .iter()
+        .scan(0.0, |sum, &v| {
+            *sum += f64::from(v);
+            Some(*sum)
+        })
+        .collect();
+    fundamental(&signal, FS, 0.8 * expected, 1.2 * expected)
+}
+
+fn peak(x: &[f32]) -> f32 {
+    x.iter().fold(0.0f32, |m, v| m.max(v.abs()))
+}
+
+/// Largest difference between `both` and `a + b`, relative to the peak of `both`.
+fn mixture_error(both: &[f32], a: &[f32], b: &[f32]) -> f32 {
+    let worst = both.iter().zip(a.iter().zip(b)).map(|(m, (x, y))| (m - (x + y)).abs()).fold(0.0f32, f32::max);
+    worst / peak(both)
+}
+
+/// Bit-identical.
+fn same(a: &[f32], b: &[f32]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
+/// A tuning that arrives with its note-on (the way hosts send a note's expression) renders
+/// exactly the note it tunes to: key 57 tuned +2 semitones is key 59, sample for sample. Tuning
+/// note 2 of a pair (addressed by its voice id, then by channel and key) leaves note 1 as it
+/// was: the pair renders as note 1 alone plus the tuned note 2 alone.
+#[test]
+fn a_tuning_at_note_on_plays_the_tuned_note_and_leaves_the_other_alone() {
+    let reference = play(&mut slide(Settings::default()), &vec![(0, on(2, 59, 22))], 24_000, 256);
+    let note_1 = play(&mut slide(Settings::default()), &vec![(0, on(1, 50, 11))], 24_000, 256);
+    for target in [NoteTarget::voice(22), NoteTarget::key(2, 57)] {
+        let tune = (0, Event::NoteTuning { note: target, semitones: 2.0 });
+        let tuned = play(&mut slide(Settings::default()), &vec![(0, on(2, 57, 22)), tune], 24_000, 256);
+        assert!(same(&tuned, &reference), "{target:?}: key 57 tuned +2 st differs from key 59");
+        let pair = vec![(0, on(1, 50, 11)), (0, on(2, 57, 22)), tune];
+        let both = play(&mut slide(Settings::default()), &pair, 24_000, 256);
+        let error = mixture_error(&both, &note_1, &tuned);
+        println!("{target:?}: pair vs note 1 + tuned note 2: {error:.2e} of the peak");
+        assert!(error < 1e-6, "{target:?}: the tuning reached note 1 ({error:e} of the peak)");
+    }
+    let f = pitch(&reference, 7_200, 24_000, key_frequency(59));
+    println!("key 57 tuned +2 st: {f:.2} Hz (key 59: {:.2} Hz)", key_frequency(59));
+    assert!((f / key_frequency(59) - 1.0).abs() < 0.01);
+}
+
+/// A tuning during a note glides that note's slide there at the slide's speed limit: note 2 (key
+/// 57, 220 Hz) tuned −3 semitones at 0.25 s sounds at key 54's pitch once it has arrived (measured
+/// from 0.35 s; the slide needs `distance / 5 m/s`, printed), while note 1 (key 50) keeps its
+/// pitch: the pair is note 1 alone plus the tuned note 2 alone.
+#[test]
+fn a_tuning_during_a_note_moves_only_that_note() {
+    let tune = (12_000, Event::NoteTuning { note: NoteTarget::voice(22), semitones: -3.0 });
+    let note_1 = play(&mut slide(Settings::default()), &vec![(0, on(1, 50, 11))], 48_000, 256);
+    let note_2 = play(&mut slide(Settings::default()), &vec![(0, on(2, 57, 22)), tune], 48_000, 256);
+    let both = play(&mut slide(Settings::default()), &vec![(0, on(1, 50, 11)), (0, on(2, 57, 22)), tune], 48_000, 256);
+    let error = mixture_error(&both, &note_1, &note_2);
+    let length = qsa_dsp::preset::slide_guitar().string.length;
+    let distance = length * (2f64.powf(-9.0 / 12.0) - 2f64.powf(-12.0 / 12.0));
+    println!(
+        "pair vs the notes alone: {error:.2e} of the peak; the slide travels {distance:.3} m in {:.1} ms",
+        1e3 * distance / qsa_dsp::instrument::SLIDE_SPEED
+    );
+    assert!(distance / qsa_dsp::instrument::SLIDE_SPEED < 0.05, "arrives well before the window");
+    assert!(error < 1e-6, "the tuning reached note 1 ({error:e} of the peak)");
+    let before = pitch(&note_2, 7_200, 12_000, key_frequency(57));
+    let after = pitch(&note_2, 16_800, 48_000, key_frequency(54));
+    println!(
+        "note 2: {before:.2} Hz before, {after:.2} Hz after −3 st (keys 57, 54: {:.2}, {:.2} Hz)",
+        key_frequency(57),
+        key_frequency(54)
+    );
+    assert!((before / key_frequency(57) - 1.0).abs() < 0.01, "before: {before} Hz");
+    assert!((after / key_frequency(54) - 1.0).abs() < 0.01, "after: {after} Hz");
+}
+
+/// Polyphonic modulation offsets a setting for one note: with the slide at 5 semitones (not
+/// following keys), +3 semitones for voice 22 at its note-on renders exactly as the setting at 8
+/// for everyone (and sounds at 8 semitones above the open string); a hand-height offset of
+/// +4.5 mm on −1.5 mm renders exactly as the hand at +3 mm (the slide lifted: another sound). The other note of the pair is untouched. (Both instruments are
+/// made with the same settings, the reference's changed before its note, which starts after the
+/// first control block: a voice made with other settings would rest elsewhere before its note.)
+#[test]
+fn poly_modulation_offsets_a_setting_for_one_note() {
+    let fixed = Settings { follow_key: false, slide_position: 5.0, ..Default::default() };
+    let cases = [
+        (NoteParam::SlidePosition, 3.0f32, Settings { slide_position: 8.0, ..fixed }),
+        (NoteParam::HandHeight, 4.5e-3, Settings { hand_height: fixed.hand_height + f64::from(4.5e-3f32), ..fixed }),
+    ];
+    for (param, offset, reference_settings) in cases {
+        let mut changed = slide(fixed);
+        changed.set_settings(&Settings { mode: Mode::Slide, ..reference_settings });
+        let reference = play(&mut changed, &vec![(64, on(2, 60, 22))], 24_000, 256);
+        let modulate = (64, Event::NoteModulation { note: NoteTarget::voice(22), param, offset });
+        let modulated = play(&mut slide(fixed), &vec![(64, on(2, 60, 22)), modulate], 24_000, 256);
+        assert!(same(&modulated, &reference), "{param:?} {offset}: differs from the setting moved by it");
+        let note_1 = play(&mut slide(fixed), &vec![(64, on(1, 60, 11))], 24_000, 256);
+        let both = play(&mut slide(fixed), &vec![(64, on(1, 60, 11)), (64, on(2, 60, 22)), modulate], 24_000, 256);
+        let error = mixture_error(&both, &note_1, &modulated);
+        println!("{param:?} +{offset}: pair vs note 1 + modulated note 2: {error:.2e} of the peak");
+        assert!(error < 1e-6, "{param:?}: the modulation reached note 1 ({error:e} of the peak)");
+    }
+    // What the offsets do: the slide at 8 semitones sounds there; the lifted hand changes the
+    // sound (by more than half its rms).
+    let render = |settings| play(&mut slide(settings), &vec![(0, on(2, 60, 22))], 24_000, 256);
+    let expected = 110.0 * 2f64.powf(8.0 / 12.0);
+    let f = pitch(&render(cases[0].2), 7_200, 24_000, expected);
+    let (pressed, lifted) = (render(fixed), render(cases[1].2));
+    let rms = |x: &[f32]| (x.iter().map(|&v| f64::from(v).powi(2)).sum::<f64>() / x.len() as f64).sqrt();
+    let diff: Vec<f32> = pressed.iter().zip(&lifted).map(|(a, b)| a - b).collect();
+    let change = rms(&diff[7_200..]) / rms(&pressed[7_200..]);
+    println!("slide at 5 + 3 st: {f:.2} Hz (expected {expected:.2}); hand lifted: {change:.2} of the rms changed");
+    assert!((f / expected - 1.0).abs() < 0.01, "slide at 8 st: {f} Hz");
+    assert!(change > 0.5, "lifting the hand changed only {change} of the rms");
+}
+
+/// A note's pressure expression (addressed by voice id) is its poly pressure: with the hand
+/// height from poly pressure, it renders exactly as MIDI poly aftertouch on the note's channel and
+/// key, and it presses that note's slide alone (the other note stays lifted, at the open string).
+#[test]
+fn a_pressure_expression_presses_only_its_note() {
+    let settings = Settings { hand_source: HandSource::PolyPressure, ..Default::default() };
+    let expression = (0, Event::NotePressure { note: NoteTarget::voice(22), value: 1.0 });
+    let aftertouch = (0, Event::PolyPressure { channel: 2, key: 57, value: 1.0 });
+    let pressed = play(&mut slide(settings), &vec![(0, on(2, 57, 22)), expression], 24_000, 256);
+    let midi = play(&mut slide(settings), &vec![(0, on(2, 57, 22)), aftertouch], 24_000, 256);
+    assert!(same(&pressed, &midi), "the pressure expression differs from poly aftertouch");
+    let note_1 = play(&mut slide(settings), &vec![(0, on(1, 50, 11))], 24_000, 256);
+    let both = play(&mut slide(settings), &vec![(0, on(1, 50, 11)), (0, on(2, 57, 22)), expression], 24_000, 256);
+    let error = mixture_error(&both, &note_1, &pressed);
+    assert!(error < 1e-6, "the pressure reached note 1 ({error:e} of the peak)");
+    // Pressed, the note sounds at its key; unpressed (the slide held 2 mm off), it is another
+    // sound altogether.
+    let unpressed = play(&mut slide(settings), &vec![(0, on(2, 57, 22))], 24_000, 256);
+    let f = pitch(&pressed, 7_200, 24_000, 220.0);
+    let rms = |x: &[f32]| (x.iter().map(|&v| f64::from(v).powi(2)).sum::<f64>() / x.len() as f64).sqrt();
+    let diff: Vec<f32> = pressed.iter().zip(&unpressed).map(|(a, b)| a - b).collect();
+    let change = rms(&diff[7_200..]) / rms(&pressed[7_200..]);
+    println!(
+        "pressed note 2: {f:.2} Hz (key 57: 220 Hz); unpressed differs by {change:.2} of its rms; pair error {error:.1e}"
+    );
+    assert!((f / 220.0 - 1.0).abs() < 0.01, "pressed: {f} Hz");
+    assert!(change > 0.5, "pressure changed the note by only {change} of its rms");
+}
+
+/// Host garbage is clamped, never played: NaN tuning and offsets are 0 (the note renders as with
+/// none), infinite ones the largest value (finite samples), pressure beyond 0..=1 is clamped.
+#[test]
+fn non_finite_per_note_values_are_clamped() {
+    let plain = play(&mut slide(Settings::default()), &vec![(0, on(2, 57, 22))], 9_600, 256);
+    let target = NoteTarget::voice(22);
+    let nan: Score = vec![
+        (0, on(2, 57, 22)),
+        (0, Event::NoteTuning { note: target, semitones: f32::NAN }),
+        (0, Event::NoteModulation { note: target, param: NoteParam::SlidePosition, offset: f32::NAN }),
+        (0, Event::NoteModulation { note: target, param: NoteParam::HandHeight, offset: f32::NAN }),
+    ];
+    assert!(same(&play(&mut slide(Settings::default()), &nan, 9_600, 256), &plain), "NaN is 0");
+    for value in [f32::INFINITY, f32::NEG_INFINITY, 1e30, -1e30] {
+        let score: Score = vec![
+            (0, on(2, 57, 22)),
+            (100, Event::NoteTuning { note: target, semitones: value }),
+            (200, Event::NoteModulation { note: target, param: NoteParam::SlidePosition, offset: value }),
+            (300, Event::NoteModulation { note: target, param: NoteParam::HandHeight, offset: value }),
+            (400, Event::NotePressure { note: NoteTarget::default(), value }),
+        ];
+        let out = play(&mut slide(Settings { follow_key: false, ..Default::default() }), &score, 9_600, 256);
+        assert!(out.iter().all(|v| v.is_finite()), "{value}: non-finite output");
+    }
+}
+
+/// Per-note events take effect at their sample like other events, so host buffer sizes change
+/// nothing: blocks of 1, 7, 64 and 4096 samples give the same samples.
+#[test]
+fn per_note_events_are_buffer_invariant() {
+    let score: Score = vec![
+        (0, on(1, 50, 11)),
+        (0, on(2, 57, 22)),
+        (1_000, Event::NoteTuning { note: NoteTarget::voice(22), semitones: 1.5 }),
+        (3_333, Event::NoteModulation { note: NoteTarget::voice(11), param: NoteParam::HandHeight, offset: 1e-3 }),
+        (5_000, Event::NotePressure { note: NoteTarget::key(1, 50), value: 0.7 }),
+        (7_777, Event::NoteTuning { note: NoteTarget::key(1, 50), semitones: -2.0 }),
+        (9_000, Event::NoteOff { channel: 2, key: 57 }),
+    ];
+    let reference = play(&mut slide(Settings::default()), &score, 14_400, 14_400);
+    for chunk in [1usize, 7, 64, 4096] {
+        assert!(same(&play(&mut slide(Settings::default()), &score, 14_400, chunk), &reference), "blocks of {chunk}");
+    }
+}
+
+/// Every note's end is reported once, with its voice id, channel and key: a released slide note
+/// when its string falls silent, a note whose voice a legato glide takes over at once, and a piano
+/// note struck again on its string at the new strike.
+#[test]
+fn ended_notes_are_reported_once() {
+    let mut s = slide(Settings::default());
+    let score: Score = vec![(0, on(0, 50, 1)), (4_800, on(0, 55, 2)), (9_000, Event::NoteOff { channel: 0, key: 55 })];
+    let _ = play(&mut s, &score, 9_600, 256);
+    let legato: Vec<_> = s.drain_ended().collect();
+    assert_eq!(legato.len(), 1, "{legato:?}");
+    assert_eq!((legato[0].note.voice, legato[0].note.key, legato[0].at), (Some(1), 50, 4_800));
+    let _ = play(&mut s, &vec![], 4 * 48_000, 4096);
+    let released: Vec<_> = s.drain_ended().collect();
+    assert_eq!(released.len(), 1, "{released:?}");
+    assert_eq!((released[0].note.voice, released[0].note.channel, released[0].note.key), (Some(2), 0, 55));
+    println!("slide note released at 0.2 s reported ended at {:.3} s", released[0].at as f64 / FS);
+    assert!(released[0].at > 9_000);
+    assert_eq!(s.drain_ended().count(), 0, "nothing twice");
+
+    let mut p = Instrument::new(FS, 4, Settings::default());
+    let _ = play(&mut p, &vec![(0, on(0, 60, 7)), (2_400, on(0, 60, 8))], 4_800, 256);
+    let restruck: Vec<_> = p.drain_ended().collect();
+    assert_eq!(restruck.len(), 1, "{restruck:?}");
+    assert_eq!((restruck[0].note.voice, restruck[0].at), (Some(7), 2_400));
+    p.handle(Event::AllSoundOff);
+    let silenced: Vec<_> = p.drain_ended().map(|e| e.note.voice).collect();
+    assert_eq!(silenced, [Some(8)]);
+}
