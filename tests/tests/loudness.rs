@@ -151,3 +151,24 @@ fn the_loudness_meter_reads_a_reference_sine_as_bs1770_specifies() {
     println!("997 Hz at -20 dBFS on two channels: {lufs:.3} LUFS");
     assert!((lufs - (-20.0)).abs() < 0.1, "{lufs}");
 }
+
+/// A held piano note carries no DC: once the hammer has left, the bridge force of a string
+/// vibrating in its modes averages to zero. Over 0.1–2 s after the strike (Hann-weighted) the
+/// mean is below −60 dB of the RMS on the lowest, middle and highest keys, soft and loud.
+#[test]
+fn a_held_piano_note_has_no_dc() {
+    for key in [21u8, 60, 108] {
+        for velocity in [30u8, 127] {
+            let out = loudness::strike(&[key], velocity, &Settings::default(), 2.0);
+            let span = &out[4_800..];
+            let n = span.len() as f64;
+            let hann = |i: usize| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / n).cos();
+            let weight: f64 = (0..span.len()).map(hann).sum();
+            let mean = span.iter().enumerate().map(|(i, &x)| hann(i) * f64::from(x)).sum::<f64>() / weight;
+            let rms = (span.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / n).sqrt();
+            let db = 20.0 * (mean.abs() / rms).log10();
+            println!("key {key} velocity {velocity}: DC {db:.1} dB of the RMS {rms:.2e}");
+            assert!(db < -60.0, "key {key} velocity {velocity}: DC {db:.1} dB");
+        }
+    }
+}

@@ -206,7 +206,7 @@ fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
     );
     let _ = writeln!(
         w,
-        "Files: [`{ERROR_CSV}`]({ERROR_CSV}) (every configuration), [`{CONVERGENCE_CSV}`]({CONVERGENCE_CSV}) (fitted orders), [`{CONTROL_BLOCK_CSV}`]({CONTROL_BLOCK_CSV}) (the control block N_b), [`{STABILITY_MD}`]({STABILITY_MD}) and [`{STABILITY_CSV}`]({STABILITY_CSV}) (the stability sweep), and the plots below.\n"
+        "Files: [`{ERROR_CSV}`]({ERROR_CSV}) (every configuration), [`{CONVERGENCE_CSV}`]({CONVERGENCE_CSV}) (fitted orders), [`{CONTROL_BLOCK_CSV}`]({CONTROL_BLOCK_CSV}) (the control block N_b), [`{STABILITY_MD}`]({STABILITY_MD}) and [`{STABILITY_CSV}`]({STABILITY_CSV}) (the stability sweep), and the plots below. The instrument's loudness per key, [`loudness.png`](loudness.png) and [`loudness.csv`](loudness.csv), comes from `cargo xtask loudness --write`.\n"
     );
 
     // ------------------------------------------------------------------ which method to pick
