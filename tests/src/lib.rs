@@ -9,6 +9,7 @@
 //!   [`hertz_integral_quadrature`]) and the closed-form peak compression and contact time
 //!   ([`HertzContact`]).
 //! - A seeded RNG ([`seeded_rng`]) so that random tests are reproducible.
+//! - The DC component of an audio signal against its RMS ([`dc_db`]).
 //!
 //! Units are SI throughout (m, kg, N, s, Hz, J).
 
@@ -228,6 +229,17 @@ impl Trajectory {
     pub fn contact_samples(&self) -> usize {
         self.frames.iter().filter(|f| touching(f)).count()
     }
+}
+
+/// `x`'s DC component (Hann-weighted mean) over `range`, relative to its RMS there, in dB.
+pub fn dc_db(x: &[f64], range: std::ops::Range<usize>) -> f64 {
+    let s = &x[range];
+    let n = s.len() as f64;
+    let hann = |i: usize| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / n).cos();
+    let dc = s.iter().enumerate().map(|(i, v)| hann(i) * v).sum::<f64>()
+        / s.iter().enumerate().map(|(i, _)| hann(i)).sum::<f64>();
+    let rms = (s.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+    20.0 * (dc.abs() / rms).log10()
 }
 
 /// `log10(‖a − b‖₂ / ‖b‖₂)`: the normalised L2 difference of two signals (physics §9.4's dF,

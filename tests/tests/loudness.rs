@@ -6,6 +6,7 @@
 //! each key struck alone and held 2 s (`xtask::loudness`).
 
 use qsa_dsp::instrument::{CEILING, Event, Instrument, Settings};
+use qsa_tests::dc_db;
 use xtask::loudness::{self, KEYS, KeyLoudness, chord_peaks, measure};
 
 /// Largest loudness step allowed between neighbouring keys (LU).
@@ -159,14 +160,10 @@ fn the_loudness_meter_reads_a_reference_sine_as_bs1770_specifies() {
 fn a_held_piano_note_has_no_dc() {
     for key in [21u8, 60, 108] {
         for velocity in [30u8, 127] {
-            let out = loudness::strike(&[key], velocity, &Settings::default(), 2.0);
-            let span = &out[4_800..];
-            let n = span.len() as f64;
-            let hann = |i: usize| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / n).cos();
-            let weight: f64 = (0..span.len()).map(hann).sum();
-            let mean = span.iter().enumerate().map(|(i, &x)| hann(i) * f64::from(x)).sum::<f64>() / weight;
-            let rms = (span.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / n).sqrt();
-            let db = 20.0 * (mean.abs() / rms).log10();
+            let out: Vec<f64> =
+                loudness::strike(&[key], velocity, &Settings::default(), 2.0).into_iter().map(f64::from).collect();
+            let db = dc_db(&out, 4_800..out.len());
+            let rms = (out[4_800..].iter().map(|x| x * x).sum::<f64>() / (out.len() - 4_800) as f64).sqrt();
             println!("key {key} velocity {velocity}: DC {db:.1} dB of the RMS {rms:.2e}");
             assert!(db < -60.0, "key {key} velocity {velocity}: DC {db:.1} dB");
         }

@@ -10,7 +10,7 @@ use qsa_dsp::preset::slide_guitar;
 use qsa_dsp::render::{parse_scene, render};
 use qsa_dsp::scene::{Frame, Scene, SlideAutomation, SlideControls, SlideCore, SlideString, SlideStringParams};
 use qsa_dsp::string::ModalString;
-use qsa_tests::{log10_rel_l2, seeded_rng};
+use qsa_tests::{dc_db, log10_rel_l2, seeded_rng};
 use xtask::report::gestures::{self, Gesture, Trajectory, grid, lanes, preset_params, semitone_position};
 
 const FS: f64 = gestures::FS;
@@ -317,17 +317,6 @@ fn a_jump_of_the_slide_position_moves_the_slide_at_a_hands_speed() {
     let seconds = blocks as f64 * 64.0 / FS;
     println!("from {start:.3} m to {last:.3} m in {seconds:.3} s");
     assert!(seconds >= (0.75 * length - start) / SLIDE_SPEED, "arrived in {seconds} s");
-}
-
-/// `x`'s DC component (Hann-weighted mean) over `range`, relative to its RMS there, in dB.
-fn dc_db(x: &[f64], range: std::ops::Range<usize>) -> f64 {
-    let s = &x[range];
-    let n = s.len() as f64;
-    let hann = |i: usize| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / n).cos();
-    let dc = s.iter().enumerate().map(|(i, v)| hann(i) * v).sum::<f64>()
-        / s.iter().enumerate().map(|(i, _)| hann(i)).sum::<f64>();
-    let rms = (s.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
-    20.0 * (dc.abs() / rms).log10()
 }
 
 /// A held slide note carries no DC: the slide presses the string statically (about 1.5 mm at
