@@ -11,8 +11,9 @@
 //! - [`exciter`]: the hammer (and the slide and fingers).
 //! - [`scene`]: physical set-ups built from a solver and bodies; each holds only what it needs.
 //! - [`instrument`]: the playable engine: a voice pool driven by note and controller events.
-//! - [`render`]: scene files (TOML), offline rendering in calls of any size, and the summary
-//!   of a render.
+//! - [`scene_file`]: scene files (TOML): parsing and validation, the scene vocabulary, the one
+//!   builder from a description and a solver choice to a runnable scene, offline rendering in
+//!   calls of any size, and what a render measured.
 //!
 //! **Units** are SI throughout: m, kg, N, s, Hz, J. State and arithmetic are `f64`.
 //!
@@ -28,17 +29,19 @@
 //!     mass = { mass = 0.01, u0 = -1e-3, v0 = 2.0 }
 //!     barrier = { position = 0.0 }
 //! "#;
-//! let scene = qsa_dsp::render::parse_scene(text).unwrap();
-//! let out = qsa_dsp::render::render(&scene, std::iter::empty()).unwrap();
-//! assert_eq!(out.summary.contacts, 1);
-//! assert!((out.summary.rebound_velocity.unwrap() + 2.0).abs() < 1e-9);
+//! let scene = qsa_dsp::scene_file::parse_scene(text).unwrap();
+//! let out = qsa_dsp::scene_file::render(&scene, std::iter::empty()).unwrap();
+//! assert_eq!(out.measurements.contacts, 1);
+//! assert!((out.measurements.rebound_velocity.unwrap() + 2.0).abs() < 1e-9);
 //! ```
 
+#[doc(hidden)]
+pub mod bench_support;
 pub mod contact;
 pub mod control;
 pub mod exciter;
 pub mod instrument;
 pub mod preset;
-pub mod render;
 pub mod scene;
+pub mod scene_file;
 pub mod string;

@@ -1,11 +1,11 @@
 //! Named parameter sets: the Chaigne–Askenfelt C4 piano string and hammer, and a rule that gives
 //! a plausible string and hammer for every MIDI key.
 //!
-//! # Chaigne & Askenfelt (1994) C4 (physics §8.2)
+//! # Chaigne & Askenfelt (1994) C4 (docs/physics.md §8.2)
 //!
 //! L = 0.62 m, string mass 3.93 g, T = 670 N, ε = EI/(TL²) = 3.82e-5, b1 = 0.5 s⁻¹,
 //! b3 = 6.25e-9 s; hammer 2.97 g, κ = 4.5e9 N/m^α, α = 2.5, struck at 0.12 L. Mapped to the
-//! model of [`crate::string`] exactly as physics §8.2 prescribes: `ρA = Ms/L`, `EI = ε T L²`,
+//! model of [`crate::string`] exactly as docs/physics.md §8.2 prescribes: `ρA = Ms/L`, `EI = ε T L²`,
 //! `η0 = b1`, `η2 = b3·T/ρA`. Derived: ρA = 6.3387e-3 kg/m, EI = 9.838e-3 N·m², f0 = 262.19 Hz,
 //! B = 3.770e-4, η2 = 6.606e-4 m²/s.
 //!
@@ -27,7 +27,7 @@
 //!   through 2.3, 2.5, 3.0, clamped to [2, 3.5]; striking position linear through 0.12, 0.12,
 //!   0.0625 of L, clamped to [0.04, 0.2].
 //!
-//! The C2 and C7 hammer values are guesses in the source tables (physics §8.2); the rule is meant
+//! The C2 and C7 hammer values are guesses in the source tables (docs/physics.md §8.2); the rule is meant
 //! to be plausible and smooth across the keyboard, not a measured piano.
 
 use crate::string::{Damping, StringParams};
@@ -47,7 +47,7 @@ pub struct PianoNote {
     pub strike_position: f64,
 }
 
-/// The Chaigne–Askenfelt C4 string and hammer, mapped as physics §8.2 prescribes.
+/// The Chaigne–Askenfelt C4 string and hammer, mapped as docs/physics.md §8.2 prescribes.
 pub fn chaigne_askenfelt_c4() -> PianoNote {
     let (length, mass, tension, epsilon, b1, b3) = (0.62, 3.93e-3, 670.0, 3.82e-5, 0.5, 6.25e-9);
     let linear_density = mass / length;
@@ -163,7 +163,7 @@ pub struct SlideGuitar {
     pub alpha: f64,
 }
 
-/// The slide-guitar set-up used for development (physics §8.3: the DAFx-20 parameters were not
+/// The slide-guitar set-up used for development (docs/physics.md §8.3: the DAFx-20 parameters were not
 /// available, so these are documented placeholders): an A2 string, L = 0.65 m, T = 100 N,
 /// f0 = 110 Hz (ρA = T/(2Lf0)²), B = 1e-5, η0 = 1 s⁻¹, η2 = 1e-4 m²/s; a 30 g slide held with
 /// k_H = 1e4 N/m and r_H = 5 kg/s; contact κ = 1e9 N/m^1.5, α = 1.5; finger windows 15 mm (left)

@@ -1,5 +1,7 @@
-//! The plugin's parameters: stable short ids (never change once released), units and ranges, and
-//! their mapping to the engine's [`Settings`].
+//! The plugin's parameters, built from the engine's parameter table
+//! ([`qsa_dsp::instrument::PARAMETERS`]), which defines each once: stable short id (never changes
+//! once released), name, group, range, unit, default, display, and its place in [`ParamValues`],
+//! mapped to the engine's [`Settings`] by [`ParamValues::settings`].
 //!
 //! Hosts see them in four groups, the editor's sections (VST3 units, CLAP modules): Engine
 //! (`mode` to `voices`), Piano (`hard` to `damper`), Slide (`slide` to `pickup`) and Output
@@ -8,43 +10,46 @@
 //! alone (the sum clamped to the range), where the parameter acts (`slide` when the slide does not
 //! follow keys, `hand` when `Hand height from` is Parameter).
 //!
-//! | id | name | range | maps to |
-//! |---|---|---|---|
-//! | `mode` | Mode | Piano, Slide | [`Settings::mode`] |
-//! | `solver` | Solver | QSA, EXP, IMP | [`Settings::method`] |
-//! | `segs` | QSA segments | 1..=64 | [`Settings::segments`] |
-//! | `nb` | Control block | 1..=256 samples | [`Settings::block`] |
-//! | `voices` | Voices | 1..=128 (next activation) | pool size |
-//! | `hard` | Hardness | ×0.1..=×10 of the per-note felt κ | [`Settings::hardness`] |
-//! | `hmass` | Hammer mass | ×0.25..=×4 | [`Settings::hammer_mass`] |
-//! | `strike` | Strike position | ×0.25..=×2.5 | [`Settings::strike_position`] |
-//! | `damp` | String damping | ×0.1..=×10 | [`Settings::damping`] |
-//! | `bright` | Brightness (inharmonicity) | ×0..=×4 of B | [`Settings::brightness`] |
-//! | `damper` | Damper | 1..=500 1/s | [`Settings::damper_rate`] |
-//! | `slide` | Slide position | 0..=24 semitones; poly modulation | [`Settings::slide_position`] |
-//! | `follow` | Slide follows key | on/off | [`Settings::follow_key`] |
-//! | `glide` | Glide time | 1..=2000 ms | [`Settings::glide_time`] |
-//! | `bend` | Bend range | 0..=24 semitones | [`Settings::bend_range`] |
-//! | `hand` | Hand height | −3..=3 mm; poly modulation | [`Settings::hand_height`] |
-//! | `handsrc` | Hand height from | Parameter, Mod wheel, Channel pressure, Poly pressure | [`Settings::hand_source`] |
-//! | `smass` | Slide mass | 5..=200 g | [`Settings::slide_mass`] |
-//! | `hstiff` | Hand stiffness | 1e2..=1e6 N/m | [`Settings::hand_stiffness`] |
-//! | `hdamp` | Hand damping | 0..=100 kg/s | [`Settings::hand_damping`] |
-//! | `fdamp` | Finger damping | 0..=50 s/m | [`Settings::finger_damping`] |
-//! | `kappa` | Slide stiffness κ | 1e6..=1e13 N/m^α | [`Settings::slide_kappa`] |
-//! | `alpha` | Slide exponent α | 1..=3 | [`Settings::slide_alpha`] |
-//! | `pluck` | Pluck position | 0.5..=0.98 of the length | [`Settings::pluck_position`] |
-//! | `pickup` | Pickup position | 0.5..=0.98 of the length | [`Settings::pickup_position`] |
-//! | `gain` | Output gain | −36..=12 dB | [`Settings::gain`] |
-//! | `limit` | Safety limiter | on/off | [`Settings::limiter`] |
+//! The table below is the parameter table's (a test checks it row by row):
+//!
+//! | id | name | range | default | maps to |
+//! |---|---|---|---|---|
+//! | `mode` | Mode | Piano, Slide | Piano | [`Settings::mode`] |
+//! | `solver` | Solver | QSA, EXP, IMP | QSA | [`Settings::method`] |
+//! | `segs` | QSA segments | 1..=64 | 6 | [`Settings::segments`] |
+//! | `nb` | Control block | 1..=256 smp | 64 smp | [`Settings::block`] |
+//! | `voices` | Voices | 1..=128 | 32 | voice pool size (at the next activation) |
+//! | `hard` | Hardness | 0.1..=10× | 1× | [`Settings::hardness`] |
+//! | `hmass` | Hammer mass | 0.25..=4× | 1× | [`Settings::hammer_mass`] |
+//! | `strike` | Strike position | 0.25..=2.5× | 1× | [`Settings::strike_position`] |
+//! | `damp` | String damping | 0.1..=10× | 1× | [`Settings::damping`] |
+//! | `bright` | Brightness | 0..=4× | 1× | [`Settings::brightness`] (inharmonicity) |
+//! | `damper` | Damper | 1..=500 1/s | 60 1/s | [`Settings::damper_rate`] |
+//! | `slide` | Slide position | 0..=24 st | 5 st | [`Settings::slide_position`] |
+//! | `follow` | Slide follows key | on/off | on | [`Settings::follow_key`] |
+//! | `glide` | Glide time | 1..=2000 ms | 50 ms | [`Settings::glide_time`] |
+//! | `bend` | Bend range | 0..=24 st | 2 st | [`Settings::bend_range`] |
+//! | `hand` | Hand height | -3..=3 mm | -1.5 mm | [`Settings::hand_height`] |
+//! | `handsrc` | Hand height from | Parameter, Mod wheel, Channel pressure, Poly pressure | Parameter | [`Settings::hand_source`] |
+//! | `smass` | Slide mass | 5..=200 g | 30 g | [`Settings::slide_mass`] |
+//! | `hstiff` | Hand stiffness | 100..=1e6 N/m | 10000 N/m | [`Settings::hand_stiffness`] |
+//! | `hdamp` | Hand damping | 0..=100 kg/s | 5 kg/s | [`Settings::hand_damping`] |
+//! | `fdamp` | Finger damping | 0..=50 s/m | 5 s/m | [`Settings::finger_damping`] |
+//! | `kappa` | Slide stiffness | 1e6..=1e13 N/m^a | 1e9 N/m^a | [`Settings::slide_kappa`] (κ) |
+//! | `alpha` | Slide exponent | 1..=3 | 1.5 | [`Settings::slide_alpha`] (α) |
+//! | `pluck` | Pluck position | 0.5..=0.98 | 0.9 | [`Settings::pluck_position`] (fraction of the length) |
+//! | `pickup` | Pickup position | 0.5..=0.98 | 0.9 | [`Settings::pickup_position`] (fraction of the length) |
+//! | `gain` | Output gain | -36..=12 dB | 0 dB | [`Settings::gain`] (linear) |
+//! | `limit` | Safety limiter | on/off | on | [`Settings::limiter`] |
 
 use std::sync::Arc;
 
 use nice_plug::prelude::*;
-use qsa_dsp::contact::Method;
-use qsa_dsp::instrument::{HandSource, Mode, NoteParam, ParamValues, Settings};
+use qsa_dsp::instrument::{
+    NoteParam, PARAMETERS, ParamKind, ParamSpec, ParamValues, Scale, Settings, ValueDisplay, param_index,
+};
 
-/// Instrument mode parameter.
+/// Instrument mode parameter (the options of `mode` in [`PARAMETERS`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Enum)]
 pub enum ModeParam {
     /// Hammer–string.
@@ -55,7 +60,7 @@ pub enum ModeParam {
     Slide,
 }
 
-/// Contact solver parameter.
+/// Contact solver parameter (the options of `solver`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Enum)]
 pub enum SolverParam {
     /// Quadratic spline approximation (non-iterative).
@@ -72,7 +77,7 @@ pub enum SolverParam {
     Imp,
 }
 
-/// Hand height source parameter.
+/// Hand height source parameter (the options of `handsrc`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Enum)]
 pub enum HandSourceParam {
     /// The Hand height parameter.
@@ -92,29 +97,155 @@ pub enum HandSourceParam {
     PolyPressure,
 }
 
-/// Range of `slide` (semitones).
-pub const SLIDE_RANGE: (f32, f32) = (0.0, 24.0);
-
-/// Range of `hand` (mm).
-pub const HAND_RANGE_MM: (f32, f32) = (-3.0, 3.0);
-
 /// Polyphonic modulation id of `slide` (nice-plug's `with_poly_modulation_id`).
 pub const POLY_SLIDE: u32 = 0;
 
 /// Polyphonic modulation id of `hand`.
 pub const POLY_HAND: u32 = 1;
 
+/// The polyphonic modulation id of the per-note offset `note`.
+fn poly_id(note: NoteParam) -> u32 {
+    match note {
+        NoteParam::SlidePosition => POLY_SLIDE,
+        NoteParam::HandHeight => POLY_HAND,
+    }
+}
+
 /// The engine's per-note offset for a polyphonic modulation of normalized offset `normalized` of
 /// the parameter with poly modulation id `id`: the setting and the offset in its unit
 /// (semitones, metres). Both parameters are linear, so a normalized offset is the same plain
 /// offset from any value: `normalized × span`.
 pub fn poly_offset(id: u32, normalized: f32) -> Option<(NoteParam, f32)> {
-    let span = |(lo, hi): (f32, f32)| normalized * (hi - lo);
-    match id {
-        POLY_SLIDE => Some((NoteParam::SlidePosition, span(SLIDE_RANGE))),
-        POLY_HAND => Some((NoteParam::HandHeight, span(HAND_RANGE_MM) * 1e-3)),
+    let (note, to_engine_unit) = match id {
+        POLY_SLIDE => (NoteParam::SlidePosition, 1.0),
+        POLY_HAND => (NoteParam::HandHeight, 1e-3),
+        _ => return None,
+    };
+    let (min, max) = PARAMETERS.iter().find_map(|spec| match spec.kind {
+        ParamKind::Float { min, max, poly: Some(p), .. } if p == note => Some((min, max)),
         _ => None,
+    })?;
+    Some((note, normalized * (max - min) * to_engine_unit))
+}
+
+/// A framework parameter built from its [`ParamSpec`], whose plain value it reports as
+/// [`ParamSpec::get`] gives it (choices as their index, switches 0 or 1).
+trait FromSpec {
+    /// The parameter `spec` describes: name, range, default, unit, display, step, poly modulation.
+    fn from_spec(spec: &ParamSpec) -> Self;
+
+    /// The current plain value.
+    fn plain(&self) -> f32;
+}
+
+impl FromSpec for FloatParam {
+    fn from_spec(spec: &ParamSpec) -> Self {
+        let ParamKind::Float { min, max, default, unit, scale, display, step, poly } = spec.kind else {
+            panic!("{} is not a continuous parameter", spec.id)
+        };
+        let (range, default) = match scale {
+            Scale::Linear => (FloatRange::Linear { min, max }, default),
+            Scale::Skewed(exponent) => {
+                (FloatRange::Skewed { min, max, factor: FloatRange::skew_factor(exponent) }, default)
+            }
+            Scale::Decibels => (
+                FloatRange::Skewed {
+                    min: util::db_to_gain(min),
+                    max: util::db_to_gain(max),
+                    factor: FloatRange::gain_skew_factor(min, max),
+                },
+                util::db_to_gain(default),
+            ),
+        };
+        let mut param = FloatParam::new(spec.name, default, range).with_unit(unit);
+        param = match (scale, display) {
+            (Scale::Decibels, ValueDisplay::Rounded(digits)) => param
+                .with_value_to_string(formatters::v2s_f32_gain_to_db(digits))
+                .with_string_to_value(formatters::s2v_f32_gain_to_db()),
+            (_, ValueDisplay::Rounded(digits)) => param.with_value_to_string(formatters::v2s_f32_rounded(digits)),
+            (_, ValueDisplay::Scientific(digits)) => {
+                param.with_value_to_string(Arc::new(move |v| format!("{v:.digits$e}")))
+            }
+            (_, ValueDisplay::Plain) => param,
+        };
+        if let Some(step) = step {
+            param = param.with_step_size(step);
+        }
+        if let Some(note) = poly {
+            param = param.with_poly_modulation_id(poly_id(note));
+        }
+        param
     }
+
+    fn plain(&self) -> f32 {
+        self.value()
+    }
+}
+
+impl FromSpec for IntParam {
+    fn from_spec(spec: &ParamSpec) -> Self {
+        let ParamKind::Int { min, max, default, unit } = spec.kind else {
+            panic!("{} is not a whole-number parameter", spec.id)
+        };
+        IntParam::new(spec.name, default, IntRange::Linear { min, max }).with_unit(unit)
+    }
+
+    fn plain(&self) -> f32 {
+        self.value() as f32
+    }
+}
+
+impl FromSpec for BoolParam {
+    fn from_spec(spec: &ParamSpec) -> Self {
+        let ParamKind::Bool { default } = spec.kind else { panic!("{} is not a switch", spec.id) };
+        BoolParam::new(spec.name, default)
+    }
+
+    fn plain(&self) -> f32 {
+        if self.value() { 1.0 } else { 0.0 }
+    }
+}
+
+impl<T: Enum + PartialEq + 'static> FromSpec for EnumParam<T> {
+    fn from_spec(spec: &ParamSpec) -> Self {
+        let ParamKind::Choice { default, .. } = spec.kind else { panic!("{} is not a choice", spec.id) };
+        EnumParam::new(spec.name, T::from_index(default))
+    }
+
+    fn plain(&self) -> f32 {
+        self.value().to_index() as f32
+    }
+}
+
+/// A parameter group: a struct of parameters with their ids (the fields' framework attribute and
+/// their [`ParamSpec`], found at compile time), built from the table and read back into
+/// [`ParamValues`] through it.
+macro_rules! param_group {
+    ($(#[$meta:meta])* $group:ident { $($(#[$field_meta:meta])* $field:ident: $kind:ty = $id:tt,)* }) => {
+        $(#[$meta])*
+        #[allow(missing_debug_implementations)]
+        #[derive(Params)]
+        pub struct $group {
+            $(
+                $(#[$field_meta])*
+                #[id = $id]
+                pub $field: $kind,
+            )*
+        }
+
+        impl Default for $group {
+            fn default() -> Self {
+                Self { $($field: FromSpec::from_spec(&PARAMETERS[const { param_index($id) }]),)* }
+            }
+        }
+
+        impl $group {
+            /// Store every parameter's plain value in `values`.
+            fn read(&self, values: &mut ParamValues) {
+                $((PARAMETERS[const { param_index($id) }].put)(values, self.$field.plain());)*
+            }
+        }
+    };
 }
 
 /// All parameters, in the four groups the editor shows (VST3 units, CLAP modules: Engine, Piano,
@@ -142,248 +273,91 @@ pub struct QsaParams {
     pub preset: Arc<std::sync::RwLock<String>>,
 }
 
-/// The Engine group.
-#[allow(missing_debug_implementations)]
-#[derive(Params)]
-pub struct EngineParams {
-    /// Piano or slide guitar.
-    #[id = "mode"]
-    pub mode: EnumParam<ModeParam>,
-    /// Contact solver.
-    #[id = "solver"]
-    pub solver: EnumParam<SolverParam>,
-    /// QSA segments N.
-    #[id = "segs"]
-    pub segments: IntParam,
-    /// Control block N_b (samples).
-    #[id = "nb"]
-    pub block: IntParam,
-    /// Voice pool size (takes effect at the next activation).
-    #[id = "voices"]
-    pub voices: IntParam,
+param_group! {
+    /// The Engine group.
+    EngineParams {
+        /// Piano or slide guitar.
+        mode: EnumParam<ModeParam> = "mode",
+        /// Contact solver.
+        solver: EnumParam<SolverParam> = "solver",
+        /// QSA segments N.
+        segments: IntParam = "segs",
+        /// Control block N_b (samples).
+        block: IntParam = "nb",
+        /// Voice pool size (takes effect at the next activation).
+        voices: IntParam = "voices",
+    }
 }
 
-/// The Piano group (relative to the per-note rule).
-#[allow(missing_debug_implementations)]
-#[derive(Params)]
-pub struct PianoParams {
-    /// Felt hardness, relative.
-    #[id = "hard"]
-    pub hardness: FloatParam,
-    /// Hammer mass, relative.
-    #[id = "hmass"]
-    pub hammer_mass: FloatParam,
-    /// Striking position, relative.
-    #[id = "strike"]
-    pub strike_position: FloatParam,
-    /// String damping, relative.
-    #[id = "damp"]
-    pub damping: FloatParam,
-    /// Inharmonicity, relative.
-    #[id = "bright"]
-    pub brightness: FloatParam,
-    /// Damper decay rate (1/s).
-    #[id = "damper"]
-    pub damper: FloatParam,
+param_group! {
+    /// The Piano group (relative to the per-note rule).
+    PianoParams {
+        /// Felt hardness, relative.
+        hardness: FloatParam = "hard",
+        /// Hammer mass, relative.
+        hammer_mass: FloatParam = "hmass",
+        /// Striking position, relative.
+        strike_position: FloatParam = "strike",
+        /// String damping, relative.
+        damping: FloatParam = "damp",
+        /// Inharmonicity, relative.
+        brightness: FloatParam = "bright",
+        /// Damper decay rate (1/s).
+        damper: FloatParam = "damper",
+    }
 }
 
-/// The Slide group.
-#[allow(missing_debug_implementations)]
-#[derive(Params)]
-pub struct SlideParams {
-    /// Slide position (semitones).
-    #[id = "slide"]
-    pub slide_position: FloatParam,
-    /// Slide follows the played key.
-    #[id = "follow"]
-    pub follow_key: BoolParam,
-    /// Glide time (ms).
-    #[id = "glide"]
-    pub glide: FloatParam,
-    /// Pitch-bend range (semitones).
-    #[id = "bend"]
-    pub bend_range: FloatParam,
-    /// Hand height (mm).
-    #[id = "hand"]
-    pub hand_height: FloatParam,
-    /// Where the hand height comes from.
-    #[id = "handsrc"]
-    pub hand_source: EnumParam<HandSourceParam>,
-    /// Slide mass (g).
-    #[id = "smass"]
-    pub slide_mass: FloatParam,
-    /// Hand stiffness (N/m).
-    #[id = "hstiff"]
-    pub hand_stiffness: FloatParam,
-    /// Hand damping (kg/s).
-    #[id = "hdamp"]
-    pub hand_damping: FloatParam,
-    /// Finger damping (s/m).
-    #[id = "fdamp"]
-    pub finger_damping: FloatParam,
-    /// Slide contact stiffness κ (N/m^α).
-    #[id = "kappa"]
-    pub kappa: FloatParam,
-    /// Slide contact exponent α.
-    #[id = "alpha"]
-    pub alpha: FloatParam,
-    /// Pluck position (fraction of the length).
-    #[id = "pluck"]
-    pub pluck_position: FloatParam,
-    /// Pickup position (fraction of the length).
-    #[id = "pickup"]
-    pub pickup_position: FloatParam,
+param_group! {
+    /// The Slide group.
+    SlideParams {
+        /// Slide position (semitones).
+        slide_position: FloatParam = "slide",
+        /// Slide follows the played key.
+        follow_key: BoolParam = "follow",
+        /// Glide time (ms).
+        glide: FloatParam = "glide",
+        /// Pitch-bend range (semitones).
+        bend_range: FloatParam = "bend",
+        /// Hand height (mm).
+        hand_height: FloatParam = "hand",
+        /// Where the hand height comes from.
+        hand_source: EnumParam<HandSourceParam> = "handsrc",
+        /// Slide mass (g).
+        slide_mass: FloatParam = "smass",
+        /// Hand stiffness (N/m).
+        hand_stiffness: FloatParam = "hstiff",
+        /// Hand damping (kg/s).
+        hand_damping: FloatParam = "hdamp",
+        /// Finger damping (s/m).
+        finger_damping: FloatParam = "fdamp",
+        /// Slide contact stiffness κ (N/m^α).
+        kappa: FloatParam = "kappa",
+        /// Slide contact exponent α.
+        alpha: FloatParam = "alpha",
+        /// Pluck position (fraction of the length).
+        pluck_position: FloatParam = "pluck",
+        /// Pickup position (fraction of the length).
+        pickup_position: FloatParam = "pickup",
+    }
 }
 
-/// The Output group.
-#[allow(missing_debug_implementations)]
-#[derive(Params)]
-pub struct OutputParams {
-    /// Output gain (linear, shown in dB).
-    #[id = "gain"]
-    pub gain: FloatParam,
-    /// Safety limiter on the output.
-    #[id = "limit"]
-    pub limiter: BoolParam,
-}
-
-/// A relative ("×") parameter on a log scale around 1.
-fn ratio(name: &str, min: f32, max: f32) -> FloatParam {
-    FloatParam::new(name, 1.0, FloatRange::Skewed { min, max, factor: FloatRange::skew_factor(-1.5) })
-        .with_unit("×")
-        .with_value_to_string(formatters::v2s_f32_rounded(2))
+param_group! {
+    /// The Output group.
+    OutputParams {
+        /// Output gain (linear, shown in dB).
+        gain: FloatParam = "gain",
+        /// Safety limiter on the output.
+        limiter: BoolParam = "limit",
+    }
 }
 
 impl Default for QsaParams {
     fn default() -> Self {
-        let d = Settings::default();
         Self {
-            engine: EngineParams {
-                mode: EnumParam::new("Mode", ModeParam::Piano),
-                solver: EnumParam::new("Solver", SolverParam::Qsa),
-                segments: IntParam::new("QSA segments", d.segments as i32, IntRange::Linear { min: 1, max: 64 }),
-                block: IntParam::new("Control block", d.block as i32, IntRange::Linear { min: 1, max: 256 })
-                    .with_unit(" smp"),
-                voices: IntParam::new("Voices", 32, IntRange::Linear { min: 1, max: 128 }),
-            },
-            piano: PianoParams {
-                hardness: ratio("Hardness", 0.1, 10.0),
-                hammer_mass: ratio("Hammer mass", 0.25, 4.0),
-                strike_position: ratio("Strike position", 0.25, 2.5),
-                damping: ratio("String damping", 0.1, 10.0),
-                brightness: FloatParam::new("Brightness", 1.0, FloatRange::Linear { min: 0.0, max: 4.0 })
-                    .with_unit("×")
-                    .with_value_to_string(formatters::v2s_f32_rounded(2)),
-                damper: FloatParam::new(
-                    "Damper",
-                    d.damper_rate as f32,
-                    FloatRange::Skewed { min: 1.0, max: 500.0, factor: FloatRange::skew_factor(-2.0) },
-                )
-                .with_unit(" 1/s")
-                .with_value_to_string(formatters::v2s_f32_rounded(1)),
-            },
-            slide: SlideParams {
-                slide_position: FloatParam::new(
-                    "Slide position",
-                    d.slide_position as f32,
-                    FloatRange::Linear { min: SLIDE_RANGE.0, max: SLIDE_RANGE.1 },
-                )
-                .with_unit(" st")
-                .with_value_to_string(formatters::v2s_f32_rounded(2))
-                .with_poly_modulation_id(POLY_SLIDE),
-                follow_key: BoolParam::new("Slide follows key", d.follow_key),
-                glide: FloatParam::new(
-                    "Glide time",
-                    (d.glide_time * 1000.0) as f32,
-                    FloatRange::Skewed { min: 1.0, max: 2000.0, factor: FloatRange::skew_factor(-2.0) },
-                )
-                .with_unit(" ms")
-                .with_value_to_string(formatters::v2s_f32_rounded(1)),
-                bend_range: FloatParam::new(
-                    "Bend range",
-                    d.bend_range as f32,
-                    FloatRange::Linear { min: 0.0, max: 24.0 },
-                )
-                .with_unit(" st")
-                .with_step_size(0.5),
-                hand_height: FloatParam::new(
-                    "Hand height",
-                    (d.hand_height * 1000.0) as f32,
-                    FloatRange::Linear { min: HAND_RANGE_MM.0, max: HAND_RANGE_MM.1 },
-                )
-                .with_unit(" mm")
-                .with_value_to_string(formatters::v2s_f32_rounded(2))
-                .with_poly_modulation_id(POLY_HAND),
-                hand_source: EnumParam::new("Hand height from", HandSourceParam::Parameter),
-                slide_mass: FloatParam::new(
-                    "Slide mass",
-                    (d.slide_mass * 1000.0) as f32,
-                    FloatRange::Skewed { min: 5.0, max: 200.0, factor: FloatRange::skew_factor(-1.5) },
-                )
-                .with_unit(" g")
-                .with_value_to_string(formatters::v2s_f32_rounded(1)),
-                hand_stiffness: FloatParam::new(
-                    "Hand stiffness",
-                    d.hand_stiffness as f32,
-                    FloatRange::Skewed { min: 1e2, max: 1e6, factor: FloatRange::skew_factor(-2.5) },
-                )
-                .with_unit(" N/m")
-                .with_value_to_string(formatters::v2s_f32_rounded(0)),
-                hand_damping: FloatParam::new(
-                    "Hand damping",
-                    d.hand_damping as f32,
-                    FloatRange::Linear { min: 0.0, max: 100.0 },
-                )
-                .with_unit(" kg/s")
-                .with_value_to_string(formatters::v2s_f32_rounded(1)),
-                finger_damping: FloatParam::new(
-                    "Finger damping",
-                    d.finger_damping as f32,
-                    FloatRange::Linear { min: 0.0, max: 50.0 },
-                )
-                .with_unit(" s/m")
-                .with_value_to_string(formatters::v2s_f32_rounded(1)),
-                kappa: FloatParam::new(
-                    "Slide stiffness",
-                    d.slide_kappa as f32,
-                    FloatRange::Skewed { min: 1e6, max: 1e13, factor: FloatRange::skew_factor(-3.0) },
-                )
-                .with_unit(" N/m^a")
-                .with_value_to_string(Arc::new(|v| format!("{v:.2e}"))),
-                alpha: FloatParam::new(
-                    "Slide exponent",
-                    d.slide_alpha as f32,
-                    FloatRange::Linear { min: 1.0, max: 3.0 },
-                )
-                .with_value_to_string(formatters::v2s_f32_rounded(2)),
-                pluck_position: FloatParam::new(
-                    "Pluck position",
-                    d.pluck_position as f32,
-                    FloatRange::Linear { min: 0.5, max: 0.98 },
-                )
-                .with_value_to_string(formatters::v2s_f32_rounded(3)),
-                pickup_position: FloatParam::new(
-                    "Pickup position",
-                    d.pickup_position as f32,
-                    FloatRange::Linear { min: 0.5, max: 0.98 },
-                )
-                .with_value_to_string(formatters::v2s_f32_rounded(3)),
-            },
-            output: OutputParams {
-                gain: FloatParam::new(
-                    "Output gain",
-                    1.0,
-                    FloatRange::Skewed {
-                        min: util::db_to_gain(-36.0),
-                        max: util::db_to_gain(12.0),
-                        factor: FloatRange::gain_skew_factor(-36.0, 12.0),
-                    },
-                )
-                .with_unit(" dB")
-                .with_value_to_string(formatters::v2s_f32_gain_to_db(1))
-                .with_string_to_value(formatters::s2v_f32_gain_to_db()),
-                limiter: BoolParam::new("Safety limiter", d.limiter),
-            },
+            engine: EngineParams::default(),
+            piano: PianoParams::default(),
+            slide: SlideParams::default(),
+            output: OutputParams::default(),
             preset: Arc::new(std::sync::RwLock::new(String::new())),
         }
     }
@@ -391,48 +365,14 @@ impl Default for QsaParams {
 
 impl QsaParams {
     /// The plain parameter values, as the shared mapping to engine settings takes them.
+    /// Allocation-free.
     pub fn values(&self) -> ParamValues {
-        ParamValues {
-            mode: match self.engine.mode.value() {
-                ModeParam::Piano => Mode::Piano,
-                ModeParam::Slide => Mode::Slide,
-            },
-            method: match self.engine.solver.value() {
-                SolverParam::Qsa => Method::Qsa,
-                SolverParam::Exp => Method::Exp,
-                SolverParam::Imp => Method::Imp,
-            },
-            segments: self.engine.segments.value(),
-            block: self.engine.block.value(),
-            voices: self.engine.voices.value(),
-            hardness: self.piano.hardness.value(),
-            hammer_mass: self.piano.hammer_mass.value(),
-            strike_position: self.piano.strike_position.value(),
-            damping: self.piano.damping.value(),
-            brightness: self.piano.brightness.value(),
-            damper: self.piano.damper.value(),
-            slide_position: self.slide.slide_position.value(),
-            follow_key: self.slide.follow_key.value(),
-            glide_ms: self.slide.glide.value(),
-            bend_range: self.slide.bend_range.value(),
-            hand_mm: self.slide.hand_height.value(),
-            hand_source: match self.slide.hand_source.value() {
-                HandSourceParam::Parameter => HandSource::Parameter,
-                HandSourceParam::ModWheel => HandSource::ModWheel,
-                HandSourceParam::ChannelPressure => HandSource::ChannelPressure,
-                HandSourceParam::PolyPressure => HandSource::PolyPressure,
-            },
-            slide_mass_g: self.slide.slide_mass.value(),
-            hand_stiffness: self.slide.hand_stiffness.value(),
-            hand_damping: self.slide.hand_damping.value(),
-            finger_damping: self.slide.finger_damping.value(),
-            kappa: self.slide.kappa.value(),
-            alpha: self.slide.alpha.value(),
-            pluck_position: self.slide.pluck_position.value(),
-            pickup_position: self.slide.pickup_position.value(),
-            gain: self.output.gain.value(),
-            limiter: self.output.limiter.value(),
-        }
+        let mut values = ParamValues::default();
+        self.engine.read(&mut values);
+        self.piano.read(&mut values);
+        self.slide.read(&mut values);
+        self.output.read(&mut values);
+        values
     }
 
     /// The engine settings these parameters describe. Allocation-free (called every process
@@ -456,6 +396,79 @@ mod tests {
         let ids: Vec<String> = params.param_map().into_iter().map(|(id, _, _)| id).collect();
         assert_eq!(ids, PARAM_IDS.map(String::from).to_vec());
         assert_eq!(params.values(), ParamValues::default());
+    }
+
+    /// Every parameter is the table's: name, group, unit, default, range, step count and poly
+    /// modulation; choices list the table's options (names and ids) in its order.
+    #[test]
+    #[allow(unsafe_code)] // nice-plug's type-erased parameter calls are `unsafe`; see SAFETY.
+    fn every_parameter_is_its_table_entry() {
+        let params = QsaParams::default();
+        let map = params.param_map();
+        assert_eq!(map.len(), PARAMETERS.len());
+        for ((id, param, group), spec) in map.into_iter().zip(&PARAMETERS) {
+            assert_eq!((id.as_str(), group.as_str()), (spec.id, spec.group.name()));
+            // SAFETY: `param` comes from the parameter map of `params`, which lives to the end of
+            // the test, so it points at a live parameter.
+            let (name, unit, default, steps, poly, bottom, top) = unsafe {
+                (
+                    param.name(),
+                    param.unit(),
+                    param.default_plain_value(),
+                    param.step_count(),
+                    param.poly_modulation_id(),
+                    param.preview_plain(0.0),
+                    param.preview_plain(1.0),
+                )
+            };
+            assert_eq!(name, spec.name, "{id}");
+            assert_eq!(default, spec.default_plain(), "{id}: default");
+            assert_eq!(steps.map(|s| s as u32), spec.step_count(), "{id}: step count");
+            let (min, max) = match spec.kind {
+                ParamKind::Float { min, max, unit: u, poly: p, .. } => {
+                    assert_eq!(unit, u, "{id}: unit");
+                    assert_eq!(poly, p.map(poly_id), "{id}: poly modulation");
+                    (spec.to_plain(min), spec.to_plain(max))
+                }
+                ParamKind::Int { min, max, unit: u, .. } => {
+                    assert_eq!(unit, u, "{id}: unit");
+                    (min as f32, max as f32)
+                }
+                ParamKind::Bool { .. } => (0.0, 1.0),
+                ParamKind::Choice { options, .. } => {
+                    let (names, ids) = match id.as_str() {
+                        "mode" => (ModeParam::variants(), ModeParam::ids()),
+                        "solver" => (SolverParam::variants(), SolverParam::ids()),
+                        "handsrc" => (HandSourceParam::variants(), HandSourceParam::ids()),
+                        _ => panic!("{id}: a choice without its enum here"),
+                    };
+                    assert_eq!(names, options.iter().map(|(_, name)| *name).collect::<Vec<_>>(), "{id}");
+                    assert_eq!(ids, Some(&options.iter().map(|(id, _)| *id).collect::<Vec<_>>()[..]), "{id}");
+                    (0.0, (options.len() - 1) as f32)
+                }
+            };
+            let near = |a: f32, b: f32| (a - b).abs() <= 1e-6 * a.abs().max(b.abs()).max(1.0);
+            assert!(near(bottom, min) && near(top, max), "{id}: range {bottom}..={top}, table {min}..={max}");
+        }
+    }
+
+    /// The table at the top of this file is the parameter table's, row by row.
+    #[test]
+    fn the_documentation_table_is_the_parameter_table() {
+        let source = include_str!("params.rs");
+        let documented: Vec<&str> = source.lines().filter(|l| l.starts_with("//! | `")).collect();
+        let expected: Vec<String> = PARAMETERS
+            .iter()
+            .map(|p| {
+                format!("//! | `{}` | {} | {} | {} | {} |", p.id, p.name, p.range_text(), p.default_text(), p.maps_to)
+            })
+            .collect();
+        assert!(
+            documented == expected,
+            "the module documentation's table should read:\n//! | id | name | range | default | maps to |\n//! \
+             |---|---|---|---|---|\n{}",
+            expected.join("\n")
+        );
     }
 
     /// Every parameter is in the group of the editor section that shows it.

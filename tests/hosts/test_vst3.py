@@ -1,8 +1,9 @@
 """The bundled VST3 plugin in a real host: pedalboard (JUCE's VST3 hosting, from PyPI).
 
-Run from the workspace root with ``python3 -m pytest -q tests/hosts/test_vst3.py`` (the Rust test
-``tests/tests/host_vst3.rs`` does, inside ``cargo test``). Needs ``pedalboard mido numpy pytest``
-and ``target/bundled/QSA Strings.vst3`` (``cargo xtask bundle qsa-plugin --release``).
+Run from the workspace root with ``target/python-venv/bin/python -m pytest -q tests/hosts/test_vst3.py``
+(the Rust test ``tests/tests/host_vst3.rs`` does, inside ``cargo test``). Needs
+``pedalboard==0.9.26 mido numpy pytest`` (``cargo xtask test`` installs them into that virtual
+environment) and ``target/bundled/QSA Strings.vst3`` (``cargo xtask bundle qsa-plugin --release``).
 
 - pedalboard loads the bundle as an instrument and sees the documented parameters under its
   python names (name + unit: ``mode``, ``slide_position_st``, ...);
@@ -17,7 +18,8 @@ text conversions when it loads a plugin and again on the first attribute access,
 40 s each here. The fixture below therefore skips that eager probe while loading and wraps only
 the parameters a test uses in pedalboard's own ``AudioProcessorParameter`` (the object its
 attribute access uses, with the same value conversion). Names come from pedalboard's own naming
-function. These are pedalboard 0.9 internals: ``.ci/run`` pins the version.
+function. These are pedalboard 0.9 internals: ``cargo xtask test`` pins the version
+(``xtask/src/python_venv.rs``).
 """
 
 import contextlib
@@ -38,7 +40,8 @@ BUNDLE = pathlib.Path(
 )
 FS = 48_000
 
-# Documented parameters (plugin/src/params.rs) under pedalboard's python names.
+# Documented parameters (plugin/src/params.rs) under pedalboard's python names; the names are the
+# documentation table's (checked below), which a Rust test checks against the parameter table.
 DOCUMENTED = {
     "mode": "Mode",
     "solver": "Solver",
@@ -200,6 +203,22 @@ def assert_pitch(measured, expected, what):
     error = measured / expected - 1
     print(f"{what}: {measured:.3f} Hz (expected {expected:.3f} Hz, {100 * error:+.3f} %)")
     assert abs(error) < PITCH_TOLERANCE, f"{what}: {measured} Hz, expected {expected} Hz within 1 %"
+
+
+def documentation_table():
+    """(id, name) of every row of plugin/src/params.rs's parameter table, in order."""
+    rows = []
+    for line in (ROOT / "plugin" / "src" / "params.rs").read_text(encoding="utf-8").splitlines():
+        if line.startswith("//! | `"):
+            cells = [c.strip() for c in line[len("//! |"):].split("|")]
+            rows.append((cells[0].strip("`"), cells[1]))
+    return rows
+
+
+def test_documented_names_are_the_parameter_tables():
+    rows = documentation_table()
+    assert len(rows) == 27, "27 parameters in the documentation table"
+    assert list(DOCUMENTED.values()) == [name for _, name in rows], "names, in the table's order"
 
 
 def test_loads_as_an_instrument_with_the_documented_parameters(synth):

@@ -3,8 +3,9 @@
 //! - Running a mass–barrier scene with any of the three contact solvers, either for a fixed
 //!   number of steps or until the contact has ended ([`run_mass_barrier`], [`run_scheme`]).
 //! - Measurements on a trajectory: energy drift, contact duration, rebound velocity, the
-//!   normalised L2 force difference of physics §9.4 ([`Trajectory`], [`log10_rel_l2`]).
-//! - The analytic Hertz contact of a mass on a rigid barrier (physics §9.1): the Gamma function
+//!   normalised L2 force difference of docs/physics.md §9.4 ([`Trajectory`]; [`log10_rel_l2`] is
+//!   the report's, re-exported so the tests and the report measure it one way).
+//! - The analytic Hertz contact of a mass on a rigid barrier (docs/physics.md §9.1): the Gamma function
 //!   ([`gamma`]), the integral `I_n` in closed form and by quadrature ([`hertz_integral`],
 //!   [`hertz_integral_quadrature`]) and the closed-form peak compression and contact time
 //!   ([`HertzContact`]).
@@ -16,10 +17,11 @@
 use qsa_dsp::contact::{
     ContactError, ContactSolver, ExplicitSolver, NewtonSolver, PowerLaw, QsaSolver, QuadSpline, SegmentSearch,
 };
-use qsa_dsp::render::contact_intervals;
 use qsa_dsp::scene::{Frame, MassBarrier, MassBarrierParams, Scene};
+use qsa_dsp::scene_file::contact_intervals;
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
+pub use xtask::report::error::log10_rel_l2;
 
 // ------------------------------------------------------------------------------------------------
 // Running a mass–barrier
@@ -129,7 +131,7 @@ impl Scheme {
 }
 
 /// The QSA spline a mass–barrier scene would use: fitted up to the compression that stores the
-/// whole kinetic energy `½ m v0²` (physics §1.2).
+/// whole kinetic energy `½ m v0²` (docs/physics.md §1.2).
 pub fn scene_spline(law: PowerLaw, params: &MassBarrierParams, segments: usize) -> Result<QuadSpline, ContactError> {
     QuadSpline::from_reference_energy(law, params.max_contact_energy(), segments)
 }
@@ -152,7 +154,7 @@ pub fn run_scheme(
     }
 }
 
-/// The seed's Fig. 4 case (physics §8.1): 10 g at 2 m/s from u0 = −1 mm onto a barrier at 0.
+/// The seed's Fig. 4 case (docs/physics.md §8.1): 10 g at 2 m/s from u0 = −1 mm onto a barrier at 0.
 pub fn fig4_params() -> MassBarrierParams {
     MassBarrierParams { mass: 0.01, u0: -1e-3, v0: 2.0, barrier: 0.0 }
 }
@@ -242,25 +244,8 @@ pub fn dc_db(x: &[f64], range: std::ops::Range<usize>) -> f64 {
     20.0 * (dc.abs() / rms).log10()
 }
 
-/// `log10(‖a − b‖₂ / ‖b‖₂)`: the normalised L2 difference of two signals (physics §9.4's dF,
-/// with `b` the reference). Signals of different lengths are compared over the longer one,
-/// missing samples counting as 0.
-pub fn log10_rel_l2(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len().max(b.len());
-    let at = |v: &[f64], i: usize| v.get(i).copied().unwrap_or(0.0);
-    let mut diff = 0.0;
-    let mut norm = 0.0;
-    for i in 0..n {
-        let d = at(a, i) - at(b, i);
-        diff += d * d;
-        norm += at(b, i) * at(b, i);
-    }
-    assert!(norm > 0.0, "reference signal is zero");
-    0.5 * (diff / norm).log10()
-}
-
 // ------------------------------------------------------------------------------------------------
-// Analytic Hertz contact (physics §9.1)
+// Analytic Hertz contact (docs/physics.md §9.1)
 // ------------------------------------------------------------------------------------------------
 
 /// Lanczos coefficients (g = 7, 9 terms); relative accuracy about 1e-15 for real arguments.
@@ -290,7 +275,7 @@ pub fn gamma(x: f64) -> f64 {
     (2.0 * PI).sqrt() * t.powf(x + 0.5) * (-t).exp() * series
 }
 
-/// `I_n = ∫_0^1 (1 − x^n)^(−1/2) dx = √π Γ(1 + 1/n) / Γ(1/n + 1/2)` (physics §9.1), n = α + 1.
+/// `I_n = ∫_0^1 (1 − x^n)^(−1/2) dx = √π Γ(1 + 1/n) / Γ(1/n + 1/2)` (docs/physics.md §9.1), n = α + 1.
 pub fn hertz_integral(n: f64) -> f64 {
     std::f64::consts::PI.sqrt() * gamma(1.0 + 1.0 / n) / gamma(1.0 / n + 0.5)
 }
@@ -330,7 +315,7 @@ pub fn hertz_integral_quadrature(n: f64) -> f64 {
 }
 
 /// Closed-form contact of a mass `m` (kg) hitting a rigid barrier at `v0` (m/s) with the law
-/// `F = −κ[y]+^α` (physics §9.1).
+/// `F = −κ[y]+^α` (docs/physics.md §9.1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HertzContact {
     /// Peak compression `y_max = (n m v0²/(2κ))^(1/n)`, n = α + 1 (m).

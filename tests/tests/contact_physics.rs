@@ -1,7 +1,7 @@
 //! Physics tests of the contact engine: the quadratic spline approximation (QSA), its
 //! non-iterative solver, and the Newton (IMP) and explicit (EXP) references, checked on the
-//! mass–barrier scene against closed forms and the measured numbers of
-//! `shared/reference/physics.md` (cited as "physics §x").
+//! mass–barrier scene against closed forms and the measured numbers of docs/physics.md (cited
+//! as "docs/physics.md §x").
 //!
 //! Every test prints the numbers it measures (`cargo test ... -- --nocapture`).
 
@@ -24,7 +24,7 @@ fn until_contact_ends(max_steps: usize) -> Stop {
 }
 
 /// The seed's Fig. 5 hammer (Chaigne & Askenfelt C4: 2.97 g, κ = 4.5e9 N/m^2.5, α = 2.5) hitting
-/// a rigid barrier at 3.5 m/s from 1 mm away (physics §9.1, second row of the table).
+/// a rigid barrier at 3.5 m/s from 1 mm away (docs/physics.md §9.1, second row of the table).
 fn fig5_hammer_on_barrier() -> (PowerLaw, MassBarrierParams) {
     let law = PowerLaw::new(4.5e9, 2.5).expect("valid law");
     (law, MassBarrierParams { mass: 2.97e-3, u0: -1e-3, v0: 3.5, barrier: 0.0 })
@@ -35,8 +35,8 @@ fn fig5_hammer_on_barrier() -> (PowerLaw, MassBarrierParams) {
 // ------------------------------------------------------------------------------------------------
 
 /// For α = 1 the potential is quadratic on y ≥ 0 and the spline reproduces it exactly
-/// (physics §1.5), so QSA and IMP solve the same discrete-gradient equation and must give the same
-/// trajectory for every N and every stiffness, up to rounding (physics §9.2: positions within
+/// (docs/physics.md §1.5), so QSA and IMP solve the same discrete-gradient equation and must give the same
+/// trajectory for every N and every stiffness, up to rounding (docs/physics.md §9.2: positions within
 /// 2e-13·y_max at κ = 1e8, ≈ 4e-15 m at κ = 1e12; forces within 1e-14 relative). Tolerance: positions
 /// within 1e-12 of max|u| (max|u| includes the 1 mm approach), forces within 1e-12 of max|F|.
 #[test]
@@ -71,7 +71,7 @@ fn max_abs_diff(a: &[Frame], b: &[Frame], field: impl Fn(&Frame) -> f64) -> f64 
 
 /// In contact with α = 1 the discrete-gradient scheme is linear,
 /// `m δ_tt y = −κ (y^{n+1} + y^{n−1})/2`, and oscillates at ω̃ with
-/// `cos(ω̃Δt) = 1/(1 + ½ω²Δt²)`, ω² = κ/m (physics §9.2; κ = 1e6, m = 10 g, 44.1 kHz gives
+/// `cos(ω̃Δt) = 1/(1 + ½ω²Δt²)`, ω² = κ/m (docs/physics.md §9.2; κ = 1e6, m = 10 g, 44.1 kHz gives
 /// ω̃/ω = 0.9895). A mass started at phase φ of `y^n = A sin(φ + ω̃nΔt)` must follow it while
 /// y^{n−1}, y^n, y^{n+1} are all positive. Tolerance 1e-13·A: the prototype matched to 8e-16 relative,
 /// and rounding of order ε·A per step accumulates over the ~10 in-contact steps.
@@ -82,7 +82,7 @@ fn alpha_one_in_contact_oscillation_matches_closed_form() {
     let omega = (kappa / mass).sqrt();
     let omega_t = (1.0 / (1.0 + 0.5 * omega * omega * dt * dt)).acos() / dt;
     println!("ω̃/ω = {:.5}", omega_t / omega);
-    assert!((omega_t / omega - 0.9895).abs() < 5e-5, "ω̃/ω = {} (physics §9.2: 0.9895)", omega_t / omega);
+    assert!((omega_t / omega - 0.9895).abs() < 5e-5, "ω̃/ω = {} (docs/physics.md §9.2: 0.9895)", omega_t / omega);
     let (amplitude, phase) = (1e-4, std::f64::consts::FRAC_PI_4);
     let exact = |n: f64| amplitude * (phase + omega_t * n * dt).sin();
     let params = MassBarrierParams { mass, u0: exact(0.0), v0: (exact(0.0) - exact(-1.0)) / dt, barrier: 0.0 };
@@ -110,9 +110,9 @@ fn alpha_one_in_contact_oscillation_matches_closed_form() {
 // ------------------------------------------------------------------------------------------------
 
 /// All three schemes conserve their numerical energy H^{n+1/2} exactly in exact arithmetic
-/// (physics §2, §4.2); in f64 the prototype measured ≤ 4.9e-15 on Fig. 4 (physics §9.4). Over
+/// (docs/physics.md §2, §4.2); in f64 the prototype measured ≤ 4.9e-15 on Fig. 4 (docs/physics.md §9.4). Over
 /// 1,000 steps (approach, contact, and ~45 mm of rebound flight, whose kinetic energy is computed
-/// from differences of growing positions) the suggested tolerance is 1e-12 (physics §9.4).
+/// from differences of growing positions) the suggested tolerance is 1e-12 (docs/physics.md §9.4).
 #[test]
 fn energy_is_conserved_over_1000_steps_on_fig4() {
     for scheme in [Scheme::qsa(5), Scheme::Imp, Scheme::Exp] {
@@ -134,7 +134,7 @@ fn energy_is_conserved_over_40000_step_sustained_contacts() {
     let steps = 40_000;
     let mut worst = 0.0_f64;
     for alpha in [1.0, 1.5, 2.5, 4.0] {
-        // Invert physics §9.1 for κ: y_max = T_c v0 / (2 I_n), κ = n m v0² / (2 y_max^n).
+        // Invert docs/physics.md §9.1 for κ: y_max = T_c v0 / (2 I_n), κ = n m v0² / (2 y_max^n).
         let n = alpha + 1.0;
         let y_max = contact_time * v0 / (2.0 * hertz_integral(n));
         let kappa = n * mass * v0 * v0 / (2.0 * y_max.powf(n));
@@ -166,11 +166,11 @@ fn assert_matches_table(what: &str, value: f64, table: f64, last_digit: f64, uni
     let tolerance = 1.02 * units * last_digit;
     assert!(
         (value - table).abs() <= tolerance,
-        "{what}: computed {value:e}, physics §9.1 table gives {table:e} (±{tolerance:e})"
+        "{what}: computed {value:e}, docs/physics.md §9.1 table gives {table:e} (±{tolerance:e})"
     );
 }
 
-/// The integral `I_n = ∫_0^1 (1 − x^n)^(−1/2) dx` that sets the Hertz contact time (physics §9.1):
+/// The integral `I_n = ∫_0^1 (1 − x^n)^(−1/2) dx` that sets the Hertz contact time (docs/physics.md §9.1):
 /// the Gamma-function closed form must agree with quadrature to 1e-10 (as in the prototype), give
 /// π/2 for n = 2, reproduce the classical Hertz coefficient 3.2181 for α = 1.5, and reproduce the
 /// worked numbers of the §9.1 table to the digits printed there (±½ unit of the last digit; the
@@ -219,7 +219,7 @@ fn hertz_closed_form_matches_quadrature_and_table() {
     }
 }
 
-/// The discrete contact converges to the analytic Hertz contact (physics §9.1) as the sample rate
+/// The discrete contact converges to the analytic Hertz contact (docs/physics.md §9.1) as the sample rate
 /// rises through 44.1 kHz × {1, 2, 4, 8}, for IMP and for QSA with N = 30 and 100 (V_ref = ½mv0²,
 /// so the last knot sits exactly at y_max and the spline stores the right energy there).
 ///
@@ -233,7 +233,7 @@ fn hertz_closed_form_matches_quadrature_and_table() {
 ///   bounded by `B = aΔt²/(8 y_max)`, which falls 4× per doubling (the error itself is not
 ///   monotone: it depends on where the samples fall). Asserted: −0.1B ≤ error ≤ 1.1B (the margins
 ///   cover the O(Δt⁴) terms, at most 0.04B at 44.1 kHz) and error < 1 % at 8×.
-/// - The lossless rebound velocity equals −v0 to 1e-8 relative (measured ~1e-14, physics §9.1).
+/// - The lossless rebound velocity equals −v0 to 1e-8 relative (measured ~1e-14, docs/physics.md §9.1).
 #[test]
 fn hertz_contact_converges_with_sample_rate() {
     let cases = [("Fig. 4", fig4_law(), fig4_params()), {
@@ -289,7 +289,7 @@ fn hertz_contact_converges_with_sample_rate() {
 // Fig. 4: entry phase
 // ------------------------------------------------------------------------------------------------
 
-/// The point of the seed's Fig. 4 (physics §4.4): shifting the entry instant by a sub-sample phase
+/// The point of the seed's Fig. 4 (docs/physics.md §4.4): shifting the entry instant by a sub-sample phase
 /// only time-shifts the IMP and QSA trajectories, so their contact duration is phase independent,
 /// while EXP's is not. Over 40 phases (u0 shifted by phase·v0·Δt), the spread of the interpolated
 /// contact duration must be < 0.05 samples for IMP and QSA (N = 5) and > 0.5 samples for EXP
@@ -377,7 +377,7 @@ fn spline_errors(spline: &QuadSpline, lo: f64, hi: f64, points: usize) -> (f64, 
     (value, slope)
 }
 
-/// For α = 1 the recursion gives A_j = κ/2 and D_j = κ y_j, so V̂ ≡ V (physics §1.5; the prototype
+/// For α = 1 the recursion gives A_j = κ/2 and D_j = κ y_j, so V̂ ≡ V (docs/physics.md §1.5; the prototype
 /// measured |V̂ − V| ≤ 8e-16·V(y_ref) for N up to 1000). Tolerance 1e-14·V(y_ref) on a grid of
 /// 20,000 points (18 or more per segment) over [−0.1 y_ref, y_ref]. The slope V̂' is exact too,
 /// but the knot slopes D_j = D_{j−1} + 2A_jΔy accumulate the rounding of each A_j (whose numerator
@@ -397,7 +397,7 @@ fn spline_is_exact_for_alpha_one() {
     }
 }
 
-/// The branched solve needs a convex spline, A_j > 0 for every segment (physics §1.5, §10.8); the
+/// The branched solve needs a convex spline, A_j > 0 for every segment (docs/physics.md §1.5, §10.8); the
 /// fit must succeed and every curvature must be positive for α ∈ [1, 4] and N ∈ [1, 1000]. (The
 /// curvatures zigzag for α < 2, which is allowed.)
 #[test]
@@ -414,7 +414,7 @@ fn spline_is_convex_for_alpha_1_to_4() {
     }
 }
 
-/// The accuracy table of physics §1.5: max |V̂ − V| over [0, y_ref] normalised by V(y_ref), and
+/// The accuracy table of docs/physics.md §1.5: max |V̂ − V| over [0, y_ref] normalised by V(y_ref), and
 /// max |V̂' − V'| normalised by V'(y_ref), for α ∈ {1.3, 2.5, 4} and N ∈ {3, 5, 10, 30, 100}, with
 /// the obvious definition (knots y_j = j·y_ref/N, uniform grid of 200,000 points over [0, y_ref]).
 /// Must agree with the table within a factor 1.5 (the table has two significant digits).
@@ -448,7 +448,7 @@ fn spline_accuracy_matches_reference_table() {
 // ------------------------------------------------------------------------------------------------
 
 /// The linear scan, the binary search and the warm-started search locate the same segment and then
-/// run the same arithmetic, so whole trajectories must be bit-identical (physics §3.2: the
+/// run the same arithmetic, so whole trajectories must be bit-identical (docs/physics.md §3.2: the
 /// prototype found bit-identical trajectories for linear vs binary). 300 seeded random mass–barrier
 /// runs: κ ∈ [1e2, 1e15] (log), α ∈ [1, 4], N ∈ [1, 64], m ∈ [1 g, 1 kg] (log), v0 ∈ [1 mm/s, 50 m/s]
 /// (log), fs ∈ [22.05, 192] kHz, V_ref ∈ [0.1, 10]·½mv0² (so compressions beyond y_N, segment N,
@@ -697,17 +697,17 @@ fn qsa_root_lies_in_its_segment_and_solves_g() {
 // QSA against IMP
 // ------------------------------------------------------------------------------------------------
 
-/// QSA converges to IMP as N grows (physics §9.4, Fig. 4 case, u0 = −1 mm):
+/// QSA converges to IMP as N grows (docs/physics.md §9.4, Fig. 4 case, u0 = −1 mm):
 /// dF = log10(‖F_QSA − F_IMP‖/‖F_IMP‖) over the force signal was −2.24 at N = 3 and −4.08 at
 /// N = 50 in the prototype. Asserted: dF ≤ −2.0 at N = 3, ≤ −3.8 at N = 50, and the trend
-/// dF(50) < dF(5) − 1 (physics §9.4: agreement is not monotone in N, so only a trend is asserted).
+/// dF(50) < dF(5) − 1 (docs/physics.md §9.4: agreement is not monotone in N, so only a trend is asserted).
 #[test]
 fn qsa_force_approaches_imp_as_segments_increase() {
     let stop = Stop::Steps(1_000);
     let imp = run_scheme(Scheme::Imp, fig4_law(), fig4_params(), FIG4_SAMPLE_RATE, stop);
     let df = |segments| {
         let qsa = run_scheme(Scheme::qsa(segments), fig4_law(), fig4_params(), FIG4_SAMPLE_RATE, stop);
-        log10_rel_l2(&qsa.forces(), &imp.forces())
+        log10_rel_l2(qsa.forces().into_iter().zip(imp.forces()))
     };
     let mut line = String::from("Fig. 4 dF:");
     for n in [1, 2, 3, 5, 8, 13, 20, 50, 100, 300] {
@@ -724,12 +724,12 @@ fn qsa_force_approaches_imp_as_segments_increase() {
 // Robustness sweep
 // ------------------------------------------------------------------------------------------------
 
-/// 540 extreme QSA combinations (physics §3.5): κ ∈ {1e5, 1e8, 1e12, 1e15}, α ∈ {1, 1.5, 2.5, 3, 4},
+/// 540 extreme QSA combinations (docs/physics.md §3.5): κ ∈ {1e5, 1e8, 1e12, 1e15}, α ∈ {1, 1.5, 2.5, 3, 4},
 /// v0 ∈ {1e-3, 2, 50} m/s, fs ∈ {22.05k, 44.1k, 192k}, N ∈ {1, 5, 30}; mass 10 g, entry 2.5 samples
 /// after the start, run until 5 samples after the contact or 40,000 steps. IMP and EXP run the 180
 /// (κ, α, v0, fs) combinations. Every frame must be finite, the energy drift ≤ 1e-7 relative
-/// (physics §3.5 measured 1.8e-8 worst with the re-centred root), and where the contact finished
-/// inside the run, the rebound speed equals v0 to 1e-7 (a drift d changes it by d/2; physics §9.4
+/// (docs/physics.md §3.5 measured 1.8e-8 worst with the re-centred root), and where the contact finished
+/// inside the run, the rebound speed equals v0 to 1e-7 (a drift d changes it by d/2; docs/physics.md §9.4
 /// measured ≤ 2e-8).
 #[test]
 fn extreme_parameter_sweep_is_finite_and_conserves_energy() {

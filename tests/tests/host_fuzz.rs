@@ -41,7 +41,7 @@ use host::{Ev, PARAMETERS, Plugin, Score, clap_id, release_bundle};
 const FS: f64 = 48_000.0;
 
 /// Largest host buffer (the instance is activated for it).
-const MAX_BLOCK: usize = 4096;
+const MAX_HOST_BUFFER: usize = 4096;
 
 /// Samples between consecutive permutations within a run.
 const INTERVALS: [usize; 4] = [1, 10, 100, 1_000];
@@ -349,10 +349,10 @@ impl Generator {
 fn block_size(rng: &mut Pcg64) -> usize {
     match rng.random_range(0..10) {
         0 => 1,
-        1 => MAX_BLOCK,
+        1 => MAX_HOST_BUFFER,
         2 | 3 => rng.random_range(1..=16),
         4 | 5 => 1 << rng.random_range(5..=12),
-        _ => rng.random_range(1..=MAX_BLOCK),
+        _ => rng.random_range(1..=MAX_HOST_BUFFER),
     }
 }
 
@@ -451,7 +451,7 @@ fn random_parameter_permutations_never_give_a_non_finite_or_loud_sample() {
     let sounding =
         |t: usize| (onsets.partition_point(|&s| s <= t) - onsets.partition_point(|&s| s + SOUNDING <= t)).max(1);
     let bundle = release_bundle();
-    let mut plugin = Plugin::new(&bundle, FS, MAX_BLOCK, &[]);
+    let mut plugin = Plugin::new(&bundle, FS, MAX_HOST_BUFFER, &[]);
     // Each permutation's peak and the sample it is at.
     let mut peaks = vec![(0.0f32, 0usize); count];
     // The largest sample over the notes that may sound, where, and how many.
@@ -544,18 +544,18 @@ fn random_parameter_permutations_never_give_a_non_finite_or_loud_sample() {
     );
     println!("note-ons by mode (Piano, Slide) and solver (QSA, EXP, IMP): {:?}", run.notes_by_setting);
     println!(
-        "host buffers: {} of 1..={} samples (1: {}, {MAX_BLOCK}: {}); permutations changing inside a buffer at \
+        "host buffers: {} of 1..={} samples (1: {}, {MAX_HOST_BUFFER}: {}); permutations changing inside a buffer at \
          intervals {INTERVALS:?}: {inside:?}",
         blocks.len(),
         blocks.iter().max().copied().unwrap_or(0),
         blocks.iter().filter(|&&n| n == 1).count(),
-        blocks.iter().filter(|&&n| n == MAX_BLOCK).count(),
+        blocks.iter().filter(|&&n| n == MAX_HOST_BUFFER).count(),
     );
     // The run covered what it claims to (a short replay need not).
     if count >= DEFAULT_PERMUTATIONS {
         let fewest = run.notes_by_setting.iter().flatten().min().copied().unwrap_or(0);
         assert!(fewest >= 10, "a mode and solver pairing started only {fewest} notes: {:?}", run.notes_by_setting);
         assert!(inside.iter().all(|&n| n > 0), "a permutation interval never landed inside a buffer: {inside:?}");
-        assert!(blocks.contains(&1) && blocks.contains(&MAX_BLOCK), "buffers of 1 and {MAX_BLOCK} samples");
+        assert!(blocks.contains(&1) && blocks.contains(&MAX_HOST_BUFFER), "buffers of 1 and {MAX_HOST_BUFFER} samples");
     }
 }

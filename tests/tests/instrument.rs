@@ -10,7 +10,7 @@ use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use qsa_dsp::contact::Method;
-use qsa_dsp::instrument::{Event, Instrument, Mode, NoteParam, NoteTarget, Settings};
+use qsa_dsp::instrument::{Event, Instrument, Mode, NoteParam, NoteTarget, STEAL_TIME, Settings};
 use qsa_dsp::preset::key_frequency;
 use qsa_tests::{CLICK_DB, click_strength, fundamental, seeded_rng, spectral_peak};
 use rand::RngExt;
@@ -156,10 +156,19 @@ fn damper_and_sustain_pedal() {
     assert!(d < 1e-3 * h, "the damper silences the note: {d} vs {h}");
 }
 
-/// Striking a sounding key again strikes the same, still vibrating string: one voice, and the
-/// second strike adds to the vibration. 0.1 s after a mezzo-forte C4 the string still holds
-/// `E_before`; a second, equal strike leaves it with more (measured 1.6× `E_before`), and never
-/// with more than `E_before` plus the hammer's kinetic energy (the felt only takes energy away).
+/// Striking a sounding key again strikes the same, still vibrating string: one voice, whose
+/// energy (string and hammer, [`Monitor::energy`](qsa_dsp::instrument::Monitor)) rises by what
+/// the new hammer brings less what stays outside the string.
+///
+/// 0.1 s after a mezzo-forte C4 the voice holds `E_before`: the string's vibration and the first
+/// hammer's kinetic energy after its rebound, `E_r`. The re-strike swaps the hammers (the new
+/// one's `E_h = ½ m v²` in, `E_r` out) and the felt only passes energy on, so 20 ms later
+/// `E_after − E_before = E_h − E_r − D`, `D` what the string's damping took meanwhile: at most
+/// `E_h`, and at least half of it, since the first strike, on the string at rest, left
+/// `E_r` = 0.416 `E_h` in its hammer (QSA and IMP alike, `piano_voice.rs`) and 20 ms of damping
+/// take 0.04 `E_h` (measured there too; allowed twice that): `1 − 0.416 − 0.08 > 0.5`. Measured
+/// 0.545 `E_h`. What the string itself gains at each phase of its swing is checked in
+/// `piano_voice.rs` (`a_restrike_adds_what_its_hammer_loses_at_every_phase_of_the_swing`).
 #[test]
 fn restrike_adds_to_the_vibration_of_the_same_string() {
     let mut p = piano(4);
@@ -174,12 +183,15 @@ fn restrike_adds_to_the_vibration_of_the_same_string() {
     p.process(&mut l2, &mut r2);
     let after = p.monitor().energy;
     let hammer = 0.5 * qsa_dsp::preset::piano_note(60).hammer_mass * qsa_dsp::instrument::hammer_speed(0.6).powi(2);
+    let rise = after - before;
     println!(
-        "string and hammer energy before {before:e} J, 20 ms after the re-strike {after:e} J; hammer {hammer:e} J"
+        "string and hammer energy before {before:e} J, 20 ms after the re-strike {after:e} J: rise {:.3} of the \
+         hammer's {hammer:e} J",
+        rise / hammer
     );
     assert_eq!(p.sounding(), 1, "the same voice plays");
-    assert!(after > 1.5 * before, "the re-strike adds to the vibration: {after:e} vs {before:e}");
-    assert!(after <= before + hammer, "no more than the hammer brought: {after:e} vs {:e}", before + hammer);
+    assert!(rise >= 0.5 * hammer, "the re-strike adds to the vibration: {after:e} J after, {before:e} J before");
+    assert!(rise <= hammer, "no more than the hammer brought: a rise of {rise:e} J from {hammer:e} J");
 }
 
 /// Windows to leave out of click detection: each note-on's attack, from the event to 8 ms after
@@ -188,19 +200,63 @@ fn attacks(score: &Score) -> Vec<std::ops::Range<usize>> {
     score.iter().filter(|(_, e)| matches!(e, Event::NoteOn { .. })).map(|&(t, _)| t..t + 384).collect()
 }
 
-/// More notes than voices: the pool never grows, and the stolen voices fade out without a click
-/// (the detector below [`CLICK_DB`] outside the attacks), at every control block length.
+/// More notes than voices: the pool never grows, and the stolen voices fade out without a click,
+/// at every control block length: the detector stays below [`CLICK_DB`] everywhere but in the
+/// new notes' own attacks, and the steal's fade is judged.
+///
+/// A note that steals waits for the stolen voice to fade ([`STEAL_TIME`], 5 ms at 2000/s, counted
+/// in whole control blocks from the block boundary after the note-on), so its attack starts that
+/// much later: the windows left out run from where each new note's hammer is thrown, in output
+/// time (the limiter's latency later), for 8 ms (the hammer's impact), and the stolen voice's fade
+/// lies before them, under the notes that keep sounding. The fades are judged, not hidden: a step
+/// of 5 % of the peak in the middle of one is found there above the threshold. (Mid-note the
+/// detector finds 1 %; in a fade the next note's attack lies within the detector's 10 ms reach
+/// and lifts the neighbourhood's median, so a 1 % step scores 7.9 dB there, 5 % 21.8 dB.)
 #[test]
-fn stealing_keeps_the_pool_and_does_not_click() {
+fn stealing_keeps_the_pool_and_the_stolen_voices_fade_without_a_click() {
+    let voices = 3;
     let score: Score = (0..8).map(|i| (i * 2_400 + 17, on(48 + 3 * i as u8, 0.7))).collect();
+    let fade = (STEAL_TIME * FS).ceil() as usize;
     for block in [1, 64, 256] {
-        let mut p = Instrument::new(FS, 3, Settings { block, ..Default::default() });
+        let mut p = Instrument::new(FS, voices, Settings { block, ..Default::default() });
+        let latency = p.latency();
         let out = wide(&play(&mut p, &score, 24_000, || 100));
-        assert!(p.sounding() <= 3);
+        assert!(p.sounding() <= voices);
         assert_eq!(p.steals(), 5);
-        let (db, at) = click_strength(&out, FS, &attacks(&score));
-        println!("N_b = {block}: worst click {db:.1} dB at {at}");
+        let attacks: Vec<std::ops::Range<usize>> = score
+            .iter()
+            .enumerate()
+            .map(|(i, &(t, _))| {
+                let boundary = t.div_ceil(block) * block;
+                let start = if i < voices { boundary } else { boundary + fade.div_ceil(block) * block };
+                start + latency..start + latency + 384
+            })
+            .collect();
+        let (db, at) = click_strength(&out, FS, &attacks);
+        let fades: Vec<std::ops::Range<usize>> =
+            score[voices..].iter().zip(&attacks[voices..]).map(|(&(t, _), a)| t + latency..a.start).collect();
+        let mut elsewhere = Vec::new();
+        let mut from = 0;
+        for f in &fades {
+            elsewhere.push(from..f.start);
+            from = f.end;
+        }
+        elsewhere.push(from..out.len());
+        let (fade_db, fade_at) = click_strength(&out, FS, &elsewhere);
+        println!(
+            "N_b = {block}: worst click {db:.1} dB at {at}; within the steal fades {fades:?}: {fade_db:.1} dB at \
+             {fade_at}"
+        );
         assert!(db < CLICK_DB, "N_b = {block}: {db:.1} dB at sample {at}");
+        // The fades are judged: a step of 5 % of the peak in the middle of the first one is found
+        // there, above the threshold.
+        let peak = out.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let middle = (fades[0].start + fades[0].end) / 2;
+        let mut stepped = out.clone();
+        stepped[middle..].iter_mut().for_each(|v| *v += 0.05 * peak);
+        let (step_db, step_at) = click_strength(&stepped, FS, &attacks);
+        println!("N_b = {block}: a 5 % step at {middle} scores {step_db:.1} dB at {step_at}");
+        assert!(step_db > CLICK_DB && step_at.abs_diff(middle) < 48, "N_b = {block}: {step_db:.1} dB at {step_at}");
     }
 }
 
@@ -267,8 +323,9 @@ fn a_hard_damper_on_the_bass_does_not_trip_the_guard() {
 /// Voices end when their strings fall silent: 200 short notes in a row (50 ms each, one every
 /// 60 ms, keys and velocities seeded at random) on 32 voices never need to steal, since the
 /// dampers silence each note within its release tail and the voice is free again; and 2 s after
-/// the last note no voice sounds. (Judged on the flying hammer's energy, as an earlier voice did,
-/// no voice was ever released: the pool filled at the 33rd note and every later note stole.)
+/// the last note no voice sounds. (A voice is judged on its string's energy: judged on the flying
+/// hammer's, no voice would ever be released, the pool would fill at the 33rd note and every later
+/// note would steal.)
 #[test]
 fn voices_are_released_after_their_tails() {
     let mut rng = seeded_rng(200);

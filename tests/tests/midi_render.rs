@@ -1,4 +1,4 @@
-//! `cargo xtask render --midi`: MIDI files through the instrument engine (issue 5).
+//! `cargo xtask render --midi`: MIDI files through the instrument engine.
 
 use std::path::PathBuf;
 

@@ -6,7 +6,7 @@
 //!   `[output] gain`; with `--csv` a CSV beside it whose header starts `t,u,y,force,energy`;
 //! - the same bytes for every `--chunk` (1, 64, 1000, 0 = seeded random sizes, or none);
 //! - exactly one JSON summary line on stdout, with physically right values for the seed's Fig. 4
-//!   (physics §9.1: y_max = 8.7162e-5 m, F_max = 527.75 N, rebound at −v0);
+//!   (docs/physics.md §9.1: y_max = 8.7162e-5 m, F_max = 527.75 N, rebound at −v0);
 //! - a scene error names its key and reason, exits non-zero and leaves no output behind; an
 //!   existing output is only ever replaced by a complete new one; the scene file is never an
 //!   output.
@@ -18,19 +18,19 @@ use std::ffi::OsString;
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use qsa_dsp::render::{Summary, parse_scene, render};
+use qsa_dsp::scene_file::{parse_scene, render};
 use rand::{RngExt, SeedableRng};
 use serde_json::Value;
 use tempfile::TempDir;
-use xtask::render::{RenderArgs, chunk_sizes};
+use xtask::render::{RenderArgs, Summary, chunk_sizes};
 
 // ------------------------------------------------------------------------------------------------
 // Fixtures and helpers
 // ------------------------------------------------------------------------------------------------
 
-/// Analytic peak compression of the Fig. 4 contact (physics §9.1), m.
+/// Analytic peak compression of the Fig. 4 contact (docs/physics.md §9.1), m.
 const FIG4_Y_MAX: f64 = 8.7162e-5;
-/// Analytic peak contact force of the Fig. 4 contact (physics §9.1), N.
+/// Analytic peak contact force of the Fig. 4 contact (docs/physics.md §9.1), N.
 const FIG4_F_MAX: f64 = 527.75;
 /// Fig. 4 initial velocity (m/s); the mass must leave at exactly −V0.
 const FIG4_V0: f64 = 2.0;
@@ -346,8 +346,8 @@ fn in_process_run_returns_the_summary_it_prints() {
             _ => assert_eq!(&got[key], w, "{key}"),
         }
     }
-    assert_eq!(summary.contacts, 1);
-    assert_eq!(summary.samples, 88);
+    assert_eq!(summary.measured.contacts, 1);
+    assert_eq!(summary.measured.samples, 88);
     assert_eq!(listing(dir.path()), names(&["s.toml", "o.wav"]));
 }
 

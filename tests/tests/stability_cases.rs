@@ -1,15 +1,15 @@
-//! Failures found by the report's stability sweep (`cargo xtask report`, `docs/report/stability.md`),
-//! fixed in the engine and kept here so they stay fixed.
+//! Cases from the report's stability sweep (`cargo xtask report`, `docs/report/stability.md`) that
+//! exercise a guard in the engine, kept as regression tests.
 //!
-//! **EXP returned NaN on a rattling slide.** In the report's slide excerpt (a slide pressed onto a
-//! plucked string, contact coming and going every few samples) a step that drained the auxiliary
-//! variable with `g = g_max` left a rounding residue ψ ≈ 1e-18 √J. The next step was out of
-//! contact (`y^n ≤ 0`) with the bodies approaching (`z < 0`), so the branch chose `g = g_max` again,
-//! and `g_max = 4ψ/(z + √(z² + 4qψ²))` divided by `z + |z| = 0` (4qψ² is far below the rounding
-//! of z²): `g = ∞` and `s = ∞/∞ = NaN`. The fix (`dsp/src/contact/explicit.rs`): `g_max` in the
+//! **EXP on a rattling slide.** In the report's slide excerpt (a slide pressed onto a plucked
+//! string, contact coming and going every few samples) a step that drains the auxiliary variable
+//! with `g = g_max` can leave a rounding residue ψ ≈ 1e-18 √J. When the next step is out of contact
+//! (`y^n ≤ 0`) with the bodies approaching (`z < 0`), the branch chooses `g = g_max` again, and the
+//! naive `g_max = 4ψ/(z + √(z² + 4qψ²))` divides by `z + |z| = 0` (4qψ² is far below the rounding
+//! of z²): `g = ∞` and `s = ∞/∞ = NaN`. The guard (`dsp/src/contact/explicit.rs`): `g_max` in the
 //! cancellation-free form for each sign of z, and a step with `g = g_max` ends with ψ exactly 0 and
-//! `s = −2ψ/g_max` evaluated without forming `g_max`. Then, out of contact, ψ is drained only while
-//! the bodies move apart: draining a residue while they approach stopped them dead.
+//! `s = −2ψ/g_max` evaluated without forming `g_max`. Out of contact, ψ is drained only while the
+//! bodies move apart: draining a residue while they approach would stop them dead.
 
 use std::path::Path;
 
@@ -32,7 +32,7 @@ fn exp_step_out_of_contact_with_a_tiny_psi_is_finite() {
     let psi = exp.psi();
     assert!(psi > 0.0 && psi < 1e-17, "ψ = {psi:e}");
     let (z, q) = (-1.5668543570102507e-5, 1.5257989860832829e-5);
-    // Before the fix the guard itself was the trigger: 4ψ/(z + √(z² + 4qψ²)) is 4ψ/0.
+    // The naive form of g_max divides by zero here: 4ψ/(z + √(z² + 4qψ²)) is 4ψ/0.
     assert_eq!(z + (z * z + 4.0 * q * psi * psi).sqrt(), 0.0, "the cancellation this case exercises");
     let problem = ContactProblem { y_prev: 5.809656546435903e-6, y_now: -2.0800705664472905e-6, z, q };
     let solution = exp.solve(&problem);

@@ -1,7 +1,7 @@
 //! `cargo xtask bench`: real-time factors of whole voices, one JSON line per case.
 //!
-//! Each case renders a shipped scene through the real-time path
-//! ([`qsa_dsp::render::render_output`]: output only, no energy bookkeeping) in calls of 64
+//! Each case renders a shipped scene through the real-time path ([`TimedOutput`] on the scene
+//! [`qsa_dsp::scene_file::build()`] makes: output only, no energy bookkeeping) in calls of 64
 //! samples, as a plugin would, `--runs` times; the line reports the median and the fastest RTF
 //! (wall seconds per simulated second) measured in this one run of the command, after one
 //! discarded warm-up run. Cases:
@@ -49,8 +49,9 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use qsa_dsp::contact::{Method, SolverSettings};
 use qsa_dsp::instrument::{Event, Instrument, Mode, Settings};
-use qsa_dsp::render::{SceneDescription, parse_scene, render_output};
-use qsa_dsp::string::{FREE_STEP_FLOPS, ModalString};
+use qsa_dsp::scene::Scene;
+use qsa_dsp::scene_file::{Sampling, SceneDescription, SceneJob, build, parse_scene};
+use qsa_dsp::string::ModalString;
 use serde::Serialize;
 
 /// Arguments of `bench`.
@@ -139,6 +140,11 @@ pub struct CallStats {
     pub contact_ratio: f64,
 }
 
+/// Flops per mode and sample of a free string step ([`ModalString::free_steps`]: the recursion
+/// `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}`, two products and a difference, and the output's product and
+/// sum), for the roofline.
+pub const FREE_STEP_FLOPS: f64 = 5.0;
+
 /// The vector unit's measured peak, in Gflop/s (best of `runs`).
 pub fn peak_gflops(runs: usize) -> f64 {
     let isa = qsa_dsp::string::Isa::detect();
@@ -146,7 +152,7 @@ pub fn peak_gflops(runs: usize) -> f64 {
     let (mut flops, mut best) = (0.0, f64::INFINITY);
     for _ in 0..runs.max(1) + 1 {
         let start = std::time::Instant::now();
-        flops = qsa_dsp::string::peak_probe(isa, std::hint::black_box(iterations));
+        flops = qsa_dsp::bench_support::peak_probe(isa, std::hint::black_box(iterations));
         best = best.min(start.elapsed().as_secs_f64());
     }
     flops / best / 1e9
@@ -163,7 +169,7 @@ pub enum BenchError {
     Write(String),
 }
 
-/// Goals of the issues, by case.
+/// The real-time-factor goal of each case that has one.
 fn goal(name: &str) -> &'static str {
     match name {
         "hammer-c4/qsa" => "≤ 0.001",
@@ -175,7 +181,7 @@ fn goal(name: &str) -> &'static str {
 }
 
 /// Goal of the all-in-contact column: the costliest call with every voice in contact within
-/// 1.5 times the mean of such calls (issue 6: bounded cost, no data-dependent iteration).
+/// 1.5 times the mean of such calls (a bounded cost: no data-dependent iteration).
 const CONTACT_GOAL: f64 = 1.5;
 
 /// The Markdown table of `lines`.
@@ -246,6 +252,32 @@ fn load(dir: &Path, name: &str) -> Result<SceneDescription, BenchError> {
     parse_scene(&text).map_err(|e| BenchError::Scene(format!("{}: {e}", path.display())))
 }
 
+/// Job: the real-time path of a scene, [`Scene::process_output`] in calls of `chunk` samples
+/// with no frames and no energy bookkeeping; returns the wall-clock seconds it took.
+#[derive(Debug, Clone, Copy)]
+pub struct TimedOutput {
+    /// Samples per call (at least 1).
+    pub chunk: usize,
+}
+
+impl SceneJob for TimedOutput {
+    type Output = f64;
+
+    fn run(self, mut scene: impl Scene, samples: usize, _segments: usize) -> f64 {
+        let mut out = vec![0.0; samples];
+        // Write every page before the clock starts (a fresh zeroed allocation is mapped lazily):
+        // a host's buffers are mapped already, so first-touch page faults are not the scene's cost.
+        out.fill(std::hint::black_box(0.0));
+        let start = std::time::Instant::now();
+        for block in out.chunks_mut(self.chunk.max(1)) {
+            scene.process_output(block);
+        }
+        let wall = start.elapsed().as_secs_f64();
+        std::hint::black_box(&out);
+        wall
+    }
+}
+
 /// Time `scene` `runs` times.
 pub fn measure(name: &str, scene: &SceneDescription, runs: usize) -> Result<BenchLine, BenchError> {
     let common = scene.common();
@@ -258,9 +290,13 @@ pub fn measure(name: &str, scene: &SceneDescription, runs: usize) -> Result<Benc
     let seconds = common.samples as f64 / f64::from(fs);
     let mut rtfs = Vec::with_capacity(runs);
     // One discarded warm-up run (page faults, clock ramp-up, CPU feature detection).
-    render_output(scene, 64).map_err(|e| BenchError::Scene(e.to_string()))?;
+    let timed = || {
+        build(scene, &common.solver, Sampling::NATIVE, TimedOutput { chunk: 64 })
+            .map_err(|e| BenchError::Scene(e.to_string()))
+    };
+    timed()?;
     for _ in 0..runs.max(1) {
-        let (_, wall) = render_output(scene, 64).map_err(|e| BenchError::Scene(e.to_string()))?;
+        let wall = timed()?;
         rtfs.push(wall / seconds);
     }
     rtfs.sort_by(f64::total_cmp);

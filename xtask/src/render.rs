@@ -6,14 +6,16 @@
 //! `contacts` = notes played, and `null` for what a MIDI render does not measure. The parameters
 //! start from the defaults or from a factory preset (`--preset`), then `--mode` and `--set` apply.
 //!
-//! Renders a scene file through the dsp engine ([`qsa_dsp::render`]) and
+//! Renders a scene file through the dsp engine (built by [`qsa_dsp::scene_file::build()`], timed
+//! here) and
 //! - writes a mono 32-bit float WAV (default: next to the scene file, with extension `.wav`),
 //!   peak-normalised unless the scene's `[output] normalize = false`;
 //! - with `--csv`, writes the per-sample signals next to the WAV (same name, `.csv`), header
 //!   `t,u,y,force,energy,velocity,losses,control_work,work,output` (units: s, m, m, N, J, m/s, J,
 //!   J, count, as
 //!   the WAV before normalisation);
-//! - prints exactly one JSON line on stdout: the [`Summary`].
+//! - prints exactly one JSON line on stdout: the [`Summary`], the render's [`Measurements`] with
+//!   the wall-clock time of the simulation.
 //!
 //! `--chunk N` renders in calls of N samples; `--chunk 0` uses sizes drawn from a seeded
 //! generator (1 to 4096). Output is bit-identical for every chunking.
@@ -26,9 +28,11 @@
 use std::fs;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use clap::Args;
-use qsa_dsp::render::{Rendered, SceneError, Summary, parse_scene, render};
+use qsa_dsp::scene::{Frame, Scene};
+use qsa_dsp::scene_file::{Measurements, Run, Sampling, SceneError, SceneJob, build, fill_frames, parse_scene};
 use rand::{RngExt, SeedableRng};
 use tempfile::NamedTempFile;
 
@@ -51,9 +55,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "NAME", requires = "midi")]
     pub preset: Option<String>,
     /// Instrument mode for --midi (same as --set mode=...).
-    #[arg(long, value_parser = ["piano", "slide"], requires = "midi")]
+    #[arg(long, value_parser = mode_options(), requires = "midi")]
     pub mode: Option<String>,
-    /// Set a plugin parameter for --midi, by its id (see README), e.g. --set hard=2 --set gain=-6.
+    /// Set a plugin parameter for --midi, by its id (the table in plugin/src/params.rs), e.g. --set hard=2
+    /// --set gain=-6.
     #[arg(long = "set", value_name = "ID=VALUE", requires = "midi")]
     pub set: Vec<String>,
     /// Sample rate for --midi (Hz).
@@ -73,6 +78,15 @@ pub struct RenderArgs {
     pub chunk: Option<usize>,
 }
 
+/// What `--mode` takes: the option ids of the `mode` parameter.
+fn mode_options() -> clap::builder::PossibleValuesParser {
+    let options = match qsa_dsp::instrument::param_spec("mode").map(|spec| spec.kind) {
+        Some(qsa_dsp::instrument::ParamKind::Choice { options, .. }) => options,
+        _ => &[],
+    };
+    clap::builder::PossibleValuesParser::new(options.iter().map(|(id, _)| *id))
+}
+
 impl Default for RenderArgs {
     fn default() -> Self {
         Self {
@@ -87,6 +101,36 @@ impl Default for RenderArgs {
             csv: false,
             chunk: None,
         }
+    }
+}
+
+/// The summary line of a scene render: what it measured, then how long the simulation took.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Summary {
+    /// What the render measured.
+    #[serde(flatten)]
+    pub measured: Measurements,
+    /// Wall-clock time of the simulation (s).
+    pub wall_seconds: f64,
+    /// Real-time factor: wall seconds per simulated second.
+    pub rtf: f64,
+}
+
+/// Job: every frame, in calls of the sizes an iterator gives, with the wall-clock time (s) spent
+/// in [`Scene::process`].
+struct TimedFrames<I> {
+    chunks: I,
+}
+
+impl<I: Iterator<Item = usize>> SceneJob for TimedFrames<I> {
+    type Output = (Run, f64);
+
+    fn run(self, mut scene: impl Scene, samples: usize, segments: usize) -> (Run, f64) {
+        let initial_energy = scene.initial_energy();
+        let mut frames = vec![Frame::default(); samples];
+        let start = Instant::now();
+        fill_frames(&mut scene, &mut frames, self.chunks);
+        (Run { frames, initial_energy, segments }, start.elapsed().as_secs_f64())
     }
 }
 
@@ -184,9 +228,14 @@ fn run_scene(args: &RenderArgs, scene_path: &Path) -> Result<Summary, RenderErro
     for path in std::iter::once(&wav_path).chain(csv_path.as_ref()) {
         check_output_path(path, scene_path)?;
     }
-    let rendered = render(&scene, chunk_sizes(args.chunk))
-        .map_err(|source| RenderError::Scene { path: scene_path.to_owned(), source })?;
-    let options = scene.common().output;
+    let common = scene.common();
+    let (rendered, wall_seconds) =
+        build(&scene, &common.solver, Sampling::NATIVE, TimedFrames { chunks: chunk_sizes(args.chunk) })
+            .map_err(|source| RenderError::Scene { path: scene_path.to_owned(), source })?;
+    let measured = Measurements::measure(&scene, &rendered);
+    let duration = rendered.frames.len() as f64 * (1.0 / common.sample_rate as f64);
+    let summary = Summary { measured, wall_seconds, rtf: wall_seconds / duration };
+    let options = common.output;
     let wav = write_temp(&wav_path, |w| {
         write_wav(w, &rendered, scene.common().sample_rate, options.normalize, options.gain)
     })?;
@@ -198,7 +247,7 @@ fn run_scene(args: &RenderArgs, scene_path: &Path) -> Result<Summary, RenderErro
     if let Some((file, path)) = csv {
         persist(file, path)?;
     }
-    Ok(rendered.summary)
+    Ok(summary)
 }
 
 pub(crate) fn check_output_path(path: &Path, scene: &Path) -> Result<(), RenderError> {
@@ -253,13 +302,7 @@ pub(crate) fn persist(file: NamedTempFile, path: &Path) -> Result<(), RenderErro
     Ok(())
 }
 
-fn write_wav(
-    w: &mut impl Write,
-    rendered: &Rendered,
-    sample_rate: u32,
-    normalize: bool,
-    gain: f64,
-) -> std::io::Result<()> {
+fn write_wav(w: &mut impl Write, rendered: &Run, sample_rate: u32, normalize: bool, gain: f64) -> std::io::Result<()> {
     let peak = rendered.frames.iter().fold(0.0_f64, |m, f| m.max(f.output.abs()));
     let scale = if normalize && peak > 0.0 { gain / peak } else { gain };
     let spec =
@@ -276,7 +319,7 @@ fn write_wav(
     w.write_all(buffer.get_ref())
 }
 
-fn write_csv(w: &mut impl Write, rendered: &Rendered, sample_rate: u32) -> std::io::Result<()> {
+fn write_csv(w: &mut impl Write, rendered: &Run, sample_rate: u32) -> std::io::Result<()> {
     let dt = 1.0 / sample_rate as f64;
     writeln!(w, "t,u,y,force,energy,velocity,losses,control_work,work,output")?;
     for (n, f) in rendered.frames.iter().enumerate() {

@@ -1,4 +1,4 @@
-//! EXP: the explicit energy-quadratised scheme (seed §4.1.1, eqs. 19–21; physics §4).
+//! EXP: the explicit energy-quadratised scheme (seed §4.1.1, eqs. 19–21; docs/physics.md §4).
 //!
 //! The potential is carried by the auxiliary variable `ψ ≈ √(2V)` at half steps, and the force is
 //! `F^n = −μ_t ψ^n · g^n` with `μ_t ψ^n = (ψ^{n+1/2} + ψ^{n−1/2})/2` and the update
@@ -10,7 +10,7 @@
 //!
 //! and `H = kinetic + ½(ψ^{n+1/2})²` is conserved exactly for *any* choice of `g^n`.
 //!
-//! # Branched gradient (physics §4.3, a reconstruction)
+//! # Branched gradient (docs/physics.md §4.3, a reconstruction)
 //!
 //! The plain choice `g^n = dψ/dy(y^n)` lets ψ go negative (an adhesive force) or stay positive
 //! after separation (energy locked in ψ: the Fig. 4 mass rebounds 3.6 % too slowly). Eliminating

@@ -14,7 +14,7 @@
 //! `g = dψ/dy = √(κ(α+1)/2) · [y]+^((α−1)/2)`. (The seed prints the exponent of `g` as α−1,
 //! a misprint: ψ·g must equal V' = κ[y]+^α, which needs (α−1)/2.)
 //!
-//! # Discrete gradient without cancellation (physics §5.1)
+//! # Discrete gradient without cancellation (docs/physics.md §5.1)
 //!
 //! `DG(y0, y1) = (V(y1) − V(y0)) / (y1 − y0)` is the secant slope used by the energy-conserving
 //! Newton scheme (seed eq. 22). The plain difference quotient loses every digit when

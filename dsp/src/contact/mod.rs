@@ -18,7 +18,7 @@
 //! - [`NewtonSolver`] ("IMP"): safeguarded Newton on the exact power law with the energy-conserving
 //!   discrete gradient (seed §4.1.2). The reference; its iteration count is data dependent.
 //! - [`ExplicitSolver`] ("EXP"): energy quadratisation with a branched gradient that keeps
-//!   ψ ≥ 0 (seed §4.1.1, physics §4.3).
+//!   ψ ≥ 0 (seed §4.1.1, docs/physics.md §4.3).
 //!
 //! Scenes are generic over the solver, so the sample loop has no dynamic dispatch.
 
@@ -108,13 +108,22 @@ pub enum Method {
 }
 
 impl Method {
-    /// The name used in scene files and reports.
-    pub fn name(self) -> &'static str {
+    /// Every method, in declaration order.
+    pub const ALL: [Method; 3] = [Method::Qsa, Method::Imp, Method::Exp];
+
+    /// The name used in scene files, reports, presets and the plugin's `solver` parameter (the
+    /// one spelling everywhere; serde's lowercase names are these, a test checks it).
+    pub const fn name(self) -> &'static str {
         match self {
             Method::Qsa => "qsa",
             Method::Imp => "imp",
             Method::Exp => "exp",
         }
+    }
+
+    /// The method called `name` ([`Method::name`]'s spelling), if any.
+    pub fn from_name(name: &str) -> Option<Method> {
+        Method::ALL.into_iter().find(|m| m.name() == name)
     }
 }
 

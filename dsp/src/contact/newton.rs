@@ -1,5 +1,5 @@
 //! IMP: the energy-conserving implicit scheme on the exact power law, solved by safeguarded
-//! Newton (seed §4.1.2, physics §5). This is the reference the QSA is measured against.
+//! Newton (seed §4.1.2, docs/physics.md §5). This is the reference the QSA is measured against.
 //!
 //! Solve `G(s) = s + z + q·DG(yp, yp+s) = 0` with the exact discrete gradient
 //! `DG(y0, y1) = (V(y1) − V(y0))/(y1 − y0)` computed without cancellation ([`PowerLaw`]).

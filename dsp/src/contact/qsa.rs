@@ -1,4 +1,4 @@
-//! QSA: the non-iterative branched solve on the spline potential (seed §4.2, physics §3).
+//! QSA: the non-iterative branched solve on the spline potential (seed §4.2, docs/physics.md §3).
 //!
 //! With the discrete-gradient force `F^n = −(V̂(y^{n−1}+s) − V̂(y^{n−1}))/s` (seed eq. 22) the
 //! scalar problem becomes
@@ -15,7 +15,7 @@
 //! a_λ = 1 + q·A_p,   b_λ = z + q·V_p'(yp),   c_λ = q·(V_p(yp) − V̂(yp))
 //! ```
 //!
-//! # Segment search (seed eq. 26, physics §3.2)
+//! # Segment search (seed eq. 26, docs/physics.md §3.2)
 //!
 //! At the knot offsets `s_j = y_j − yp` the sign of G needs no division:
 //! `λ_j = s_j(s_j + z) + q(V(y_j) − V̂(yp))` and `sign G(s_j) = sign λ_j · sign s_j`
@@ -27,7 +27,7 @@
 //!
 //! A sign test that lands exactly on the root (`λ_j = 0`) ends the search with `s = s_j`.
 //!
-//! # Root without cancellation (physics §3.3–3.5)
+//! # Root without cancellation (docs/physics.md §3.3–3.5)
 //!
 //! With `k = seg(yp)`: if `p = k` then `c_λ = 0`, `b_λ = g0` and `s = −g0/a_λ`, a perfectly
 //! conditioned root. Otherwise the quadratic is re-centred on the knot `y_m` between `y^{n−1}` and
@@ -41,7 +41,7 @@
 //! The wanted root is where G crosses zero upwards: the larger root if `g0 < 0` (`s* > 0`), the
 //! smaller if `g0 > 0`, each taken in the form that avoids cancellation
 //! (`(−b ± √d)/(2a)` or `2c/(−b ∓ √d)`). Re-centring keeps about 2.5 more digits at extreme
-//! stiffness (physics §3.5) and makes the root's cost independent of `|p − k|`.
+//! stiffness (docs/physics.md §3.5) and makes the root's cost independent of `|p − k|`.
 //!
 //! # Cost bound
 //!

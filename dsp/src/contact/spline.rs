@@ -5,7 +5,7 @@
 //! last quadratic `V_N` extended without limit beyond `y_{N−1}`. It interpolates V at every knot
 //! and is C¹ (seed eqs. 6–10).
 //!
-//! # Construction: bidiagonal recursion in local form (physics §1.4)
+//! # Construction: bidiagonal recursion in local form (docs/physics.md §1.4)
 //!
 //! With `Vk_j = V(y_j)` and the knot slopes `D_j = V̂'(y_j)`:
 //!

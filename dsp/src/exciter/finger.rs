@@ -1,4 +1,4 @@
-//! Fingers on the string (seed eqs. 45–48, 52, 62; physics §7.1).
+//! Fingers on the string (seed eqs. 45–48, 52, 62; docs/physics.md §7.1).
 //!
 //! A finger φ presses with force `F_φe(t)` (N, a control input) spread over the half-cosine window
 //! `χ_φ(x) = π/(2W) · cos(π(x − x_φ)/W)` for `|x − x_φ| ≤ W/2` (seed eq. 48, ∫χ = 1), and

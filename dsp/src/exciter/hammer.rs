@@ -1,4 +1,4 @@
-//! A lumped piano hammer (seed eq. 36–42, physics §6.4).
+//! A lumped piano hammer (seed eq. 36–42, docs/physics.md §6.4).
 //!
 //! `m_h δ_tt w = −F^n`, so `w^{n+1} = w^{n−1} − z_h − ξ_h F^n` with `z_h = 2(w^{n−1} − w^n)` and
 //! `ξ_h = Δt²/m_h`. The hammer sits at `w` (m) on the positive side of the string and moves
@@ -22,7 +22,7 @@ pub struct HammerParams {
 }
 
 impl HammerParams {
-    /// The default initial gap: 0.2 mm, as in the seed's Fig. 5 set-up (physics §9.4).
+    /// The default initial gap: 0.2 mm, as in the seed's Fig. 5 set-up (docs/physics.md §9.4).
     pub const DEFAULT_GAP: f64 = 2e-4;
 
     /// Largest energy the hammer can put into the felt: its kinetic energy `½ m v²` (J).

@@ -1,4 +1,4 @@
-//! The slide–hand oscillator (SHO, seed eqs. 49, 64–71; physics §7.2).
+//! The slide–hand oscillator (SHO, seed eqs. 49, 64–71; docs/physics.md §7.2).
 //!
 //! A slide of mass `m_o` (kg) at height `w_o` (m) is held by the hand at height `w_H` (a control
 //! input) through a spring `k_H` (N/m) and a damper `r_H` (kg/s):
@@ -21,6 +21,8 @@
 //! `Q_o = r_H (δ_t· w_o)²` and gaining the hand power
 //! `P_H = {r_H δ_t· w_o − k_H μ_t²(w_o − w_H)} δ_t· w_H`.
 
+use crate::contact::PowerLaw;
+
 /// Slide and hand parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SlideParams {
@@ -30,6 +32,19 @@ pub struct SlideParams {
     pub stiffness: f64,
     /// Hand damping r_H (kg/s), ≥ 0.
     pub damping: f64,
+}
+
+impl SlideParams {
+    /// The reference compression `y_ref` (m) that sizes the QSA fit of the slide contact: where
+    /// the force `κ y^α` of `law` reaches twice the largest static push the hand and the fingers
+    /// make, `F_ref = 2(k_H (d + 1 mm) + F_1 + F_2)`, with `d` (m, ≥ 0) the deepest hand press
+    /// and `F_1`, `F_2` (N) the largest finger forces: `y_ref = (max(F_ref, 1 mN)/κ)^{1/α}`.
+    /// Compressions beyond it are still stable (the fit is extended), only softer. Scene files
+    /// and the plugin's slide voice both size their fits with it.
+    pub fn reference_compression(&self, law: &PowerLaw, depth: f64, finger_1: f64, finger_2: f64) -> f64 {
+        let force = 2.0 * (self.stiffness * (depth + 1e-3) + finger_1 + finger_2);
+        (force.max(1e-3) / law.kappa()).powf(1.0 / law.alpha())
+    }
 }
 
 /// The SHO state and its per-sample-rate constants.

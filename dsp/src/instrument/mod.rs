@@ -60,29 +60,31 @@ mod monitor;
 mod notes;
 mod output;
 mod params;
+mod piano_voice;
 mod presets;
 mod settings;
 mod slide_voice;
 mod solvers;
-mod voice;
 mod voicing;
 
 pub use midi::event_from_midi;
 pub use monitor::{Monitor, SHAPE_POINTS};
 pub use notes::{EndedNote, MAX_TUNING, Note, NoteParam, NoteTarget};
 pub use output::{CEILING, LOOKAHEAD, OutputStage, RELEASE, lookahead_samples};
-pub use params::{PARAM_IDS, ParamError, ParamValues};
+pub use params::{
+    Group, PARAM_IDS, PARAMETERS, ParamError, ParamKind, ParamSpec, ParamValues, Scale, ValueDisplay, param_index,
+    param_spec,
+};
+pub use piano_voice::{
+    DAMPER_UPDATE, DAMPER_WIDTH, GUARD_FACTOR, PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike,
+    damper_shares,
+};
 pub use presets::{
     CATEGORIES, FACTORY_PRESETS, Preset, PresetError, factory_presets, find_preset, load_factory_presets, parse_preset,
 };
 pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, hammer_speed};
-pub use slide_voice::{
-    ChannelState, GUARD_FACTOR, HAND_SPEED, OPEN_KEY, PLUCK_TIME, REST_FORCE, SLIDE_SPEED, SlideVoice, TRAIL,
-};
+pub use slide_voice::{ChannelState, HAND_SPEED, OPEN_KEY, PLUCK_TIME, REST_FORCE, SLIDE_SPEED, SlideVoice, TRAIL};
 pub use solvers::Solvers;
-pub use voice::{
-    DAMPER_UPDATE, DAMPER_WIDTH, PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike, damper_shares,
-};
 pub use voicing::{VOICING_DB, VOICING_VELOCITIES, voicing_gain};
 
 use crate::string::ModalString;

@@ -1,20 +1,615 @@
-//! Parameter values as the plugin stores them (plain values, `f32`, in the units the plugin shows),
-//! keyed by the plugin's stable ids, and their one mapping to [`Settings`].
+//! The plugin's parameters, defined once: [`PARAMETERS`], one [`ParamSpec`] each (stable short id,
+//! name, group, range, unit, default, display, and where the value lives in [`ParamValues`]), and
+//! the one mapping of those values to [`Settings`].
 //!
-//! The plugin and the offline MIDI renderer both build their [`Settings`] through
-//! [`ParamValues::settings`], so the same parameter values give the same samples in both.
+//! Everything that knows a parameter reads it from the table: the plugin builds its host-facing
+//! parameters from it, the offline renderer's `--set ID=VALUE` and the factory presets parse
+//! through [`ParamValues::set`], and the documentation table of `plugin/src/params.rs` is checked
+//! against it. The ids, names, ranges and defaults are part of saved state and automation: they
+//! never change once released.
+//!
+//! Values are held as the plugin holds them (plain `f32` values in the units it shows: ms, mm, g,
+//! linear gain) and mapped to [`Settings`] by [`ParamValues::settings`], so the plugin and the
+//! offline MIDI renderer give the same samples for the same values.
 
 use crate::contact::Method;
-use crate::instrument::settings::{HandSource, Mode, Settings};
+use crate::instrument::MAX_VOICES;
+use crate::instrument::notes::NoteParam;
+use crate::instrument::settings::{HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings};
 
-/// The plugin's parameter ids, in display order.
-pub const PARAM_IDS: [&str; 27] = [
-    "mode", "solver", "segs", "nb", "voices", "hard", "hmass", "strike", "damp", "bright", "damper", "slide", "follow",
-    "glide", "bend", "hand", "handsrc", "smass", "hstiff", "hdamp", "fdamp", "kappa", "alpha", "pluck", "pickup",
-    "gain", "limit",
+/// The editor section (host group: VST3 unit, CLAP module) that shows a parameter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Group {
+    /// Mode, solver, control block, voices.
+    Engine,
+    /// The piano's settings.
+    Piano,
+    /// The slide guitar's settings.
+    Slide,
+    /// Gain and limiter.
+    Output,
+}
+
+impl Group {
+    /// The group's name as hosts show it.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Group::Engine => "Engine",
+            Group::Piano => "Piano",
+            Group::Slide => "Slide",
+            Group::Output => "Output",
+        }
+    }
+}
+
+/// How a continuous parameter's normalized position (0..=1, what hosts automate) maps to its range.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Scale {
+    /// Evenly.
+    Linear,
+    /// Skewed towards the low end: nice-plug's `FloatRange::Skewed` with factor
+    /// `FloatRange::skew_factor(exponent)` (negative exponents give the low end more travel).
+    Skewed(f32),
+    /// The range, default and text are in dB; the value is the linear gain `10^(dB/20)`, skewed as
+    /// nice-plug skews gains (`FloatRange::gain_skew_factor`).
+    Decibels,
+}
+
+/// How a continuous parameter's value is shown.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ValueDisplay {
+    /// The framework's default text.
+    Plain,
+    /// Rounded to this many decimals.
+    Rounded(usize),
+    /// Scientific notation with this many decimals (`1.00e9`).
+    Scientific(usize),
+}
+
+/// What kind of value a parameter takes, with its range and default in the units it shows.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ParamKind {
+    /// A continuous value.
+    Float {
+        /// Lowest value (in `unit`).
+        min: f32,
+        /// Highest value (in `unit`).
+        max: f32,
+        /// Default (in `unit`).
+        default: f32,
+        /// Unit suffix as shown after the value (with its leading space, if any).
+        unit: &'static str,
+        /// How the normalized position maps to the range.
+        scale: Scale,
+        /// How the value is shown.
+        display: ValueDisplay,
+        /// Step the value snaps to, if any.
+        step: Option<f32>,
+        /// The per-note offset CLAP polyphonic modulation of this parameter drives, if it takes any.
+        poly: Option<NoteParam>,
+    },
+    /// A whole number.
+    Int {
+        /// Lowest value.
+        min: i32,
+        /// Highest value.
+        max: i32,
+        /// Default.
+        default: i32,
+        /// Unit suffix as shown after the value.
+        unit: &'static str,
+    },
+    /// On or off (`on`/`off`, `true`/`false`, `1`/`0` as text).
+    Bool {
+        /// Default.
+        default: bool,
+    },
+    /// One of a list, held as its index.
+    Choice {
+        /// Every option as (stable id, also the text `--set` and presets take; display name).
+        options: &'static [(&'static str, &'static str)],
+        /// Index of the default option.
+        default: usize,
+    },
+}
+
+/// One parameter: everything the plugin, the renderer, the presets and the docs need to know.
+#[derive(Debug, Clone, Copy)]
+pub struct ParamSpec {
+    /// Stable short id (saved state, automation, presets, `--set`).
+    pub id: &'static str,
+    /// Name hosts show.
+    pub name: &'static str,
+    /// Host group and editor section.
+    pub group: Group,
+    /// Value kind, range and default.
+    pub kind: ParamKind,
+    /// What the value sets in the engine (for the documentation table).
+    pub maps_to: &'static str,
+    /// The plain value (choices as their index, switches 0 or 1, gain linear) in `values`.
+    pub get: fn(&ParamValues) -> f32,
+    /// Store the plain value `plain` in `values`.
+    pub put: fn(&mut ParamValues, f32),
+}
+
+/// The modes of `mode`, in option order.
+const MODES: [Mode; 2] = [Mode::Piano, Mode::Slide];
+
+/// The solvers of `solver`, in option order.
+const SOLVERS: [Method; 3] = [Method::Qsa, Method::Exp, Method::Imp];
+
+/// The hand-height sources of `handsrc`, in option order.
+const HAND_SOURCES: [HandSource; 4] =
+    [HandSource::Parameter, HandSource::ModWheel, HandSource::ChannelPressure, HandSource::PolyPressure];
+
+/// The option of `options` at plain value (index) `plain`, clamped to the list.
+fn pick<T: Copy, const N: usize>(options: [T; N], plain: f32) -> T {
+    options[(plain.max(0.0) as usize).min(N - 1)]
+}
+
+/// The index of `value` in `options`, as a plain value.
+fn index<T: PartialEq, const N: usize>(options: [T; N], value: T) -> f32 {
+    options.iter().position(|o| *o == value).unwrap_or(0) as f32
+}
+
+/// A switch's plain value.
+fn switch(on: bool) -> f32 {
+    if on { 1.0 } else { 0.0 }
+}
+
+/// A relative ("×") parameter on a log-like scale around 1, shown with two decimals.
+const fn ratio(min: f32, max: f32, scale: Scale) -> ParamKind {
+    ParamKind::Float {
+        min,
+        max,
+        default: 1.0,
+        unit: "×",
+        scale,
+        display: ValueDisplay::Rounded(2),
+        step: None,
+        poly: None,
+    }
+}
+
+/// A continuous parameter without step or polyphonic modulation.
+const fn float(min: f32, max: f32, default: f32, unit: &'static str, scale: Scale, display: ValueDisplay) -> ParamKind {
+    ParamKind::Float { min, max, default, unit, scale, display, step: None, poly: None }
+}
+
+/// Every parameter, in display order (the groups in the order Engine, Piano, Slide, Output).
+pub const PARAMETERS: [ParamSpec; 27] = [
+    ParamSpec {
+        id: "mode",
+        name: "Mode",
+        group: Group::Engine,
+        kind: ParamKind::Choice { options: &[("piano", "Piano"), ("slide", "Slide")], default: 0 },
+        maps_to: "[`Settings::mode`]",
+        get: |v| index(MODES, v.mode),
+        put: |v, x| v.mode = pick(MODES, x),
+    },
+    ParamSpec {
+        id: "solver",
+        name: "Solver",
+        group: Group::Engine,
+        kind: ParamKind::Choice {
+            options: &[(Method::Qsa.name(), "QSA"), (Method::Exp.name(), "EXP"), (Method::Imp.name(), "IMP")],
+            default: 0,
+        },
+        maps_to: "[`Settings::method`]",
+        get: |v| index(SOLVERS, v.method),
+        put: |v, x| v.method = pick(SOLVERS, x),
+    },
+    ParamSpec {
+        id: "segs",
+        name: "QSA segments",
+        group: Group::Engine,
+        kind: ParamKind::Int { min: 1, max: MAX_SEGMENTS as i32, default: 6, unit: "" },
+        maps_to: "[`Settings::segments`]",
+        get: |v| v.segments as f32,
+        put: |v, x| v.segments = x as i32,
+    },
+    ParamSpec {
+        id: "nb",
+        name: "Control block",
+        group: Group::Engine,
+        kind: ParamKind::Int { min: 1, max: MAX_BLOCK as i32, default: 64, unit: " smp" },
+        maps_to: "[`Settings::block`]",
+        get: |v| v.block as f32,
+        put: |v, x| v.block = x as i32,
+    },
+    ParamSpec {
+        id: "voices",
+        name: "Voices",
+        group: Group::Engine,
+        kind: ParamKind::Int { min: 1, max: MAX_VOICES as i32, default: 32, unit: "" },
+        maps_to: "voice pool size (at the next activation)",
+        get: |v| v.voices as f32,
+        put: |v, x| v.voices = x as i32,
+    },
+    ParamSpec {
+        id: "hard",
+        name: "Hardness",
+        group: Group::Piano,
+        kind: ratio(0.1, 10.0, Scale::Skewed(-1.5)),
+        maps_to: "[`Settings::hardness`]",
+        get: |v| v.hardness,
+        put: |v, x| v.hardness = x,
+    },
+    ParamSpec {
+        id: "hmass",
+        name: "Hammer mass",
+        group: Group::Piano,
+        kind: ratio(0.25, 4.0, Scale::Skewed(-1.5)),
+        maps_to: "[`Settings::hammer_mass`]",
+        get: |v| v.hammer_mass,
+        put: |v, x| v.hammer_mass = x,
+    },
+    ParamSpec {
+        id: "strike",
+        name: "Strike position",
+        group: Group::Piano,
+        kind: ratio(0.25, 2.5, Scale::Skewed(-1.5)),
+        maps_to: "[`Settings::strike_position`]",
+        get: |v| v.strike_position,
+        put: |v, x| v.strike_position = x,
+    },
+    ParamSpec {
+        id: "damp",
+        name: "String damping",
+        group: Group::Piano,
+        kind: ratio(0.1, 10.0, Scale::Skewed(-1.5)),
+        maps_to: "[`Settings::damping`]",
+        get: |v| v.damping,
+        put: |v, x| v.damping = x,
+    },
+    ParamSpec {
+        id: "bright",
+        name: "Brightness",
+        group: Group::Piano,
+        kind: ratio(0.0, 4.0, Scale::Linear),
+        maps_to: "[`Settings::brightness`] (inharmonicity)",
+        get: |v| v.brightness,
+        put: |v, x| v.brightness = x,
+    },
+    ParamSpec {
+        id: "damper",
+        name: "Damper",
+        group: Group::Piano,
+        kind: float(1.0, 500.0, 60.0, " 1/s", Scale::Skewed(-2.0), ValueDisplay::Rounded(1)),
+        maps_to: "[`Settings::damper_rate`]",
+        get: |v| v.damper,
+        put: |v, x| v.damper = x,
+    },
+    ParamSpec {
+        id: "slide",
+        name: "Slide position",
+        group: Group::Slide,
+        kind: ParamKind::Float {
+            min: 0.0,
+            max: 24.0,
+            default: 5.0,
+            unit: " st",
+            scale: Scale::Linear,
+            display: ValueDisplay::Rounded(2),
+            step: None,
+            poly: Some(NoteParam::SlidePosition),
+        },
+        maps_to: "[`Settings::slide_position`]",
+        get: |v| v.slide_position,
+        put: |v, x| v.slide_position = x,
+    },
+    ParamSpec {
+        id: "follow",
+        name: "Slide follows key",
+        group: Group::Slide,
+        kind: ParamKind::Bool { default: true },
+        maps_to: "[`Settings::follow_key`]",
+        get: |v| switch(v.follow_key),
+        put: |v, x| v.follow_key = x != 0.0,
+    },
+    ParamSpec {
+        id: "glide",
+        name: "Glide time",
+        group: Group::Slide,
+        kind: float(1.0, 2000.0, 50.0, " ms", Scale::Skewed(-2.0), ValueDisplay::Rounded(1)),
+        maps_to: "[`Settings::glide_time`]",
+        get: |v| v.glide_ms,
+        put: |v, x| v.glide_ms = x,
+    },
+    ParamSpec {
+        id: "bend",
+        name: "Bend range",
+        group: Group::Slide,
+        kind: ParamKind::Float {
+            min: 0.0,
+            max: 24.0,
+            default: 2.0,
+            unit: " st",
+            scale: Scale::Linear,
+            display: ValueDisplay::Plain,
+            step: Some(0.5),
+            poly: None,
+        },
+        maps_to: "[`Settings::bend_range`]",
+        get: |v| v.bend_range,
+        put: |v, x| v.bend_range = x,
+    },
+    ParamSpec {
+        id: "hand",
+        name: "Hand height",
+        group: Group::Slide,
+        kind: ParamKind::Float {
+            min: -3.0,
+            max: 3.0,
+            default: -1.5,
+            unit: " mm",
+            scale: Scale::Linear,
+            display: ValueDisplay::Rounded(2),
+            step: None,
+            poly: Some(NoteParam::HandHeight),
+        },
+        maps_to: "[`Settings::hand_height`]",
+        get: |v| v.hand_mm,
+        put: |v, x| v.hand_mm = x,
+    },
+    ParamSpec {
+        id: "handsrc",
+        name: "Hand height from",
+        group: Group::Slide,
+        kind: ParamKind::Choice {
+            options: &[
+                ("param", "Parameter"),
+                ("modwheel", "Mod wheel"),
+                ("chanpress", "Channel pressure"),
+                ("polypress", "Poly pressure"),
+            ],
+            default: 0,
+        },
+        maps_to: "[`Settings::hand_source`]",
+        get: |v| index(HAND_SOURCES, v.hand_source),
+        put: |v, x| v.hand_source = pick(HAND_SOURCES, x),
+    },
+    ParamSpec {
+        id: "smass",
+        name: "Slide mass",
+        group: Group::Slide,
+        kind: float(5.0, 200.0, 30.0, " g", Scale::Skewed(-1.5), ValueDisplay::Rounded(1)),
+        maps_to: "[`Settings::slide_mass`]",
+        get: |v| v.slide_mass_g,
+        put: |v, x| v.slide_mass_g = x,
+    },
+    ParamSpec {
+        id: "hstiff",
+        name: "Hand stiffness",
+        group: Group::Slide,
+        kind: float(1e2, 1e6, 1e4, " N/m", Scale::Skewed(-2.5), ValueDisplay::Rounded(0)),
+        maps_to: "[`Settings::hand_stiffness`]",
+        get: |v| v.hand_stiffness,
+        put: |v, x| v.hand_stiffness = x,
+    },
+    ParamSpec {
+        id: "hdamp",
+        name: "Hand damping",
+        group: Group::Slide,
+        kind: float(0.0, 100.0, 5.0, " kg/s", Scale::Linear, ValueDisplay::Rounded(1)),
+        maps_to: "[`Settings::hand_damping`]",
+        get: |v| v.hand_damping,
+        put: |v, x| v.hand_damping = x,
+    },
+    ParamSpec {
+        id: "fdamp",
+        name: "Finger damping",
+        group: Group::Slide,
+        kind: float(0.0, 50.0, 5.0, " s/m", Scale::Linear, ValueDisplay::Rounded(1)),
+        maps_to: "[`Settings::finger_damping`]",
+        get: |v| v.finger_damping,
+        put: |v, x| v.finger_damping = x,
+    },
+    ParamSpec {
+        id: "kappa",
+        name: "Slide stiffness",
+        group: Group::Slide,
+        kind: float(1e6, 1e13, 1e9, " N/m^a", Scale::Skewed(-3.0), ValueDisplay::Scientific(2)),
+        maps_to: "[`Settings::slide_kappa`] (κ)",
+        get: |v| v.kappa,
+        put: |v, x| v.kappa = x,
+    },
+    ParamSpec {
+        id: "alpha",
+        name: "Slide exponent",
+        group: Group::Slide,
+        kind: float(1.0, 3.0, 1.5, "", Scale::Linear, ValueDisplay::Rounded(2)),
+        maps_to: "[`Settings::slide_alpha`] (α)",
+        get: |v| v.alpha,
+        put: |v, x| v.alpha = x,
+    },
+    ParamSpec {
+        id: "pluck",
+        name: "Pluck position",
+        group: Group::Slide,
+        kind: float(0.5, 0.98, 0.9, "", Scale::Linear, ValueDisplay::Rounded(3)),
+        maps_to: "[`Settings::pluck_position`] (fraction of the length)",
+        get: |v| v.pluck_position,
+        put: |v, x| v.pluck_position = x,
+    },
+    ParamSpec {
+        id: "pickup",
+        name: "Pickup position",
+        group: Group::Slide,
+        kind: float(0.5, 0.98, 0.9, "", Scale::Linear, ValueDisplay::Rounded(3)),
+        maps_to: "[`Settings::pickup_position`] (fraction of the length)",
+        get: |v| v.pickup_position,
+        put: |v, x| v.pickup_position = x,
+    },
+    ParamSpec {
+        id: "gain",
+        name: "Output gain",
+        group: Group::Output,
+        kind: float(-36.0, 12.0, 0.0, " dB", Scale::Decibels, ValueDisplay::Rounded(1)),
+        maps_to: "[`Settings::gain`] (linear)",
+        get: |v| v.gain,
+        put: |v, x| v.gain = x,
+    },
+    ParamSpec {
+        id: "limit",
+        name: "Safety limiter",
+        group: Group::Output,
+        kind: ParamKind::Bool { default: true },
+        maps_to: "[`Settings::limiter`]",
+        get: |v| switch(v.limiter),
+        put: |v, x| v.limiter = x != 0.0,
+    },
 ];
 
-/// Plain parameter values (the plugin's units: ms, mm, g, linear gain).
+/// The parameter ids, in display order.
+pub const PARAM_IDS: [&str; 27] = {
+    let mut ids = [""; 27];
+    let mut i = 0;
+    while i < ids.len() {
+        ids[i] = PARAMETERS[i].id;
+        i += 1;
+    }
+    ids
+};
+
+/// The index in [`PARAMETERS`] of parameter `id`. In a constant, an unknown id is a compile error.
+pub const fn param_index(id: &str) -> usize {
+    let mut i = 0;
+    while i < PARAMETERS.len() {
+        if same(PARAMETERS[i].id.as_bytes(), id.as_bytes()) {
+            return i;
+        }
+        i += 1;
+    }
+    panic!("no parameter has this id")
+}
+
+/// Byte-wise equality, usable in constants.
+const fn same(a: &[u8], b: &[u8]) -> bool {
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
+/// The parameter with id `id`, if any.
+pub fn param_spec(id: &str) -> Option<&'static ParamSpec> {
+    PARAMETERS.iter().find(|p| p.id == id)
+}
+
+impl ParamSpec {
+    /// The default as a plain value (what [`ParamSpec::get`] gives for it).
+    pub fn default_plain(&self) -> f32 {
+        match self.kind {
+            ParamKind::Float { default, scale, .. } => scale.to_plain(default),
+            ParamKind::Int { default, .. } => default as f32,
+            ParamKind::Bool { default } => switch(default),
+            ParamKind::Choice { default, .. } => default as f32,
+        }
+    }
+
+    /// The number of steps a host sees (CLAP value range 0..=steps) for a stepped parameter;
+    /// `None` for a continuous one.
+    pub const fn step_count(&self) -> Option<u32> {
+        match self.kind {
+            ParamKind::Float { .. } => None,
+            ParamKind::Int { min, max, .. } => Some(max.abs_diff(min)),
+            ParamKind::Bool { .. } => Some(1),
+            ParamKind::Choice { options, .. } => Some(options.len() as u32 - 1),
+        }
+    }
+
+    /// The value `text` gives this parameter, in its shown unit (gain in dB, choices as their
+    /// index, switches 0 or 1), or what was expected instead. Not range-checked.
+    pub fn parse(&self, text: &str) -> Result<f32, String> {
+        match self.kind {
+            ParamKind::Float { .. } => {
+                text.trim().parse::<f32>().ok().filter(|v| v.is_finite()).ok_or_else(|| "a finite number".into())
+            }
+            ParamKind::Int { .. } => text.trim().parse::<i32>().map(|v| v as f32).map_err(|_| "a whole number".into()),
+            ParamKind::Bool { .. } => match text.trim() {
+                "on" | "true" | "1" => Ok(1.0),
+                "off" | "false" | "0" => Ok(0.0),
+                _ => Err("on or off".into()),
+            },
+            ParamKind::Choice { options, .. } => {
+                options.iter().position(|(id, _)| *id == text).map(|i| i as f32).ok_or_else(|| {
+                    let ids: Vec<&str> = options.iter().map(|(id, _)| *id).collect();
+                    match ids.split_last() {
+                        Some((last, [])) => (*last).to_owned(),
+                        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+                        None => String::new(),
+                    }
+                })
+            }
+        }
+    }
+
+    /// The plain value of `shown`, a value in the parameter's shown unit (gain: dB to linear).
+    pub fn to_plain(&self, shown: f32) -> f32 {
+        match self.kind {
+            ParamKind::Float { scale, .. } => scale.to_plain(shown),
+            _ => shown,
+        }
+    }
+
+    /// Whether `shown`, a value in the parameter's shown unit, is in its range.
+    pub fn contains(&self, shown: f32) -> bool {
+        match self.kind {
+            ParamKind::Float { min, max, .. } => (min..=max).contains(&shown),
+            ParamKind::Int { min, max, .. } => (min as f32..=max as f32).contains(&shown),
+            ParamKind::Bool { .. } => shown == 0.0 || shown == 1.0,
+            ParamKind::Choice { options, .. } => (0.0..options.len() as f32).contains(&shown),
+        }
+    }
+
+    /// The range as the documentation writes it: `1..=64`, `-36..=12 dB`, `1e6..=1e13 N/m^a`,
+    /// `on/off`, or the options' names.
+    pub fn range_text(&self) -> String {
+        match self.kind {
+            ParamKind::Float { min, max, unit, .. } => format!("{}..={}{unit}", number_text(min), number_text(max)),
+            ParamKind::Int { min, max, unit, .. } => format!("{min}..={max}{unit}"),
+            ParamKind::Bool { .. } => "on/off".into(),
+            ParamKind::Choice { options, .. } => options.iter().map(|(_, name)| *name).collect::<Vec<_>>().join(", "),
+        }
+    }
+
+    /// The default as the documentation writes it (`60 1/s`, `1e9 N/m^a`, `Piano`, `on`).
+    pub fn default_text(&self) -> String {
+        match self.kind {
+            ParamKind::Float { default, unit, .. } => format!("{}{unit}", number_text(default)),
+            ParamKind::Int { default, unit, .. } => format!("{default}{unit}"),
+            ParamKind::Bool { default } => (if default { "on" } else { "off" }).into(),
+            ParamKind::Choice { options, default } => options[default].1.into(),
+        }
+    }
+}
+
+/// A number as the documentation writes it: `0.25`, `2000`, and from 1e5 up in powers of ten
+/// (`1e6`).
+fn number_text(value: f32) -> String {
+    if value.abs() >= 1e5 { format!("{value:e}") } else { value.to_string() }
+}
+
+impl Scale {
+    /// The plain value of `shown` (dB to linear gain for [`Scale::Decibels`]).
+    pub fn to_plain(self, shown: f32) -> f32 {
+        match self {
+            Scale::Decibels => 10f32.powf(shown / 20.0),
+            Scale::Linear | Scale::Skewed(_) => shown,
+        }
+    }
+}
+
+/// Plain parameter values (the plugin's units: ms, mm, g, linear gain). [`PARAMETERS`] says which
+/// field each id sets.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ParamValues {
     /// `mode`.
@@ -74,37 +669,41 @@ pub struct ParamValues {
 }
 
 impl Default for ParamValues {
+    /// Every parameter at its default in [`PARAMETERS`].
     fn default() -> Self {
-        let d = Settings::default();
-        Self {
-            mode: d.mode,
-            method: d.method,
-            segments: d.segments as i32,
-            block: d.block as i32,
-            voices: 32,
-            hardness: 1.0,
-            hammer_mass: 1.0,
-            strike_position: 1.0,
-            damping: 1.0,
-            brightness: 1.0,
-            damper: d.damper_rate as f32,
-            slide_position: d.slide_position as f32,
-            follow_key: d.follow_key,
-            glide_ms: (d.glide_time * 1000.0) as f32,
-            bend_range: d.bend_range as f32,
-            hand_mm: (d.hand_height * 1000.0) as f32,
-            hand_source: d.hand_source,
-            slide_mass_g: (d.slide_mass * 1000.0) as f32,
-            hand_stiffness: d.hand_stiffness as f32,
-            hand_damping: d.hand_damping as f32,
-            finger_damping: d.finger_damping as f32,
-            kappa: d.slide_kappa as f32,
-            alpha: d.slide_alpha as f32,
-            pluck_position: d.pluck_position as f32,
-            pickup_position: d.pickup_position as f32,
-            gain: d.gain as f32,
-            limiter: d.limiter,
+        let mut values = Self {
+            mode: Mode::Piano,
+            method: Method::Qsa,
+            segments: 0,
+            block: 0,
+            voices: 0,
+            hardness: 0.0,
+            hammer_mass: 0.0,
+            strike_position: 0.0,
+            damping: 0.0,
+            brightness: 0.0,
+            damper: 0.0,
+            slide_position: 0.0,
+            follow_key: false,
+            glide_ms: 0.0,
+            bend_range: 0.0,
+            hand_mm: 0.0,
+            hand_source: HandSource::Parameter,
+            slide_mass_g: 0.0,
+            hand_stiffness: 0.0,
+            hand_damping: 0.0,
+            finger_damping: 0.0,
+            kappa: 0.0,
+            alpha: 0.0,
+            pluck_position: 0.0,
+            pickup_position: 0.0,
+            gain: 0.0,
+            limiter: false,
+        };
+        for spec in &PARAMETERS {
+            (spec.put)(&mut values, spec.default_plain());
         }
+        values
     }
 }
 
@@ -122,7 +721,7 @@ pub enum ParamError {
         /// The text given.
         value: String,
         /// What was expected.
-        expected: &'static str,
+        expected: String,
     },
 }
 
@@ -161,132 +760,36 @@ impl ParamValues {
         }
     }
 
-    /// Set parameter `id` from text: numbers in the parameter's unit (`gain` in dB, like the
-    /// plugin shows it), `on`/`off` for `follow` and `limit`, names for the choices (`piano`/`slide`,
-    /// `qsa`/`exp`/`imp`, `param`/`modwheel`/`chanpress`/`polypress`).
+    /// Set parameter `id` from text ([`ParamSpec::parse`]): numbers in the parameter's unit
+    /// (`gain` in dB, like the plugin shows it), `on`/`off` for switches, option ids for the
+    /// choices (`piano`/`slide`, `qsa`/`exp`/`imp`, `param`/`modwheel`/`chanpress`/`polypress`).
     pub fn set(&mut self, id: &str, value: &str) -> Result<(), ParamError> {
-        let bad = |expected| ParamError::BadValue { id: id.to_owned(), value: value.to_owned(), expected };
-        let number =
-            || value.trim().parse::<f32>().ok().filter(|v| v.is_finite()).ok_or_else(|| bad("a finite number"));
-        let whole = || value.trim().parse::<i32>().map_err(|_| bad("a whole number"));
-        let switch = || match value.trim() {
-            "on" | "true" | "1" => Some(true),
-            "off" | "false" | "0" => Some(false),
-            _ => None,
-        };
-        match id {
-            "mode" => {
-                self.mode = match value {
-                    "piano" => Mode::Piano,
-                    "slide" => Mode::Slide,
-                    _ => return Err(bad("piano or slide")),
-                }
-            }
-            "solver" => {
-                self.method = match value {
-                    "qsa" => Method::Qsa,
-                    "exp" => Method::Exp,
-                    "imp" => Method::Imp,
-                    _ => return Err(bad("qsa, exp or imp")),
-                }
-            }
-            "handsrc" => {
-                self.hand_source = match value {
-                    "param" => HandSource::Parameter,
-                    "modwheel" => HandSource::ModWheel,
-                    "chanpress" => HandSource::ChannelPressure,
-                    "polypress" => HandSource::PolyPressure,
-                    _ => return Err(bad("param, modwheel, chanpress or polypress")),
-                }
-            }
-            "follow" => self.follow_key = switch().ok_or_else(|| bad("on or off"))?,
-            "limit" => self.limiter = switch().ok_or_else(|| bad("on or off"))?,
-            "segs" => self.segments = whole()?,
-            "nb" => self.block = whole()?,
-            "voices" => self.voices = whole()?,
-            "hard" => self.hardness = number()?,
-            "hmass" => self.hammer_mass = number()?,
-            "strike" => self.strike_position = number()?,
-            "damp" => self.damping = number()?,
-            "bright" => self.brightness = number()?,
-            "damper" => self.damper = number()?,
-            "slide" => self.slide_position = number()?,
-            "glide" => self.glide_ms = number()?,
-            "bend" => self.bend_range = number()?,
-            "hand" => self.hand_mm = number()?,
-            "smass" => self.slide_mass_g = number()?,
-            "hstiff" => self.hand_stiffness = number()?,
-            "hdamp" => self.hand_damping = number()?,
-            "fdamp" => self.finger_damping = number()?,
-            "kappa" => self.kappa = number()?,
-            "alpha" => self.alpha = number()?,
-            "pluck" => self.pluck_position = number()?,
-            "pickup" => self.pickup_position = number()?,
-            "gain" => self.gain = 10f32.powf(number()? / 20.0),
-            _ => return Err(ParamError::UnknownId(id.to_owned())),
-        }
+        let spec = param_spec(id).ok_or_else(|| ParamError::UnknownId(id.to_owned()))?;
+        let shown = spec.parse(value).map_err(|expected| ParamError::BadValue {
+            id: id.to_owned(),
+            value: value.to_owned(),
+            expected,
+        })?;
+        (spec.put)(self, spec.to_plain(shown));
         Ok(())
     }
 
     /// The plugin's plain value of parameter `id` as an `f32`, as a host-facing parameter holds it:
     /// numbers in the parameter's unit (`gain` linear, not dB), whole numbers as themselves,
-    /// `follow` and `limit` as 0 or 1, and choices as their index in the plugin's order (`mode`:
-    /// piano, slide; `solver`: qsa, exp, imp; `handsrc`: param, modwheel, chanpress, polypress).
-    /// `None` for an unknown id. This is how a preset is applied to the plugin's parameters.
+    /// switches as 0 or 1, and choices as their option index. `None` for an unknown id. This is how
+    /// a preset is applied to the plugin's parameters.
     pub fn plain(&self, id: &str) -> Option<f32> {
-        let switch = |on: bool| if on { 1.0 } else { 0.0 };
-        Some(match id {
-            "mode" => match self.mode {
-                Mode::Piano => 0.0,
-                Mode::Slide => 1.0,
-            },
-            "solver" => match self.method {
-                Method::Qsa => 0.0,
-                Method::Exp => 1.0,
-                Method::Imp => 2.0,
-            },
-            "handsrc" => match self.hand_source {
-                HandSource::Parameter => 0.0,
-                HandSource::ModWheel => 1.0,
-                HandSource::ChannelPressure => 2.0,
-                HandSource::PolyPressure => 3.0,
-            },
-            "follow" => switch(self.follow_key),
-            "limit" => switch(self.limiter),
-            "segs" => self.segments as f32,
-            "nb" => self.block as f32,
-            "voices" => self.voices as f32,
-            "hard" => self.hardness,
-            "hmass" => self.hammer_mass,
-            "strike" => self.strike_position,
-            "damp" => self.damping,
-            "bright" => self.brightness,
-            "damper" => self.damper,
-            "slide" => self.slide_position,
-            "glide" => self.glide_ms,
-            "bend" => self.bend_range,
-            "hand" => self.hand_mm,
-            "smass" => self.slide_mass_g,
-            "hstiff" => self.hand_stiffness,
-            "hdamp" => self.hand_damping,
-            "fdamp" => self.finger_damping,
-            "kappa" => self.kappa,
-            "alpha" => self.alpha,
-            "pluck" => self.pluck_position,
-            "pickup" => self.pickup_position,
-            "gain" => self.gain,
-            _ => return None,
-        })
+        param_spec(id).map(|spec| (spec.get)(self))
     }
 
-    /// The first parameter (in [`PARAM_IDS`] order) whose plain value differs from `other`'s by
+    /// The first parameter (in [`PARAMETERS`] order) whose plain value differs from `other`'s by
     /// more than a host's `f32` normalisation can account for (relative 1e-4, or 1e-5 absolute
     /// near zero), or `None` when they match. Used to mark a preset as modified.
     pub fn first_difference(&self, other: &Self) -> Option<&'static str> {
-        PARAM_IDS.into_iter().find(|id| {
-            let (a, b) = (self.plain(id).unwrap_or(0.0), other.plain(id).unwrap_or(0.0));
-            (a - b).abs() > 1e-5f32.max(1e-4 * a.abs().max(b.abs()))
-        })
+        PARAMETERS
+            .iter()
+            .map(|spec| (spec.id, (spec.get)(self), (spec.get)(other)))
+            .find_map(|(id, a, b)| ((a - b).abs() > 1e-5f32.max(1e-4 * a.abs().max(b.abs()))).then_some(id))
     }
 }
 
@@ -294,12 +797,108 @@ impl ParamValues {
 mod tests {
     use super::*;
 
+    /// Ids are unique, every default is in its range, and `param_index` finds each.
+    #[test]
+    fn the_table_is_consistent() {
+        for (i, spec) in PARAMETERS.iter().enumerate() {
+            assert_eq!(param_index(spec.id), i);
+            assert_eq!(PARAMETERS.iter().filter(|p| p.id == spec.id).count(), 1, "{} is unique", spec.id);
+            let shown = match spec.kind {
+                ParamKind::Float { default, .. } => default,
+                _ => spec.default_plain(),
+            };
+            assert!(spec.contains(shown), "{}: default in range", spec.id);
+        }
+    }
+
+    /// Released ids never change: saved state, automation, presets and hosts refer to them.
+    #[test]
+    fn ids_are_the_released_ones() {
+        let released = [
+            "mode", "solver", "segs", "nb", "voices", "hard", "hmass", "strike", "damp", "bright", "damper", "slide",
+            "follow", "glide", "bend", "hand", "handsrc", "smass", "hstiff", "hdamp", "fdamp", "kappa", "alpha",
+            "pluck", "pickup", "gain", "limit",
+        ];
+        assert_eq!(PARAM_IDS, released);
+    }
+
+    /// The table's defaults are the engine's defaults.
     #[test]
     fn defaults_give_the_default_settings() {
         let s = ParamValues::default().settings();
         let d = Settings::default();
         assert_eq!((s.mode, s.method, s.segments, s.block), (d.mode, d.method, d.segments, d.block));
-        assert!((s.glide_time - d.glide_time).abs() < 1e-9 && (s.hand_height - d.hand_height).abs() < 1e-9);
+        assert_eq!((s.follow_key, s.hand_source, s.limiter), (d.follow_key, d.hand_source, d.limiter));
+        let pairs = [
+            (s.hardness, d.hardness),
+            (s.hammer_mass, d.hammer_mass),
+            (s.strike_position, d.strike_position),
+            (s.damping, d.damping),
+            (s.brightness, d.brightness),
+            (s.damper_rate, d.damper_rate),
+            (s.slide_position, d.slide_position),
+            (s.glide_time, d.glide_time),
+            (s.bend_range, d.bend_range),
+            (s.hand_height, d.hand_height),
+            (s.slide_mass, d.slide_mass),
+            (s.hand_stiffness, d.hand_stiffness),
+            (s.hand_damping, d.hand_damping),
+            (s.finger_damping, d.finger_damping),
+            (s.slide_kappa, d.slide_kappa),
+            (s.slide_alpha, d.slide_alpha),
+            (s.pluck_position, d.pluck_position),
+            (s.pickup_position, d.pickup_position),
+            (s.gain, d.gain),
+        ];
+        for (i, (got, want)) in pairs.into_iter().enumerate() {
+            assert!((got - want).abs() <= 1e-7 * want.abs().max(1e-3), "pair {i}: {got} vs {want}");
+        }
+    }
+
+    /// The engine's clamping ([`Settings::sanitized`]) keeps every continuous parameter's whole
+    /// range and no more: the table's ranges are the engine's (gain aside, whose engine range is
+    /// wider).
+    #[test]
+    fn ranges_are_the_engines() {
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * a.abs().max(b.abs()).max(1e-9);
+        let fields = |s: &Settings| {
+            [s.hardness, s.hammer_mass, s.strike_position, s.damping, s.brightness, s.damper_rate, s.slide_position]
+                .into_iter()
+                .chain([s.glide_time, s.bend_range, s.hand_height, s.slide_mass, s.hand_stiffness, s.hand_damping])
+                .chain([s.finger_damping, s.slide_kappa, s.slide_alpha, s.pluck_position, s.pickup_position])
+                .collect::<Vec<f64>>()
+        };
+        for spec in PARAMETERS.iter().filter(|p| p.id != "gain") {
+            let ParamKind::Float { min, max, .. } = spec.kind else { continue };
+            let span = max - min;
+            for (shown, inside) in [(min, true), (max, true), (min - 0.01 * span, false), (max + 0.01 * span, false)] {
+                let mut values = ParamValues::default();
+                (spec.put)(&mut values, shown);
+                let settings = values.settings();
+                let unchanged =
+                    fields(&settings).into_iter().zip(fields(&settings.sanitized())).all(|(a, b)| close(a, b));
+                assert_eq!(unchanged, inside, "{} = {shown}", spec.id);
+            }
+        }
+        for (id, max) in [("segs", MAX_SEGMENTS), ("nb", MAX_BLOCK), ("voices", MAX_VOICES)] {
+            let Some(ParamSpec { kind: ParamKind::Int { min, max: top, .. }, .. }) = param_spec(id) else {
+                panic!("{id} is a whole number")
+            };
+            assert_eq!((*min, *top), (1, max as i32), "{id}");
+        }
+    }
+
+    /// The solver's option ids are the methods' names, which are serde's (scene files).
+    #[test]
+    fn solver_names_are_the_methods_names() {
+        for method in Method::ALL {
+            assert_eq!(Method::from_name(method.name()), Some(method));
+            assert_eq!(toml::Value::try_from(method).unwrap(), toml::Value::String(method.name().into()));
+            let mut values = ParamValues::default();
+            values.set("solver", method.name()).unwrap();
+            assert_eq!(values.method, method);
+        }
+        assert_eq!(Method::from_name("QSA"), None);
     }
 
     #[test]
@@ -319,7 +918,9 @@ mod tests {
         assert!((p.gain - 10f32.powf(0.1)).abs() < 1e-6, "gain is given in dB");
         assert!(matches!(p.set("kapa", "1"), Err(ParamError::UnknownId(_))));
         assert!(p.set("hard", "nan").is_err());
-        assert!(p.set("mode", "banjo").is_err());
+        assert_eq!(p.set("mode", "banjo").unwrap_err().to_string(), "mode: cannot use \"banjo\" (piano or slide)");
+        let expected = p.set("handsrc", "foot").unwrap_err().to_string();
+        assert_eq!(expected, "handsrc: cannot use \"foot\" (param, modwheel, chanpress or polypress)");
     }
 
     /// `plain` knows every id, reads back what `set` stored (gain linear, choices as indices) and
@@ -342,6 +943,12 @@ mod tests {
             p.set(id, text).unwrap();
             let got = p.plain(id).unwrap();
             assert!((got - plain).abs() < 1e-6, "{id}: {got}, expected {plain}");
+        }
+        for spec in &PARAMETERS {
+            let mut values = defaults;
+            (spec.put)(&mut values, spec.default_plain());
+            assert_eq!(values, defaults, "{}: put and get agree on the default", spec.id);
+            assert_eq!((spec.get)(&defaults), spec.default_plain(), "{}", spec.id);
         }
         assert_eq!(defaults.first_difference(&defaults), None);
         let mut q = defaults;

@@ -21,9 +21,7 @@
 
 use std::sync::OnceLock;
 
-use crate::instrument::MAX_VOICES;
-use crate::instrument::params::{ParamError, ParamValues};
-use crate::instrument::settings::{MAX_BLOCK, MAX_SEGMENTS, Settings};
+use crate::instrument::params::{ParamError, ParamValues, param_spec};
 
 /// Preset categories, in the order the editor lists them.
 pub const CATEGORIES: [&str; 4] = ["Paper", "Piano", "Slide", "Contact"];
@@ -131,7 +129,7 @@ pub enum PresetError {
         key: String,
         /// The value as written.
         value: String,
-        /// The range (with a leading space), or where to find it.
+        /// The range, with a leading space.
         range: String,
     },
 }
@@ -183,7 +181,7 @@ pub fn parse_preset(id: &str, text: &str) -> Result<Preset, PresetError> {
             }
         };
         values.set(key, &text).map_err(|source| PresetError::Param { id: id.to_owned(), source })?;
-        check_range(key, &text, &values).map_err(|range| PresetError::OutOfRange {
+        check_range(key, &text).map_err(|range| PresetError::OutOfRange {
             id: id.to_owned(),
             key: key.clone(),
             value: text.clone(),
@@ -193,58 +191,15 @@ pub fn parse_preset(id: &str, text: &str) -> Result<Preset, PresetError> {
     Ok(Preset { id: id.to_owned(), name, category, description, values })
 }
 
-/// Output gain range of the plugin (dB).
-const GAIN_RANGE_DB: (f32, f32) = (-36.0, 12.0);
-
-/// Whether parameter `key` of `values` (just set from `text`) is in its range: the engine's own
-/// clamping ([`Settings::sanitized`]) must leave it alone, and the counts and the gain must be
-/// within the plugin's ranges. `Err` holds the range to quote, where simple.
-fn check_range(key: &str, text: &str, values: &ParamValues) -> Result<(), String> {
-    let whole = |value: i32, max: usize| {
-        if (1..=max as i32).contains(&value) { Ok(()) } else { Err(format!(" 1..={max}")) }
-    };
-    match key {
-        "segs" => return whole(values.segments, MAX_SEGMENTS),
-        "nb" => return whole(values.block, MAX_BLOCK),
-        "voices" => return whole(values.voices, MAX_VOICES),
-        "gain" => {
-            let db: f32 = text.trim().parse().unwrap_or(f32::NAN);
-            let (lo, hi) = GAIN_RANGE_DB;
-            return if (lo..=hi).contains(&db) { Ok(()) } else { Err(format!(" {lo}..={hi} dB")) };
-        }
-        _ => {}
+/// Whether `text`, just accepted for parameter `key`, is in the parameter's range, in the unit the
+/// preset writes (gain in dB; [`ParamSpec::contains`](crate::instrument::ParamSpec::contains)).
+/// `Err` holds the range to quote, with a leading space.
+fn check_range(key: &str, text: &str) -> Result<(), String> {
+    let Some(spec) = param_spec(key) else { return Ok(()) };
+    match spec.parse(text) {
+        Ok(shown) if !spec.contains(shown) => Err(format!(" {}", spec.range_text())),
+        _ => Ok(()),
     }
-    // Only `key` differs from the defaults, which are all in range: any clamping is its.
-    let mut alone = ParamValues::default();
-    alone.set(key, text).map_err(|_| String::new())?;
-    let settings = alone.settings();
-    let range = " (plugin/src/params.rs lists the ranges)";
-    if clamped(&settings, &settings.sanitized()) { Err(range.into()) } else { Ok(()) }
-}
-
-/// Whether sanitising changed any continuous setting by more than rounding.
-fn clamped(a: &Settings, b: &Settings) -> bool {
-    let pairs = [
-        (a.hardness, b.hardness),
-        (a.hammer_mass, b.hammer_mass),
-        (a.strike_position, b.strike_position),
-        (a.damping, b.damping),
-        (a.brightness, b.brightness),
-        (a.damper_rate, b.damper_rate),
-        (a.slide_position, b.slide_position),
-        (a.glide_time, b.glide_time),
-        (a.bend_range, b.bend_range),
-        (a.hand_height, b.hand_height),
-        (a.slide_mass, b.slide_mass),
-        (a.hand_stiffness, b.hand_stiffness),
-        (a.hand_damping, b.hand_damping),
-        (a.finger_damping, b.finger_damping),
-        (a.pluck_position, b.pluck_position),
-        (a.pickup_position, b.pickup_position),
-        (a.slide_kappa, b.slide_kappa),
-        (a.slide_alpha, b.slide_alpha),
-    ];
-    pairs.iter().any(|&(x, y)| (x - y).abs() > 1e-6 * x.abs().max(y.abs()).max(1e-9))
 }
 
 /// Every factory preset, parsed, or the first error.
@@ -306,8 +261,8 @@ solver = "imp"
         let cases = [
             (param("kapa = 1"), "[params] unknown parameter id \"kapa\" (one of: mode, solver"),
             (param("hard = \"soft\""), "[params] hard: cannot use \"soft\" (a finite number)"),
-            (param("hard = 20"), "[params] hard = 20 is outside the parameter's range (plugin/src/params.rs"),
-            (param("pluck = 0.3"), "[params] pluck = 0.3 is outside the parameter's range"),
+            (param("hard = 20"), "[params] hard = 20 is outside the parameter's range 0.1..=10×"),
+            (param("pluck = 0.3"), "[params] pluck = 0.3 is outside the parameter's range 0.5..=0.98"),
             (param("segs = 65"), "[params] segs = 65 is outside the parameter's range 1..=64"),
             (param("segs = 6.5"), "[params] segs: cannot use \"6.5\" (a whole number)"),
             (param("gain = 20"), "[params] gain = 20 is outside the parameter's range -36..=12 dB"),
@@ -367,6 +322,18 @@ solver = "imp"
         let order: Vec<usize> =
             presets.iter().map(|p| CATEGORIES.iter().position(|c| *c == p.category).unwrap()).collect();
         assert!(order.windows(2).all(|w| w[0] <= w[1]), "FACTORY_PRESETS is grouped by category");
+    }
+
+    /// Every key of every factory preset's `[params]` is a parameter id of the table.
+    #[test]
+    fn every_preset_key_is_a_parameter_id() {
+        for (id, text) in FACTORY_PRESETS {
+            let table: toml::Table = text.parse().unwrap();
+            let params = table.get("params").and_then(toml::Value::as_table).cloned().unwrap_or_default();
+            for key in params.keys() {
+                assert!(param_spec(key).is_some(), "{id}: {key} is not a parameter id");
+            }
+        }
     }
 
     #[test]

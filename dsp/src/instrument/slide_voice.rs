@@ -22,8 +22,8 @@
 //! - the left finger trails the slide by 2 cm with 0.3 N while the voice sounds, damping the
 //!   dead part of the string;
 //! - note-on plucks with the right finger at the plucking position: the force ramps up over
-//!   [`PLUCK_TIME`] to `0.3 + 2.7·velocity` N and is then released; note-off lays the finger on
-//!   with 0.3 N, muting the string.
+//!   [`PLUCK_TIME`] to [`pluck_force`] `0.3 + 2.7·velocity` N and is then released; note-off lays
+//!   the finger on with 0.3 N, muting the string.
 //!
 //! The slide's mass, the hand's stiffness and damping, the contact law (κ, α), the solver and
 //! its segments belong to the voice's note: a note on a silent voice takes the current ones, and
@@ -47,9 +47,9 @@ use crate::contact::{Method, PowerLaw};
 use crate::control::Live;
 use crate::exciter::SlideParams;
 use crate::instrument::notes::NoteParam;
+use crate::instrument::piano_voice::{GUARD_FACTOR, RELEASE_ENERGY, Strike};
 use crate::instrument::settings::{HAND_RANGE, HandSource, Settings};
 use crate::instrument::solvers::Solvers;
-use crate::instrument::voice::{RELEASE_ENERGY, Strike};
 use crate::preset::slide_guitar;
 use crate::scene::{OutputKind, Pickup, SlideControls, SlideCore, SlideStringParams};
 use crate::string::ModalString;
@@ -72,9 +72,10 @@ pub const SLIDE_SPEED: f64 = 5.0;
 /// Fastest the hand moves the slide towards or away from the string (m/s).
 pub const HAND_SPEED: f64 = 0.5;
 
-/// How far a voice's energy may exceed its bound (energy at the pluck plus the controls' work)
-/// before the guard silences it.
-pub const GUARD_FACTOR: f64 = 10.0;
+/// The right finger's pluck force (N) for a note of `velocity` (0..1): `0.3 + 2.7·velocity`.
+pub fn pluck_force(velocity: f64) -> f64 {
+    0.3 + 2.7 * velocity
+}
 
 /// What the voice reads from its MIDI channel.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -227,10 +228,9 @@ impl SlideVoice {
             if (law, slide, solver) != (self.law, self.slide, self.solver) {
                 self.rest_lifted();
             }
-            // The QSA fit spans twice the largest static push the hand and fingers can make
-            // (the scene-file rule of `SlideStringDescription::default_v_ref`).
-            let push = 2.0 * (slide.stiffness * (-HAND_RANGE.1 + 1e-3) + 3.0 + REST_FORCE);
-            let y_ref = (push / law.kappa()).powf(1.0 / law.alpha());
+            // The QSA fit spans twice the largest static push the hand and fingers can make: the
+            // deepest hand press and the strongest pluck, with the resting finger.
+            let y_ref = slide.reference_compression(&law, -HAND_RANGE.1, pluck_force(1.0), REST_FORCE);
             if !self.solvers.restart(solver.0, law, y_ref, solver.1, self.core.compressions()) {
                 return;
             }
@@ -240,7 +240,7 @@ impl SlideVoice {
         self.energy_at_pluck = self.energy();
         self.work_at_pluck = self.core.control_work();
         // Static energy of the pluck: ½F² x(L − x)/(T L) for a point force F at x.
-        let force = 0.3 + 2.7 * strike.velocity;
+        let force = pluck_force(strike.velocity);
         let (x, t) = (settings.pluck_position * self.length, self.core.string().params().tension);
         self.reference_energy =
             (0.5 * force * force * x * (self.length - x) / (t * self.length)).max(f64::MIN_POSITIVE);
@@ -373,7 +373,7 @@ impl SlideVoice {
         let right_force = match self.pluck {
             Some(t) if t < PLUCK_TIME => {
                 self.pluck = Some(t + span);
-                (0.3 + 2.7 * self.strike.velocity) * ((t + span) / PLUCK_TIME).min(1.0)
+                pluck_force(self.strike.velocity) * ((t + span) / PLUCK_TIME).min(1.0)
             }
             Some(_) => {
                 self.pluck = None;

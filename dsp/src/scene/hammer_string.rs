@@ -1,4 +1,4 @@
-//! A piano hammer striking a modal stiff string (seed §5, physics §6.4).
+//! A piano hammer striking a modal stiff string (seed §5, docs/physics.md §6.4).
 //!
 //! The string runs from the agraffe at `x = 0`, near which the hammer strikes (`x_h` is measured
 //! from there: 0.12 L for the C4 of Chaigne and Askenfelt), to the bridge at `x = L`, whose
@@ -17,7 +17,7 @@
 //! which also projects the next step's `z̃` on `h`: [`ModalString::advance_projecting`]) and one
 //! solve.
 //!
-//! Energy (physics §6.3): `H^{n+1/2}` = string + `½ m_h ((w^{n+1} − w^n)/Δt)²` + the solver's
+//! Energy (docs/physics.md §6.3): `H^{n+1/2}` = string + `½ m_h ((w^{n+1} − w^n)/Δt)²` + the solver's
 //! contact term; `H^{n+1/2} − H^{n−1/2} = −Δt (δ_t·ũ)ᵀ R̂ (δ_t·ũ)` exactly.
 //!
 //! # Retiring the hammer
@@ -80,6 +80,20 @@ pub struct Pickup {
     pub kind: OutputKind,
     /// Pickup position as a fraction of the length, in (0, 1) (unused for the bridge force).
     pub position: f64,
+}
+
+impl Pickup {
+    /// Write the output weights of this pickup on `string` into `out` (a vector fitted to the
+    /// string): the mode shapes `φ_i(x_p)` at the pickup `x_p = position·L` for displacement and
+    /// velocity, the bridge weights `(−1)^{i+1}(Tβ_i + EIβ_i³)` at `x = L` for the bridge force.
+    pub fn weights(&self, string: &ModalString, out: &mut [f64]) {
+        match self.kind {
+            OutputKind::Displacement | OutputKind::Velocity => {
+                string.mode_shapes(self.position * string.params().length, out)
+            }
+            OutputKind::BridgeForce => string.bridge_weights(true, out),
+        }
+    }
 }
 
 /// Parameters of a hammer–string scene.
@@ -230,12 +244,7 @@ impl HammerCore {
         for ((g, h), c) in self.gain.iter_mut().zip(&self.shape).zip(s.input_gains()) {
             *g = h * c;
         }
-        match pickup.kind {
-            OutputKind::Displacement | OutputKind::Velocity => {
-                s.mode_shapes(pickup.position * length, &mut self.pickup)
-            }
-            OutputKind::BridgeForce => s.bridge_weights(true, &mut self.pickup),
-        }
+        pickup.weights(s, &mut self.pickup);
         self.kind = pickup.kind;
         self.q = s.project(&self.shape, &self.gain) + self.hammer.coupling();
         let (mut by_stiffness, mut squares) = (0.0, 0.0);

@@ -8,9 +8,9 @@
 //! ```
 //!
 //! The state is kept as the compression relative to the barrier, `y^n`, and its increment
-//! `δ^n = y^n − y^{n−1}`: `y` is never the difference of two large positions (physics §10.6), and
+//! `δ^n = y^n − y^{n−1}`: `y` is never the difference of two large positions (docs/physics.md §10.6), and
 //! `z = −2δ^n` and the velocity `δ^{n+1}/Δt = (s − δ^n)/Δt` keep full precision however far the
-//! mass travels. The numerical energy (physics §2)
+//! mass travels. The numerical energy (docs/physics.md §2)
 //!
 //! ```text
 //! H^{n+1/2} = ½ m ((y^{n+1} − y^n)/Δt)² + (contact term of the solver)

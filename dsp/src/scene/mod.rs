@@ -11,7 +11,7 @@ mod slide_string;
 
 pub use hammer_string::{HammerCore, HammerString, HammerStringParams, OutputKind, Pickup};
 pub use mass_barrier::{MassBarrier, MassBarrierParams};
-pub use slide_string::{CONTROL_TARGETS, SlideAutomation, SlideControls, SlideCore, SlideString, SlideStringParams};
+pub use slide_string::{SlideControls, SlideCore, SlideString, SlideStringParams};
 
 /// One sample `n` of a scene's signals.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

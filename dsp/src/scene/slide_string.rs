@@ -1,4 +1,4 @@
-//! A slide pressed onto, slid along and lifted off a plucked string (seed §6, physics §7).
+//! A slide pressed onto, slid along and lifted off a plucked string (seed §6, docs/physics.md §7).
 //!
 //! The string ([`ModalString`]) meets
 //! - the slide at `x_o` through the power-law contact, `y = h_oᵀũ − w_o`, `h_o = v(x_o)`, with the
@@ -68,11 +68,11 @@
 //! the controls do, since every vector used to distribute a force is the one used to project the
 //! motion it works on.
 
-use crate::contact::{ContactProblem, ContactSolver};
+use crate::contact::{ContactProblem, ContactSolution, ContactSolver};
 use crate::control::{ControlSource, Ramp};
 use crate::exciter::{FingerParams, HandMotion, SlideHand, SlideParams, finger};
 use crate::scene::{Frame, OutputKind, Pickup, Scene};
-use crate::string::{GramVector, ModalString, StringParams};
+use crate::string::{GramVector, ModalString, StringEnergy, StringParams};
 
 /// The slide scene's control inputs at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -311,6 +311,21 @@ fn block_theta(plan: &Plan, g: &[[f64; SLOTS]; SLOTS]) -> [[[f64; 3]; 3]; 3] {
     theta
 }
 
+/// What the controls give one step with `V` vectors (see [`SlideCore::step_controls`]).
+#[derive(Debug, Clone, Copy)]
+struct StepControls<const V: usize> {
+    /// Fraction `a = k/N_b` of the block.
+    a: f64,
+    /// Weight of each slot's vector in its contact's interpolated vector.
+    weights: [f64; V],
+    /// Hand heights `w_H^{n−1}`, `w_H^n`, `w_H^{n+1}` (m).
+    hand: HandMotion,
+    /// Finger forces `F_φe` (N), left and right.
+    finger_forces: [f64; 2],
+    /// Finger damping coefficients `γ_φ = r_φ|F_φe|/(2Δt)` (N/m), left and right.
+    gamma: [f64; 2],
+}
+
 /// The finger damping forces eliminated in closed form (module docs): the fingers' velocity
 /// projections `s_φ = s_φ0 + s_φ1 F` and the slide's `z_str`, `q_str`.
 #[derive(Debug, Clone, Copy)]
@@ -478,12 +493,7 @@ impl SlideCore {
         let fs = string.sample_rate();
         let block = params.block.max(1);
         let mut pickup = string.vector();
-        match params.pickup.kind {
-            OutputKind::Displacement | OutputKind::Velocity => {
-                string.mode_shapes(params.pickup.position * string.params().length, &mut pickup)
-            }
-            OutputKind::BridgeForce => string.bridge_weights(true, &mut pickup),
-        }
+        params.pickup.weights(&string, &mut pickup);
         let sho = SlideHand::new(params.slide, fs, start.hand_height);
         let mut core = Self {
             vectors: ContactVectors::new(&string, &params.left, &params.right),
@@ -572,12 +582,7 @@ impl SlideCore {
     pub fn set_pickup(&mut self, pickup: Pickup) {
         let s = &self.string;
         s.fit_vector(&mut self.pickup);
-        match pickup.kind {
-            OutputKind::Displacement | OutputKind::Velocity => {
-                s.mode_shapes(pickup.position * s.params().length, &mut self.pickup)
-            }
-            OutputKind::BridgeForce => s.bridge_weights(true, &mut self.pickup),
-        }
+        pickup.weights(s, &mut self.pickup);
         self.kind = pickup.kind;
         self.out_now = s.project_state(&self.pickup).1;
     }
@@ -706,87 +711,34 @@ impl SlideCore {
         self.plan_block();
     }
 
-    /// One step with the `V` vectors `slots` of the current plan.
+    /// One step with the `V` vectors `slots` of the current plan (seed eqs. 65, 72–74;
+    /// docs/physics.md §7.2–7.5): the controls at this step, `z̃` projected on the contacts, the
+    /// vector-change term `J`, the finger damping eliminated, the scalar contact problem solved,
+    /// the string and the slide advanced, and (with `MONITOR`) the energy balance.
     #[inline]
     fn step<S: ContactSolver, const MONITOR: bool, const V: usize>(
         &mut self,
         solver: &mut S,
         slots: [usize; V],
     ) -> Frame {
-        let k = self.k;
-        let plan = self.plan;
-        // Interpolation weights of the vectors at this step (all 1 for contacts held still).
-        let a = k as f64 * self.inv_block;
-        let w: [f64; V] = std::array::from_fn(|j| plan.weight(slots[j], a));
-        let hand = HandMotion { prev: self.hand_prev, now: self.hand.at(k), next: self.hand.at(k + 1) };
-        let f = [self.left_force.at(k), self.right_force.at(k)];
+        let controls = self.step_controls(slots);
         let shapes = &self.vectors.shapes;
         let projections: [f64; V] = self.string.history(std::array::from_fn(|j| &shapes[slots[j]][..]));
-        // `ĥ_ζᵀz̃` and `θ_ζξ = ĥ_ζᵀ(C∘ĥ_ξ)` of the interpolated vectors `ĥ_ζ = Σ w_j h_j`.
-        let mut z = [0.0; 3];
-        for j in 0..V {
-            z[contact(slots[j])] += w[j] * projections[j];
-        }
-        let [c0, c1, c2] = &self.theta;
-        let th = if plan.moving == [false; 3] {
-            *c0
-        } else {
-            std::array::from_fn(|i| std::array::from_fn(|k| c0[i][k] + a * (c1[i][k] + a * c2[i][k])))
-        };
-        // The slide's vector moved since the compression y^{n−1} was measured: the string under
-        // it, `ĥ_oᵀũ^{n−1}`, differs from the carried `y^{n−1} + w_o^{n−1}` by `J`.
-        if (k == 0 && self.slide_jumped) || (k > 0 && plan.moving[SLIDE]) {
-            self.slide_still = 0;
-        }
-        let jump = if self.slide_still < 2 {
-            let mut under = 0.0;
-            for j in 0..V {
-                if contact(slots[j]) == SLIDE {
-                    under += w[j] * self.slide_state[slots[j] % 2][0];
-                }
-            }
-            (under - self.sho.previous()) - self.y_prev
-        } else {
-            0.0
-        };
-        let gamma = [self.r[0] * f[0].abs() / (2.0 * self.dt), self.r[1] * f[1].abs() / (2.0 * self.dt)];
-        let fingers = Elimination::new(&th, z, f, gamma);
-        let z_sho = self.sho.history(&hand);
-        let problem = ContactProblem {
-            y_prev: self.y_prev,
-            y_now: self.y_now,
-            z: fingers.z_str - z_sho - jump,
-            q: fingers.q_str + self.sho.coupling(),
-        };
-        let solution = solver.solve(&problem);
+        let (z, th) = self.contact_projections(slots, &controls, projections);
+        let jump = self.vector_change(slots, &controls.weights);
+        let fingers = Elimination::new(&th, z, controls.finger_forces, controls.gamma);
+        let z_sho = self.sho.history(&controls.hand);
+        let solution = self.solve(solver, &fingers, z_sho, jump);
         let force = solution.force;
-        self.last_force = force;
         let y_next = self.y_prev + solution.s;
         let s_f = [0, 1].map(|i| fingers.s0[i] + fingers.s1[i] * force);
+        let (f, gamma) = (controls.finger_forces, controls.gamma);
         // Modal force along each contact: the slide's F, each finger's F_φe + F_φR.
         let along = [force, f[0] - gamma[0] * s_f[0], f[1] - gamma[1] * s_f[1]];
-        let gains = &self.vectors.gains;
-        let forces: [(&[f64], f64); V] =
-            std::array::from_fn(|j| (&gains[slots[j]][..], w[j] * along[contact(slots[j])]));
-        let (out_next, string_energy) = if MONITOR {
-            self.string.advance_monitored(forces, &self.pickup)
-        } else {
-            (self.string.advance(forces, &self.pickup), Default::default())
-        };
-        // The slide vectors' projections follow the update ũ^{n+1} = ũ^{n−1} − z̃ + Σ C∘ĥ F.
-        let g = &self.vectors.gram;
-        for j in 0..V {
-            if contact(slots[j]) == SLIDE {
-                let mut next = self.slide_state[slots[j] % 2][0] - projections[j];
-                for i in 0..V {
-                    next += g[slots[j]][slots[i]] * forces[i].1;
-                }
-                let state = &mut self.slide_state[slots[j] % 2];
-                *state = [state[1], next];
-            }
-        }
+        let (out_next, string_energy) = self.advance_string::<MONITOR, V>(slots, &controls.weights, along, projections);
         let w_now = self.sho.position();
-        let exchange = self.sho.advance(z_sho, force, &hand);
+        let exchange = self.sho.advance(z_sho, force, &controls.hand);
+        // The controls' work `Δt(P_H + Σ P_φ) − ½F J`, `Δt P_φ = F_φe s_φ/2` (docs/physics.md §7.5.3).
         self.control_work += -0.5 * force * jump + exchange.supplied + 0.5 * (f[0] * s_f[0] + f[1] * s_f[1]);
         let output = self.kind.sample(self.out_now, out_next, self.dt);
         let mut frame = Frame {
@@ -801,21 +753,160 @@ impl SlideCore {
             work: solver.last_work(),
         };
         if MONITOR {
+            // `H^{n+1/2}` = string + SHO + contact, and the losses `Δt(Q_str + Q_o + Σ Q_φ)` with
+            // `Δt Q_φ = γ_φ s_φ²/2` (docs/physics.md §7.4).
             let fingers = 0.5 * (gamma[0] * s_f[0] * s_f[0] + gamma[1] * s_f[1] * s_f[1]);
             self.losses += string_energy.dissipated + fingers + exchange.dissipated;
+            let hand = &controls.hand;
             frame.energy =
                 string_energy.stored + self.sho.energy(hand.now, hand.next) + solver.stored_energy(y_next, self.y_now);
             frame.losses = self.losses;
             frame.control_work = self.control_work;
         }
+        self.move_on(out_next, y_next, controls.hand.now);
+        frame
+    }
+
+    /// The controls at this step, fraction `a = k/N_b` into the block (docs/physics.md §7.5.1):
+    /// the weights of the slots' vectors in the interpolated `ĥ_ζ = Σ_j w_j h_j` (`1 − a` and `a`
+    /// for a moving contact's start and end vectors, 1 for one held still), the hand heights
+    /// `w_H^{n−1}`, `w_H^n`, `w_H^{n+1}` and the finger forces `F_φe` from their ramps, and the
+    /// fingers' damping coefficients `γ_φ = r_φ|F_φe|/(2Δt)` (N/m, §7.3).
+    #[inline(always)]
+    fn step_controls<const V: usize>(&self, slots: [usize; V]) -> StepControls<V> {
+        let k = self.k;
+        let a = k as f64 * self.inv_block;
+        let f = [self.left_force.at(k), self.right_force.at(k)];
+        StepControls {
+            a,
+            weights: std::array::from_fn(|j| self.plan.weight(slots[j], a)),
+            hand: HandMotion { prev: self.hand_prev, now: self.hand.at(k), next: self.hand.at(k + 1) },
+            finger_forces: f,
+            gamma: [self.r[0] * f[0].abs() / (2.0 * self.dt), self.r[1] * f[1].abs() / (2.0 * self.dt)],
+        }
+    }
+
+    /// The projections `z_ζ = ĥ_ζᵀz̃ = Σ_j w_j h_jᵀz̃` (m) of `z̃` on the interpolated contact
+    /// vectors, from the slots' `projections`, and their Gram matrix in the C metric at this step,
+    /// `θ_ζξ(a) = c0 + a(c1 + a·c2)` (m/N; docs/physics.md §7.5.1).
+    #[inline(always)]
+    fn contact_projections<const V: usize>(
+        &self,
+        slots: [usize; V],
+        controls: &StepControls<V>,
+        projections: [f64; V],
+    ) -> ([f64; 3], [[f64; 3]; 3]) {
+        let mut z = [0.0; 3];
+        for j in 0..V {
+            z[contact(slots[j])] += controls.weights[j] * projections[j];
+        }
+        let [c0, c1, c2] = &self.theta;
+        let a = controls.a;
+        let th = if self.plan.moving == [false; 3] {
+            *c0
+        } else {
+            std::array::from_fn(|i| std::array::from_fn(|k| c0[i][k] + a * (c1[i][k] + a * c2[i][k])))
+        };
+        (z, th)
+    }
+
+    /// The vector-change term `J = ĥ_o^nᵀũ^{n−1} − w_o^{n−1} − y^{n−1}` (m; docs/physics.md
+    /// §7.5.2): where the slide's vector moved since the compression `y^{n−1}` was measured, the
+    /// string under it differs from the carried `y^{n−1} + w_o^{n−1}` by `J`; zero once the vector
+    /// has stayed put for two steps.
+    #[inline(always)]
+    fn vector_change<const V: usize>(&mut self, slots: [usize; V], weights: &[f64; V]) -> f64 {
+        let (k, moving) = (self.k, self.plan.moving[SLIDE]);
+        if (k == 0 && self.slide_jumped) || (k > 0 && moving) {
+            self.slide_still = 0;
+        }
+        if self.slide_still >= 2 {
+            return 0.0;
+        }
+        let mut under = 0.0;
+        for j in 0..V {
+            if contact(slots[j]) == SLIDE {
+                under += weights[j] * self.slide_state[slots[j] % 2][0];
+            }
+        }
+        (under - self.sho.previous()) - self.y_prev
+    }
+
+    /// Solve the slide's scalar contact problem with the fingers eliminated and the hand's
+    /// oscillator folded in, `s + (z_str − z_sho − J) − (q_str + q_sho) F = 0` (seed eq. 74 with
+    /// `J`; docs/physics.md §7.3), for `s = y^{n+1} − y^{n−1}` (m) and the force `F` (N).
+    #[inline(always)]
+    fn solve<S: ContactSolver>(
+        &mut self,
+        solver: &mut S,
+        fingers: &Elimination,
+        z_sho: f64,
+        jump: f64,
+    ) -> ContactSolution {
+        let problem = ContactProblem {
+            y_prev: self.y_prev,
+            y_now: self.y_now,
+            z: fingers.z_str - z_sho - jump,
+            q: fingers.q_str + self.sho.coupling(),
+        };
+        let solution = solver.solve(&problem);
+        self.last_force = solution.force;
+        solution
+    }
+
+    /// Advance the string, `ũ^{n+1} = ũ^{n−1} − z̃ + Σ_j (C∘h_j) w_j F_ζ(j)` with `F_ζ` the force
+    /// `along` each contact (seed eq. 65; docs/physics.md §7.2), and the slide vectors'
+    /// projections with it ([`track_slide`](Self::track_slide)). Returns `outputᵀũ^{n+1}` and,
+    /// with `MONITOR`, the string's energy terms.
+    #[inline(always)]
+    fn advance_string<const MONITOR: bool, const V: usize>(
+        &mut self,
+        slots: [usize; V],
+        weights: &[f64; V],
+        along: [f64; 3],
+        projections: [f64; V],
+    ) -> (f64, StringEnergy) {
+        let gains = &self.vectors.gains;
+        let forces: [(&[f64], f64); V] =
+            std::array::from_fn(|j| (&gains[slots[j]][..], weights[j] * along[contact(slots[j])]));
+        let advanced = if MONITOR {
+            self.string.advance_monitored(forces, &self.pickup)
+        } else {
+            (self.string.advance(forces, &self.pickup), Default::default())
+        };
+        self.track_slide(slots, projections, forces.map(|(_, force)| force));
+        advanced
+    }
+
+    /// Move the slide vectors' state projections on by the string update's own recursion,
+    /// `hᵀũ^{n+1} = hᵀũ^{n−1} − hᵀz̃ + Σ_j hᵀ(C∘h_j) F_j` (m; docs/physics.md §7.5.2), with
+    /// `F_j` the modal force along slot `j` (N).
+    #[inline(always)]
+    fn track_slide<const V: usize>(&mut self, slots: [usize; V], projections: [f64; V], forces: [f64; V]) {
+        let g = &self.vectors.gram;
+        for j in 0..V {
+            if contact(slots[j]) == SLIDE {
+                let mut next = self.slide_state[slots[j] % 2][0] - projections[j];
+                for i in 0..V {
+                    next += g[slots[j]][slots[i]] * forces[i];
+                }
+                let state = &mut self.slide_state[slots[j] % 2];
+                *state = [state[1], next];
+            }
+        }
+    }
+
+    /// Move the time index on: the output, the compressions `y^{n−1} ← y^n ← y^{n+1}` and the hand
+    /// height `w_H^{n−1} ← w_H^n`.
+    #[inline(always)]
+    fn move_on(&mut self, out_next: f64, y_next: f64, hand_now: f64) {
         self.out_now = out_next;
         self.y_prev = self.y_now;
         self.y_now = y_next;
-        self.hand_prev = hand.now;
+        self.hand_prev = hand_now;
         self.slide_still = self.slide_still.saturating_add(1);
         self.n += 1;
         self.k += 1;
-        frame
     }
 
     /// Run `count` steps with `solver`, starting blocks where they fall and asking `controls`
@@ -857,66 +948,5 @@ impl SlideCore {
         out: &mut [f64],
     ) {
         self.run::<S, C, false>(solver, controls, out.len(), |i, f| out[i] = f.output);
-    }
-}
-
-/// The control target names used by scene files and automation.
-pub const CONTROL_TARGETS: [&str; 6] = [
-    "slide.position",
-    "hand.height",
-    "finger.left.position",
-    "finger.left.force",
-    "finger.right.position",
-    "finger.right.force",
-];
-
-/// Slide controls from breakpoint automation, one lane per target (in [`CONTROL_TARGETS`]
-/// order), evaluated at `t = n/fs`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SlideAutomation {
-    /// Lanes in [`CONTROL_TARGETS`] order.
-    pub lanes: [crate::control::Breakpoints; 6],
-    /// Sample rate (Hz).
-    pub sample_rate: f64,
-    /// Each lane's segment at the latest sample asked for (see `Breakpoints::at_cursor`).
-    cursors: [usize; 6],
-}
-
-impl SlideAutomation {
-    /// Automation from its lanes (in [`CONTROL_TARGETS`] order) at `sample_rate` (Hz).
-    pub fn new(lanes: [crate::control::Breakpoints; 6], sample_rate: f64) -> Self {
-        Self { lanes, sample_rate, cursors: [0; 6] }
-    }
-
-    /// The values at time `t` (s).
-    pub fn at_time(&self, t: f64) -> SlideControls {
-        let [a, b, c, d, e, f] = &self.lanes;
-        SlideControls {
-            slide_position: a.at(t),
-            hand_height: b.at(t),
-            left_position: c.at(t),
-            left_force: d.at(t),
-            right_position: e.at(t),
-            right_force: f.at(t),
-        }
-    }
-
-    /// Whether every lane is a single constant.
-    pub fn is_constant(&self) -> bool {
-        self.lanes.iter().all(|l| l.points().len() == 1)
-    }
-}
-
-impl ControlSource<SlideControls> for SlideAutomation {
-    const VARYING: bool = true;
-
-    fn at(&mut self, n: u64) -> SlideControls {
-        let t = n as f64 / self.sample_rate;
-        let mut v = [0.0; 6];
-        for ((v, lane), cursor) in v.iter_mut().zip(&self.lanes).zip(&mut self.cursors) {
-            *v = lane.at_cursor(t, cursor);
-        }
-        let [slide_position, hand_height, left_position, left_force, right_position, right_force] = v;
-        SlideControls { slide_position, hand_height, left_position, left_force, right_position, right_force }
     }
 }

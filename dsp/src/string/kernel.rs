@@ -251,58 +251,28 @@ pub fn projections<const K: usize>(isa: Isa, zt: &[f64], vectors: [&[f64]; K]) -
     isa.run(Projections { zt: chunks(zt), vectors: vectors.map(chunks) })
 }
 
-/// A step without forces in one pass, by the homogeneous recursion itself:
+/// Most steps [`free_run`] takes per call.
+pub const RUN: usize = 64;
+
+/// `outputs.len()` (at most [`RUN`]) steps without forces, by the homogeneous recursion itself:
 /// `up = a∘un − (b − 1)∘up`, i.e. `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}` with the full step's own
 /// coefficients (`b − 1 = Q` exactly: `b = 1 + Q` lies in `[1, 2]`, so the subtraction is exact,
-/// and padded modes stay zero); returns `outᵀ up`.
+/// and padded modes stay zero). The state is kept in registers: `up`, `un` hold `ũ^{n−1}`, `ũ^n`
+/// on entry and the last two states on return (no swap needed), and `outputs[t]` receives
+/// `outᵀũ^{n+1+t}`.
 ///
 /// [`history`] then [`advance`] with every force zero compute `up − (b∘up − a∘un)`: the same
 /// recursion, rounded differently (agreeing to a few ulps of the terms per step). This form has a
 /// product and one subtraction on each mode's dependency chain from one step to the next, where
-/// that one has a product and two subtractions, so a run of free steps ([`free_run`]), which is
-/// bound by that chain's latency, is about a third shorter per step.
-#[inline]
-pub fn free(isa: Isa, a: &[f64], b: &[f64], up: &mut [f64], un: &[f64], out: &[f64]) -> f64 {
-    struct Free<'a> {
-        a: &'a [Chunk],
-        b: &'a [Chunk],
-        up: &'a mut [Chunk],
-        un: &'a [Chunk],
-        out: &'a [Chunk],
-    }
-    impl Kernel for Free<'_> {
-        type Output = f64;
-        #[inline(always)]
-        fn run<L: Lanes>(self, s: L) -> f64 {
-            let n = self.up.len();
-            let (a, b, un, out) = (&self.a[..n], &self.b[..n], &self.un[..n], &self.out[..n]);
-            let ups = self.up;
-            let one = s.splat(1.0);
-            let (mut even, mut odd) = (s.splat(0.0), s.splat(0.0));
-            paired!(n, even, odd, |c, acc| {
-                let q = s.sub(s.load(&b[c]), one);
-                let next = s.sub(s.mul(s.load(&a[c]), s.load(&un[c])), s.mul(q, s.load(&ups[c])));
-                s.store(&mut ups[c], next);
-                *acc = s.add(*acc, s.mul(s.load(&out[c]), next));
-            });
-            s.sum(s.add(even, odd))
-        }
-    }
-    isa.run(Free { a: chunks(a), b: chunks(b), up: chunks_mut(up), un: chunks(un), out: chunks(out) })
-}
-
-/// Most steps [`free_run`] takes per call.
-pub const RUN: usize = 64;
-
-/// `outputs.len()` (at most [`RUN`]) steps without forces, each exactly a [`free`] step, with
-/// the state kept in registers: `up`, `un` hold `ũ^{n−1}`, `ũ^n` on entry and the last two states
-/// on return (no swap needed), and `outputs[t]` receives `outᵀũ^{n+1+t}`.
+/// that one has a product and two subtractions, so a run of free steps, which is bound by that
+/// chain's latency, is about a third shorter per step.
 ///
 /// The loops run over groups of chunks (as many as the vector registers hold: `Lanes::RESIDENT`,
 /// four with AVX-512, two with AVX), and within a group over the samples: the chunks'
 /// recursions are independent, so their latencies overlap, and nothing goes through memory but
-/// the per-sample partial sums. Those are added chunk after chunk in the same
-/// order as [`free`]'s, so the outputs are bit-identical to it. A group's step is bound by the
+/// the per-sample partial sums. Those are added chunk after chunk, the even chunks into one sum and
+/// the odd into another, in the order of one pass over the modes, so the outputs are the same bits
+/// whatever the group size (and on every instruction set). A group's step is bound by the
 /// latency of one recursion step (a product and a subtraction), which two chunks' work just
 /// fills with AVX.
 #[inline]
@@ -324,7 +294,7 @@ pub fn free_run(isa: Isa, a: &[f64], b: &[f64], up: &mut [f64], un: &mut [f64], 
             (a[i], q[i], w[i]) = (s.load(&run.a[c]), s.sub(s.load(&run.b[c]), one), s.load(&run.out[c]));
             (prev[i], now[i]) = (s.load(&run.up[c]), s.load(&run.un[c]));
         }
-        // Chunk `first + i` adds to the partial sum of its parity, as in `free`.
+        // Chunk `first + i` adds to the partial sum of its parity, as in a single pass.
         let (parity, opposite) = (first % 2, 1 - first % 2);
         for sum in sums.iter_mut() {
             let (mut same, mut other) = (s.load(&sum[parity]), s.load(&sum[opposite]));
@@ -426,7 +396,7 @@ pub fn energy_sums(isa: Isa, up: &[f64], un: &[f64], k: &[f64]) -> (f64, f64) {
     isa.run(EnergySums { up: chunks(up), un: chunks(un), k: chunks(k) })
 }
 
-/// One contact vector of [`gram`]: `shape` is `h` (dimensionless) and `gain` is `C∘h` (m/N),
+/// One contact vector of [`ModalString::gram`](super::ModalString::gram): `shape` is `h` (dimensionless) and `gain` is `C∘h` (m/N),
 /// whole chunks each.
 #[derive(Debug)]
 pub struct GramVector<'a> {
@@ -437,7 +407,7 @@ pub struct GramVector<'a> {
     /// Per-mode window factors for a fresh vector (whole chunks, zero past M), or none.
     pub window: Option<&'a [f64]>,
     /// `Some((sin θ, cos θ))`: make the vector afresh, `h_i = sin((i+1)θ)` (the mode shapes of
-    /// [`sines`]) times the window if any, zero past the modes, and write `shape` and `gain`.
+    /// [`ModalString::mode_shapes`](super::ModalString::mode_shapes)) times the window if any, zero past the modes, and write `shape` and `gain`.
     /// `None`: `shape` and `gain` already hold the vector and are only read.
     pub fresh: Option<(f64, f64)>,
 }
@@ -649,42 +619,6 @@ pub fn sines(isa: Isa, sin: f64, cos: f64, out: &mut [f64]) {
     isa.run(Sines { angle: (sin, cos), out: chunks_mut(out) })
 }
 
-/// Flops per mode and sample of a [`free_run`] step (two products and a difference, and the
-/// output's product and sum), for roofline estimates.
-pub const FREE_STEP_FLOPS: f64 = 5.0;
-
-/// A measure of the vector unit's peak: `iterations` steps of `Lanes::CHAINS` independent chains
-/// `x ← x·m + c` (a multiply and an add, as in the string's loops, never fused) on chunks of
-/// [`LANES`]. Returns the flops done, `iterations · CHAINS · LANES · 2`; the result of the chains
-/// goes through [`std::hint::black_box`] so the work is kept.
-pub fn peak_probe(isa: Isa, iterations: usize) -> f64 {
-    struct Probe(usize);
-    impl Kernel for Probe {
-        type Output = f64;
-        #[inline(always)]
-        fn run<L: Lanes>(self, s: L) -> f64 {
-            let (m, c) = (s.splat(0.999_999), s.splat(1e-9));
-            let mut x = [s.splat(1.0); 16];
-            let chains = L::CHAINS.min(x.len());
-            for (j, v) in x.iter_mut().enumerate() {
-                *v = s.splat(1.0 + j as f64 * 1e-3);
-            }
-            for _ in 0..self.0 {
-                for v in &mut x[..chains] {
-                    *v = s.add(s.mul(*v, m), c);
-                }
-            }
-            let mut sum = 0.0;
-            for v in &x[..chains] {
-                sum += s.sum(*v);
-            }
-            std::hint::black_box(sum);
-            (self.0 * chains * LANES * 2) as f64
-        }
-    }
-    isa.run(Probe(iterations))
-}
-
 /// Pass 2 with the energy terms: as [`advance`], and also returns
 /// `(Σ (u' − un)², Σ K̂ (u' + un)², Σ R̂ (u' − up)²)` with `u'` the new state. Not dispatched: it
 /// serves the offline harness, which wants the energy, not the speed.
@@ -722,6 +656,38 @@ pub fn advance_monitored<const K: usize>(
 mod tests {
     use super::*;
 
+    /// One step of [`free_run`]'s recursion, `up = a∘un − (b − 1)∘up`, in one pass over the modes
+    /// (chunk after chunk, the even and the odd ones into two partial sums); returns `outᵀ up`. The
+    /// reference the register-resident run is checked against.
+    fn free(isa: Isa, a: &[f64], b: &[f64], up: &mut [f64], un: &[f64], out: &[f64]) -> f64 {
+        struct Free<'a> {
+            a: &'a [Chunk],
+            b: &'a [Chunk],
+            up: &'a mut [Chunk],
+            un: &'a [Chunk],
+            out: &'a [Chunk],
+        }
+        impl Kernel for Free<'_> {
+            type Output = f64;
+            #[inline(always)]
+            fn run<L: Lanes>(self, s: L) -> f64 {
+                let n = self.up.len();
+                let (a, b, un, out) = (&self.a[..n], &self.b[..n], &self.un[..n], &self.out[..n]);
+                let ups = self.up;
+                let one = s.splat(1.0);
+                let (mut even, mut odd) = (s.splat(0.0), s.splat(0.0));
+                paired!(n, even, odd, |c, acc| {
+                    let q = s.sub(s.load(&b[c]), one);
+                    let next = s.sub(s.mul(s.load(&a[c]), s.load(&un[c])), s.mul(q, s.load(&ups[c])));
+                    s.store(&mut ups[c], next);
+                    *acc = s.add(*acc, s.mul(s.load(&out[c]), next));
+                });
+                s.sum(s.add(even, odd))
+            }
+        }
+        isa.run(Free { a: chunks(a), b: chunks(b), up: chunks_mut(up), un: chunks(un), out: chunks(out) })
+    }
+
     /// Deterministic values in (−1, 1) with varied exponents.
     fn data(n: usize, seed: u64) -> Vec<f64> {
         let mut x = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
@@ -734,6 +700,29 @@ mod tests {
             .collect()
     }
 
+    /// Every instruction-set level compiled for this target, widest first. The `match` fails to
+    /// compile when [`Isa`] gains a level, so that it is added here too.
+    fn compiled_levels() -> Vec<Isa> {
+        let levels = vec![
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512,
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx,
+            Isa::Portable,
+        ];
+        for level in &levels {
+            match level {
+                #[cfg(target_arch = "x86_64")]
+                Isa::Avx512 | Isa::Avx => {}
+                Isa::Portable => {}
+            }
+        }
+        levels
+    }
+
+    /// The kernels give the same bits on every compiled instruction-set level the CPU runs
+    /// (AVX-512, AVX and portable on x86-64) as on the portable one, so a render does not depend
+    /// on the machine. The levels the CPU lacks are printed as skipped.
     #[test]
     fn every_instruction_set_gives_the_same_bits() {
         let n = 7 * LANES;
@@ -750,7 +739,12 @@ mod tests {
             (h, o, up, zt, p, f, free_up, shapes, d)
         };
         let reference = run(Isa::Portable);
-        for isa in Isa::available() {
+        let available = Isa::available();
+        let (levels, skipped): (Vec<Isa>, Vec<Isa>) =
+            compiled_levels().into_iter().partition(|level| available.contains(level));
+        println!("instruction-set levels compared: {levels:?}; skipped, not on this CPU: {skipped:?}");
+        assert!(levels.contains(&Isa::Portable), "the portable level always runs");
+        for isa in levels {
             let got = run(isa);
             assert_eq!(format!("{got:?}"), format!("{reference:?}"), "{isa:?}");
         }

@@ -37,7 +37,7 @@ pub trait Lanes: Copy {
     /// 16 registers of half a chunk (AVX), one otherwise. More would spill to the stack.
     const RESIDENT: usize;
     /// Independent chunk-wide multiply–add chains that fill the vector unit without spilling
-    /// (`kernel::peak_probe`): enough to hide the latency of a multiply and an add on every
+    /// (`bench_support::peak_probe`): enough to hide the latency of a multiply and an add on every
     /// arithmetic port.
     const CHAINS: usize;
     /// Chunks the vector register file holds.

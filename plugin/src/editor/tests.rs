@@ -84,11 +84,14 @@ pub(super) fn draw(monitors: &[Monitor], preset: &str, size: Vec2) -> (Vec<(Stri
     ctx.set_theme(egui::Theme::Dark);
     ctx.set_missing_glyph_policy(MissingGlyphPolicy::Panic);
     let input = RawInput { screen_rect: Some(Rect::from_min_size(Pos2::ZERO, size)), ..RawInput::default() };
-    // Grids and columns settle their sizes over the first passes.
+    // Grids and columns settle their sizes over the first passes. Nothing here uploads textures,
+    // so each pass's font-atlas updates are dropped on purpose (epaint's debug assertions insist
+    // that a dropped update be cleared first).
     for _ in 0..2 {
-        let _ = ctx.run_ui(input.clone(), |ui| app.show(ui));
+        ctx.run_ui(input.clone(), |ui| app.show(ui)).textures_delta.clear();
     }
-    let output = ctx.run_ui(input, |ui| app.show(ui));
+    let mut output = ctx.run_ui(input, |ui| app.show(ui));
+    output.textures_delta.clear();
 
     fn collect(shape: &Shape, texts: &mut Vec<(String, Rect)>) {
         match shape {

@@ -381,34 +381,16 @@ pub fn push_event(buffer: &mut EventBuffer, time: u32, ev: Ev) {
     }
 }
 
-/// The documented parameters (plugin/src/params.rs): string id, name, and the step count of the
-/// stepped ones (CLAP value range 0..=steps; continuous ones span 0..=1).
-pub const PARAMETERS: [(&str, &str, Option<u32>); 27] = [
-    ("mode", "Mode", Some(1)),
-    ("solver", "Solver", Some(2)),
-    ("segs", "QSA segments", Some(63)),
-    ("nb", "Control block", Some(255)),
-    ("voices", "Voices", Some(127)),
-    ("hard", "Hardness", None),
-    ("hmass", "Hammer mass", None),
-    ("strike", "Strike position", None),
-    ("damp", "String damping", None),
-    ("bright", "Brightness", None),
-    ("damper", "Damper", None),
-    ("slide", "Slide position", None),
-    ("follow", "Slide follows key", Some(1)),
-    ("glide", "Glide time", None),
-    ("bend", "Bend range", None),
-    ("hand", "Hand height", None),
-    ("handsrc", "Hand height from", Some(3)),
-    ("smass", "Slide mass", None),
-    ("hstiff", "Hand stiffness", None),
-    ("hdamp", "Hand damping", None),
-    ("fdamp", "Finger damping", None),
-    ("kappa", "Slide stiffness", None),
-    ("alpha", "Slide exponent", None),
-    ("pluck", "Pluck position", None),
-    ("pickup", "Pickup position", None),
-    ("gain", "Output gain", None),
-    ("limit", "Safety limiter", Some(1)),
-];
+/// The plugin's parameters (the engine's table, `qsa_dsp::instrument::PARAMETERS`): string id,
+/// name, and the step count of the stepped ones (CLAP value range 0..=steps; continuous ones span
+/// 0..=1).
+pub const PARAMETERS: [(&str, &str, Option<u32>); 27] = {
+    let mut list = [("", "", None); 27];
+    let mut i = 0;
+    while i < list.len() {
+        let spec = &qsa_dsp::instrument::PARAMETERS[i];
+        list[i] = (spec.id, spec.name, spec.step_count());
+        i += 1;
+    }
+    list
+};

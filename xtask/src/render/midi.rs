@@ -163,6 +163,13 @@ pub fn preset_values(name: &str) -> Result<ParamValues, String> {
     })
 }
 
+/// Apply one `--set ID=VALUE` to `params` ([`ParamValues::set`]: any id of the parameter table,
+/// in the unit the plugin shows), or say why not.
+pub fn apply_set(params: &mut ParamValues, assignment: &str) -> Result<(), String> {
+    let (id, value) = assignment.split_once('=').ok_or_else(|| format!("--set {assignment}: expected ID=VALUE"))?;
+    params.set(id.trim(), value.trim()).map_err(|e| format!("--set {assignment}: {e}"))
+}
+
 /// `render --midi`: read, render, write the WAV; return the summary.
 pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSummary, super::RenderError> {
     use super::RenderError;
@@ -175,10 +182,7 @@ pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSumma
         params.set("mode", mode).map_err(|e| RenderError::Midi(e.to_string()))?;
     }
     for assignment in &args.set {
-        let (id, value) = assignment
-            .split_once('=')
-            .ok_or_else(|| RenderError::Midi(format!("--set {assignment}: expected ID=VALUE")))?;
-        params.set(id.trim(), value.trim()).map_err(|e| RenderError::Midi(format!("--set {assignment}: {e}")))?;
+        apply_set(&mut params, assignment).map_err(RenderError::Midi)?;
     }
     if !(1000..=768_000).contains(&args.rate) {
         return Err(RenderError::Midi(format!("--rate {}: must be 1000 to 768000 Hz", args.rate)));
@@ -232,4 +236,35 @@ pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSumma
         wall_seconds: wall,
         rtf: wall / (samples as f64 / fs),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use qsa_dsp::instrument::{PARAMETERS, ParamKind};
+
+    use super::*;
+
+    /// `--set` takes every parameter of the table, at either end of its range (choices: every
+    /// option), and stores what the plugin would hold.
+    #[test]
+    fn set_accepts_every_parameter() {
+        for spec in &PARAMETERS {
+            let values: Vec<(String, f32)> = match spec.kind {
+                ParamKind::Float { min, max, .. } => vec![(min.to_string(), min), (max.to_string(), max)],
+                ParamKind::Int { min, max, .. } => vec![(min.to_string(), min as f32), (max.to_string(), max as f32)],
+                ParamKind::Bool { .. } => vec![("off".into(), 0.0), ("on".into(), 1.0)],
+                ParamKind::Choice { options, .. } => {
+                    options.iter().enumerate().map(|(i, (id, _))| ((*id).to_owned(), i as f32)).collect()
+                }
+            };
+            for (text, shown) in values {
+                let mut params = ParamValues::default();
+                apply_set(&mut params, &format!("{}={text}", spec.id)).unwrap_or_else(|e| panic!("{e}"));
+                assert_eq!(params.plain(spec.id), Some(spec.to_plain(shown)), "--set {}={text}", spec.id);
+            }
+        }
+        let mut params = ParamValues::default();
+        assert!(apply_set(&mut params, "hard").unwrap_err().contains("expected ID=VALUE"));
+        assert!(apply_set(&mut params, "kapa=1").unwrap_err().contains("unknown parameter id"));
+    }
 }

@@ -11,7 +11,7 @@
 //! - **Cheapest within a target** ([`cheapest`]): the configuration with the lowest median RTF
 //!   whose error against the reference (force or output signal, [`Signal`]) is at most the
 //!   target, over all methods or one.
-//! - **Pareto front** ([`super::plot::front`]) over all methods, for the budget table.
+//! - **Pareto front** ([`super::pareto::front`]) over all methods, for the budget table.
 
 use qsa_dsp::contact::Method;
 
@@ -156,7 +156,7 @@ pub fn most_accurate<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal) -> Op
 pub fn pareto<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal) -> Vec<&'a ErrorRow> {
     let points: Vec<(f64, f64, &ErrorRow)> =
         rows.iter().filter(|r| r.case == case).filter_map(|r| r.rtf.map(|t| (t, signal.of(r), r))).collect();
-    super::plot::front(&points).into_iter().map(|p| p.2).collect()
+    super::pareto::front(&points).into_iter().map(|p| p.2).collect()
 }
 
 /// QSA against EXP at one target: the cheapest of each, if any reaches it.

@@ -20,8 +20,8 @@ use std::path::Path;
 
 use qsa_dsp::contact::PowerLaw;
 use qsa_dsp::control::Breakpoints;
-use qsa_dsp::render::{SceneDescription, SlideStringDescription, parse_scene};
-use qsa_dsp::scene::{OutputKind, Pickup, SlideAutomation, SlideStringParams};
+use qsa_dsp::scene::{OutputKind, Pickup, SlideStringParams};
+use qsa_dsp::scene_file::{SceneDescription, SlideAutomation, SlideStringDescription, parse_scene};
 
 use super::ReportError;
 use super::sim::{CaseScene, Setup};

@@ -1,6 +1,6 @@
 //! Fig. 4-style trajectories: the mass–barrier with its entry shifted by sub-sample phases.
 //!
-//! The seed's Fig. 4 point (physics §4.4): a mass that reaches the barrier at a different phase
+//! The seed's Fig. 4 point (docs/physics.md §4.4): a mass that reaches the barrier at a different phase
 //! within a sample only time-shifts the IMP and QSA trajectories, because both solve an
 //! autonomous energy-conserving implicit scheme; EXP's trajectory changes shape, because its
 //! gradient `g^n` is evaluated at `y^n` and so depends on where the samples fall.

@@ -21,6 +21,8 @@ use super::ReportError;
 use super::analysis::Signal;
 use super::error::ErrorRow;
 use super::fig4::Fig4Study;
+use super::files::make_readable;
+use super::pareto::front;
 
 /// Size of the single-panel plots (pixels).
 const SIZE: (u32, u32) = (960, 640);
@@ -55,7 +57,7 @@ fn draw_png(path: &Path, size: (u32, u32), draw: impl FnOnce(&Area) -> Result<()
         draw(&root).map_err(fail)?;
         root.present().map_err(|e| fail(e.to_string()))?;
     }
-    super::readme::make_readable(temp.as_file()).map_err(|e| ReportError::Io { path: path.to_owned(), source: e })?;
+    make_readable(temp.as_file()).map_err(|e| ReportError::Io { path: path.to_owned(), source: e })?;
     temp.persist(path).map_err(|e| ReportError::Io { path: path.to_owned(), source: e.error })?;
     Ok(())
 }
@@ -69,26 +71,6 @@ fn range(values: impl Iterator<Item = f64>, pad: f64, min_span: f64) -> (f64, f6
     }
     let span = (hi - lo).max(min_span);
     (lo - pad * span, hi + pad * span)
-}
-
-/// The Pareto front of `(cost, error, label)` points: sorted by cost, each point strictly better in
-/// error than every cheaper one.
-pub fn front<T: Clone>(points: &[(f64, f64, T)]) -> Vec<(f64, f64, T)> {
-    let mut sorted: Vec<(f64, f64, T)> =
-        points.iter().filter(|p| p.0.is_finite() && p.1.is_finite()).cloned().collect();
-    sorted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    let mut best = f64::INFINITY;
-    sorted
-        .into_iter()
-        .filter(|p| {
-            if p.1 < best {
-                best = p.1;
-                true
-            } else {
-                false
-            }
-        })
-        .collect()
 }
 
 fn short_label(row: &ErrorRow) -> String {

@@ -17,6 +17,7 @@ use super::cases::Case;
 use super::control_block::{self, BlockRow};
 use super::error::{self, CHECK_OVERSAMPLING, ErrorRow, REFERENCE_OVERSAMPLING, SEGMENTS, TIMING_RUNS};
 use super::fig4::{self, Fig4Study};
+use super::files::make_readable;
 use super::plot;
 use super::sim::Setup;
 use super::stability::{self, BUDGET_LIMIT, ENERGY_LIMIT, Sweep, Tally};
@@ -71,19 +72,6 @@ pub struct Results<'a> {
     pub sweep: &'a Sweep,
     /// Wall times.
     pub timing: Timing,
-}
-
-/// Make a finished report file readable by everyone, as a file written the ordinary way would be
-/// (temporary files are created private).
-pub fn make_readable(file: &std::fs::File) -> std::io::Result<()> {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        file.set_permissions(std::fs::Permissions::from_mode(0o644))?;
-    }
-    #[cfg(not(unix))]
-    let _ = file;
-    Ok(())
 }
 
 /// Write `content` to `dir/name` through a temporary file.
@@ -391,8 +379,8 @@ fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
     let _ = writeln!(w, "![error against segment spacing]({FIG5_PNG})\n");
     let _ = writeln!(
         w,
-        "Δy/y_ref = 1/N. The seed's Fig. 5 values (physics §9.4) were −1.18 at N = 3, −1.62 at N = 6 and −4.01 at \
-         N = 50; measured here: {}.\n",
+        "Δy/y_ref = 1/N. The seed's Fig. 5 values (docs/physics.md §9.4) were −1.18 at N = 3, −1.62 at N = 6 and \
+         −4.01 at N = 50; measured here: {}.\n",
         [3, 6, 50]
             .iter()
             .filter_map(|&n| rows.iter().find(|row| row.case == "fig5-hammer"
@@ -464,8 +452,8 @@ fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
     let _ = writeln!(
         w,
         "The Fig. 4 mass enters the barrier at {} sub-sample phases ({} drawn). Effective contact time between the \
-         free-flight lines (physics §4.4; the seed's claim is that it does not depend on the phase for IMP and \
-         QSA):\n",
+         free-flight lines (docs/physics.md §4.4; the seed's claim is that it does not depend on the phase for IMP \
+         and QSA):\n",
         fig4::PHASES,
         fig4::PLOTTED_PHASES
     );
@@ -483,7 +471,8 @@ fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
     }
     let _ = writeln!(
         w,
-        "\n(physics §4.4 measured spreads of 0.001 (IMP), 0.008 (QSA N=5), 0.003 (QSA N=20) and 1.03 (EXP) samples.)\n"
+        "\n(docs/physics.md §4.4 measured spreads of 0.001 (IMP), 0.008 (QSA N=5), 0.003 (QSA N=20) and 1.03 (EXP) \
+         samples.)\n"
     );
 
     // ------------------------------------------------------------------ control block
@@ -873,14 +862,15 @@ fn stability_md(sweep: &Sweep) -> String {
     let _ = writeln!(
         w,
         "- **Energy.** The worst energy error of any run is {worst_energy:.1e} of the largest energy: rounding, \
-         largest for contacts much stiffer than one sample can resolve (physics §3.5 expected up to ~1e-8).\n\
+         largest for contacts much stiffer than one sample can resolve (docs/physics.md §3.5 expected up to \
+         ~1e-8).\n\
          - **Compression beyond y_ref.** With the discrete energy ½(V(y^(n+1)) + V(y^n)), one sample can hold up to \
          twice the contact energy when its neighbour is out of contact, so IMP and QSA reach up to \
          2^(1/(α+1)) ≤ √2 times y_ref on the mass–barrier (measured {:.3}) and a little less on the string \
          ({:.3}). On the slide, V_ref is the scene files' default, sized from the static push of the hand; a \
          slide thrown onto the string by a hand at up to 50 m/s carries far more energy, and the compression goes \
-         far beyond y_ref (QSA {:.1e}): QSA then works on its extended last segment (physics §10.4), softer than \
-         the law but stable. EXP's compression is not bound to its energy (ψ carries the potential): at stiff \
+         far beyond y_ref (QSA {:.1e}): QSA then works on its extended last segment (docs/physics.md §10.4), softer \
+         than the law but stable. EXP's compression is not bound to its energy (ψ carries the potential): at stiff \
          contacts sampled coarsely the bodies pass deep into each other before the force builds up (up to \
          {:.1e} y_ref on the mass–barrier and {:.1e} on the slide). EXP stays finite and keeps its energy, but \
          its trajectory is then meaningless; IMP and QSA do not do this.\n\

@@ -6,26 +6,30 @@
 //! (every scene starts its time axis at `u^0`, `t = 0`).
 //!
 //! - **Strings keep the modes of the base rate.** A string is prepared with
-//!   [`ModalString::band_limited`] at `f_max = fs/2`, so at every `k` it has exactly the modes the
-//!   base render has. Oversampling then refines only the time step (and the contact solve), and the
-//!   converged reference is the same modal system at a fine step. (The plain renderer keeps every
-//!   mode below the oversampled Nyquist instead; the extra modes ring above 20 kHz, and the bridge
-//!   force weights them by `Tβ_i + EIβ_i³`, so they would dominate an output-signal comparison.)
+//!   [`ModalString::band_limited`](qsa_dsp::string::ModalString::band_limited) at `f_max = fs/2`,
+//!   so at every `k` it has exactly the modes the base render has. Oversampling then refines only
+//!   the time step (and the contact solve), and the converged reference is the same modal system
+//!   at a fine step. (The plain renderer keeps every mode below the oversampled Nyquist instead;
+//!   the extra modes ring above 20 kHz, and the bridge force weights them by `Tβ_i + EIβ_i³`, so
+//!   they would dominate an output-signal comparison.)
 //! - **Slide controls keep their timing.** Automation is in seconds and is re-sampled at `k·fs`,
 //!   and the control block `N_b` is multiplied by `k`, so blocks start at the same instants.
 //!
-//! Two jobs run on a built scene: `Frames` (every per-sample [`Frame`], with energy
-//! bookkeeping) and `Timed` (the real-time path, [`Scene::process_output`] in calls of 64
-//! samples with no bookkeeping, timed with the wall clock). At `k = 1` a string has exactly the
-//! modes the renderer gives it (every mode below Nyquist), so the stability sweep builds its
-//! scenes here too.
+//! The scenes are built by the scene builder ([`qsa_dsp::scene_file::build()`], with
+//! [`Sampling::oversampled`]) from the [`SceneDescription`] of the set-up, and run either for
+//! every per-sample [`Frame`] (with energy bookkeeping) or through the real-time path, timed
+//! ([`TimedOutput`], in calls of [`CHUNK`] samples). At `k = 1` a string has exactly the modes
+//! the renderer gives it (every mode below Nyquist), so the stability sweep builds its scenes here
+//! too.
 
-use std::time::Instant;
+use qsa_dsp::contact::{Method, PowerLaw, SolverSettings};
+use qsa_dsp::scene::{Frame, HammerStringParams, MassBarrierParams, SlideStringParams};
+use qsa_dsp::scene_file::{
+    Common, Frames, HammerStringDescription, MassBarrierDescription, OutputOptions, Sampling, SceneDescription,
+    SceneJob, SlideAutomation, SlideStringDescription, build,
+};
 
-use qsa_dsp::contact::{ContactSolver, PowerLaw, SolverSettings, WithSolver};
-use qsa_dsp::scene::{Frame, HammerString, HammerStringParams, MassBarrier, MassBarrierParams, Scene, SlideString};
-use qsa_dsp::scene::{SlideAutomation, SlideStringParams};
-use qsa_dsp::string::ModalString;
+use crate::bench::TimedOutput;
 
 /// Samples per call of the real-time path, as a plugin would run a voice.
 pub const CHUNK: usize = 64;
@@ -84,90 +88,51 @@ impl CaseScene {
 
     /// Every frame of a render with `settings` at `k` times the base rate.
     pub fn frames(&self, settings: SolverSettings, k: usize) -> Vec<Frame> {
-        self.build(settings, k, Frames).0
+        self.frames_and_energy(settings, k).0
     }
 
     /// Every frame and the initial numerical energy `H^{−1/2}` (J) of a render with `settings` at
     /// `k` times the base rate.
     pub fn frames_and_energy(&self, settings: SolverSettings, k: usize) -> (Vec<Frame>, f64) {
-        self.build(settings, k, Frames)
+        let run = self.build(settings, k, Frames { chunks: std::iter::empty() });
+        (run.frames, run.initial_energy)
     }
 
     /// Wall-clock seconds of one render through the real-time path.
     pub fn timed(&self, settings: SolverSettings, k: usize) -> f64 {
-        self.build(settings, k, Timed)
+        self.build(settings, k, TimedOutput { chunk: CHUNK })
     }
 
-    fn build<J: Job>(&self, settings: SolverSettings, k: usize, job: J) -> J::Output {
-        settings
-            .build(self.law, self.v_ref, Build { case: self, k, job })
-            .expect("the report's cases have valid contact parameters")
-    }
-}
-
-/// What to do with a built scene.
-trait Job {
-    type Output;
-    fn run(self, scene: impl Scene, samples: usize) -> Self::Output;
-}
-
-/// Every frame, and the initial energy.
-struct Frames;
-
-impl Job for Frames {
-    type Output = (Vec<Frame>, f64);
-
-    fn run(self, mut scene: impl Scene, samples: usize) -> (Vec<Frame>, f64) {
-        let initial = scene.initial_energy();
-        let mut frames = vec![Frame::default(); samples];
-        scene.process(&mut frames);
-        (frames, initial)
-    }
-}
-
-/// The output only, in calls of [`CHUNK`] samples; returns the wall seconds spent processing.
-struct Timed;
-
-impl Job for Timed {
-    type Output = f64;
-
-    fn run(self, mut scene: impl Scene, samples: usize) -> f64 {
-        let mut out = vec![0.0; samples];
-        let start = Instant::now();
-        for block in out.chunks_mut(CHUNK) {
-            scene.process_output(block);
-        }
-        let wall = start.elapsed().as_secs_f64();
-        std::hint::black_box(&out);
-        wall
-    }
-}
-
-struct Build<'a, J> {
-    case: &'a CaseScene,
-    k: usize,
-    job: J,
-}
-
-impl<J: Job> WithSolver for Build<'_, J> {
-    type Output = J::Output;
-
-    fn run<S: ContactSolver>(self, solver: S) -> J::Output {
-        let case = self.case;
-        let base = f64::from(case.sample_rate);
-        let fs = base * self.k as f64;
-        let samples = case.samples * self.k;
-        let string = |params| {
-            ModalString::band_limited(params, fs, 0.5 * base).expect("the report's strings have valid parameters")
+    /// The set-up as a scene description at the base rate; its solver is QSA at the case's
+    /// V_ref, and [`Self::build`] names the solver of each run.
+    pub fn description(&self) -> SceneDescription {
+        let common = Common {
+            sample_rate: self.sample_rate,
+            samples: self.samples,
+            solver: SolverSettings { method: Method::Qsa, segments: 5, v_ref: Some(self.v_ref) },
+            law: self.law,
+            output: OutputOptions { normalize: true, gain: 1.0 },
         };
-        match &case.setup {
-            Setup::MassBarrier(params) => self.job.run(MassBarrier::new(*params, fs, solver), samples),
-            Setup::Hammer(params) => self.job.run(HammerString::new(string(params.string), params, solver), samples),
-            Setup::Slide(params, controls) => {
-                let params = SlideStringParams { block: params.block * self.k, ..*params };
-                let controls = SlideAutomation::new(controls.lanes.clone(), fs);
-                self.job.run(SlideString::new(string(params.string), &params, solver, controls), samples)
+        match &self.setup {
+            Setup::MassBarrier(params) => {
+                SceneDescription::MassBarrier(MassBarrierDescription { common, params: *params })
             }
+            Setup::Hammer(params) => {
+                SceneDescription::HammerString(HammerStringDescription { common, params: *params })
+            }
+            Setup::Slide(params, controls) => SceneDescription::SlideString(SlideStringDescription {
+                common,
+                params: *params,
+                controls: controls.clone(),
+            }),
         }
+    }
+
+    /// Build the set-up with `settings` (V_ref falling back to the case's) at `k` times the base
+    /// rate, the strings keeping the modes of the base rate, and run `job` on it.
+    fn build<J: SceneJob>(&self, settings: SolverSettings, k: usize, job: J) -> J::Output {
+        let solver = SolverSettings { v_ref: settings.v_ref.or(Some(self.v_ref)), ..settings };
+        build(&self.description(), &solver, Sampling::oversampled(k, self.sample_rate), job)
+            .expect("the report's cases have valid contact parameters")
     }
 }

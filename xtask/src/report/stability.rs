@@ -11,7 +11,7 @@
 //! - sample rate fs ∈ [8, 384] kHz (whole Hz);
 //! - `mass-barrier`: mass ∈ [0.1 g, 1 kg], approach speed v0 ∈ [1e-3, 50] m/s, reaching the barrier
 //!   0.5 to 3 samples after the start (uniform); the run lasts the estimated Hertz contact time
-//!   (physics §9.1, `T_c ≤ 3.2·y_max/v0`) plus 20 %, plus 16 samples, between 32 and 4000 samples;
+//!   (docs/physics.md §9.1, `T_c ≤ 3.2·y_max/v0`) plus 20 %, plus 16 samples, between 32 and 4000 samples;
 //! - `hammer-string`: the `piano-note` string of a MIDI key in [21, 108] (uniform), lossless in half
 //!   of the sets; hammer mass ∈ [0.1 g, 1 kg], speed ∈ [1e-3, 50] m/s, striking position ∈
 //!   [0.05, 0.5] L (uniform), gap 0.5 to 3 samples of travel; twice the rigid-barrier contact time,
@@ -71,10 +71,8 @@ use qsa_dsp::contact::{MAX_ITERATIONS, Method, PowerLaw, SolverSettings};
 use qsa_dsp::control::Breakpoints;
 use qsa_dsp::exciter::{FingerParams, HammerParams, SlideParams};
 use qsa_dsp::preset::{chaigne_askenfelt_c4, piano_note, slide_guitar};
-use qsa_dsp::render::{Common, OutputOptions, SlideStringDescription};
-use qsa_dsp::scene::{
-    Frame, HammerStringParams, MassBarrierParams, OutputKind, Pickup, SlideAutomation, SlideStringParams,
-};
+use qsa_dsp::scene::{Frame, HammerStringParams, MassBarrierParams, OutputKind, Pickup, SlideStringParams};
+use qsa_dsp::scene_file::{Common, OutputOptions, SlideAutomation, SlideStringDescription};
 use qsa_dsp::string::{Damping, ModalString, StringParams};
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
@@ -97,7 +95,7 @@ pub const BUDGET_LIMIT: f64 = 1e-9;
 
 /// Largest energy error (relative) a run may show: drift in conservative sets, increase in lossy
 /// ones. Rounding alone gives 1e-15 to 1e-13 per step at ordinary stiffness and up to ~1e-8 over a
-/// run at κ ≥ 1e12 (physics §3.5, §9.4); 1e-6 flags anything systematic.
+/// run at κ ≥ 1e12 (docs/physics.md §3.5, §9.4); 1e-6 flags anything systematic.
 pub const ENERGY_LIMIT: f64 = 1e-6;
 
 /// Worst cases kept per measure.
@@ -207,7 +205,7 @@ fn log_int(rng: &mut Pcg64, lo: usize, hi: usize) -> usize {
     (log_uniform(rng, lo as f64, hi as f64 + 1.0).floor() as usize).clamp(lo, hi)
 }
 
-/// Estimated contact time (s) of a mass `m` at `v` on a rigid barrier (physics §9.1, `I_n ≤ 1.6`).
+/// Estimated contact time (s) of a mass `m` at `v` on a rigid barrier (docs/physics.md §9.1, `I_n ≤ 1.6`).
 fn hertz_time(law: &PowerLaw, mass: f64, v: f64) -> f64 {
     let n = law.alpha() + 1.0;
     let y_max = (n * mass * v * v / (2.0 * law.kappa())).powf(1.0 / n);

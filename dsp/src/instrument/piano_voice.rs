@@ -39,7 +39,6 @@
 use crate::contact::{Method, PowerLaw};
 use crate::exciter::HammerParams;
 use crate::instrument::settings::{Settings, hammer_speed};
-use crate::instrument::slide_voice::GUARD_FACTOR;
 use crate::instrument::solvers::Solvers;
 use crate::preset::piano_note;
 use crate::scene::{HammerCore, HammerStringParams, OutputKind, Pickup};
@@ -48,6 +47,10 @@ use crate::string::{Damping, ModalString, StringParams};
 /// Energy below which a voice that is not touching its hammer is released, relative to the
 /// energy of its latest strike (−140 dB in energy, −70 dB in amplitude).
 pub const RELEASE_ENERGY: f64 = 1e-14;
+
+/// How far a voice's energy may exceed its bound before the guard silences it: the strike's
+/// energy for a piano voice, the energy at the pluck plus the controls' work for a slide voice.
+pub const GUARD_FACTOR: f64 = 10.0;
 
 /// Decay rate that silences a stolen voice before its new note (1/s): −87 dB in 5 ms.
 pub const STEAL_RATE: f64 = 2000.0;

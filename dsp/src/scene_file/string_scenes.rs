@@ -62,18 +62,21 @@
 
 use serde::Deserialize;
 
-use super::SceneError;
-use super::file::{
-    Common, ContactTable, Head, SolverTable, common, finite, fraction, non_negative, positive, required, unity, yes,
+use super::automation::{CONTROL_TARGETS, SlideAutomation};
+use super::error::SceneError;
+use super::tables::{
+    Common, ContactTable, Head, OutputTable, SolverTable, common, finite, fraction, non_negative, positive, required,
+    unity, yes,
 };
 use crate::control::Breakpoints;
 use crate::exciter::{FingerParams, HammerParams, SlideParams};
 use crate::preset::{chaigne_askenfelt_c4, piano_note, slide_guitar};
-use crate::scene::{CONTROL_TARGETS, HammerStringParams, OutputKind, Pickup, SlideAutomation, SlideStringParams};
+use crate::scene::{HammerStringParams, OutputKind, Pickup, SlideStringParams};
 use crate::string::{Damping, StringParams};
 
-/// Most samples per control block.
-pub const MAX_BLOCK: usize = 65_536;
+/// Most samples per control block a scene file may ask for (the plugin's own, smaller bound is
+/// [`MAX_BLOCK`](crate::instrument::MAX_BLOCK)).
+pub const MAX_SCENE_BLOCK: usize = 65_536;
 
 /// A validated hammer–string scene.
 #[derive(Debug, Clone, PartialEq)]
@@ -104,11 +107,10 @@ pub struct SlideStringDescription {
 }
 
 impl SlideStringDescription {
-    /// Default QSA reference energy (J): the potential at the compression where the contact
-    /// force reaches twice the largest static push the scene asks for,
-    /// `F_ref = 2(k_H (d + 1 mm) + |F_le| + |F_re|)` with `d` the deepest hand press
-    /// (`−min hand.height`, at least 0) and the finger forces at their largest. Compressions beyond
-    /// it are still stable (the fit is extended), only softer.
+    /// Default QSA reference energy (J): the potential at the slide's reference compression
+    /// ([`SlideParams::reference_compression`]) for the largest push the scene asks for: `d` the
+    /// deepest hand press (`−min hand.height`, at least 0) and the finger forces `|F_le|`, `|F_re|`
+    /// at their largest.
     pub fn default_v_ref(&self) -> f64 {
         let lanes = &self.controls.lanes;
         let depth = (-lanes[1].range().0).max(0.0);
@@ -116,10 +118,8 @@ impl SlideStringDescription {
             let (lo, hi) = lanes[i].range();
             lo.abs().max(hi.abs())
         };
-        let force = 2.0 * (self.params.slide.stiffness * (depth + 1e-3) + peak(3) + peak(5));
         let law = &self.common.law;
-        let y = (force.max(1e-3) / law.kappa()).powf(1.0 / law.alpha());
-        law.potential(y)
+        law.potential(self.params.slide.reference_compression(law, depth, peak(3), peak(5)))
     }
 }
 
@@ -276,8 +276,8 @@ impl StringOutputTable {
         })
     }
 
-    fn options(&self) -> super::file::OutputTable {
-        super::file::OutputTable { normalize: self.normalize, gain: self.gain }
+    fn options(&self) -> OutputTable {
+        OutputTable { normalize: self.normalize, gain: self.gain }
     }
 }
 
@@ -469,10 +469,10 @@ impl SlideStringFile {
             damping: r,
         };
         let block = self.control.block.unwrap_or(64);
-        if !(1..=MAX_BLOCK as i64).contains(&block) {
+        if !(1..=MAX_SCENE_BLOCK as i64).contains(&block) {
             return Err(SceneError::invalid(
                 "control.block",
-                format!("must be 1 to {MAX_BLOCK} samples (got {block})"),
+                format!("must be 1 to {MAX_SCENE_BLOCK} samples (got {block})"),
             ));
         }
         let controls = self.controls(string.length, common.sample_rate)?;

@@ -1,13 +1,15 @@
-//! What a render measured: the one-line JSON summary of `cargo xtask render`.
+//! What a render measured: the physics of the one-line JSON summary of `cargo xtask render`
+//! (which adds the wall-clock timing).
 
 use serde::Serialize;
 
-use super::{Run, SceneDescription};
+use super::build::Run;
+use super::parse::SceneDescription;
 use crate::scene::Frame;
 
-/// Measurements of one render. Serialises to the summary line of `cargo xtask render`.
+/// Measurements of one render, in the order of the summary line of `cargo xtask render`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Summary {
+pub struct Measurements {
     /// Scene kind.
     pub scene: &'static str,
     /// Solver: `qsa`, `imp` or `exp`.
@@ -39,13 +41,9 @@ pub struct Summary {
     pub max_work: u32,
     /// Mean solver work per step with a non-zero force.
     pub mean_contact_work: f64,
-    /// Wall-clock time of the simulation (s).
-    pub wall_seconds: f64,
-    /// Real-time factor: wall seconds per simulated second.
-    pub rtf: f64,
 }
 
-impl Summary {
+impl Measurements {
     /// Measure a finished run of `scene`.
     pub fn measure(scene: &SceneDescription, run: &Run) -> Self {
         let common = scene.common();
@@ -81,7 +79,6 @@ impl Summary {
             Some(f) if contacts > 0 && f.force == 0.0 => Some(f.velocity),
             _ => None,
         };
-        let duration = frames.len() as f64 * dt;
         Self {
             scene: scene.kind(),
             method: common.solver.method.name(),
@@ -97,8 +94,6 @@ impl Summary {
             energy_drift_rel: if scale > 0.0 { drift / scale } else { 0.0 },
             max_work,
             mean_contact_work: if contact_samples > 0 { contact_work as f64 / contact_samples as f64 } else { 0.0 },
-            wall_seconds: run.wall_seconds,
-            rtf: run.wall_seconds / duration,
         }
     }
 }

@@ -1,0 +1,117 @@
+//! The modes a string keeps and the scheme's coefficients for each (docs/physics.md §6.1–6.2).
+//!
+//! Mode `i ≥ 1` has wavenumber `β_i = iπ/L`, `ω0_i² = (Tβ_i² + EIβ_i⁴)/ρA`, decay rate `σ_i` and
+//! damped frequency `ω_i = √(ω0_i² − σ_i²)`; the string keeps the modes with `ω_i` strictly below
+//! `π·min(fs, 2 f_max)`. From a mode's homogeneous recursion `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}`:
+//!
+//! ```text
+//! A = 2P,   B = 1 + Q,   C = Δt²(1 + 2P + Q)/(4m̃)
+//! K̂ = (4m̃/Δt²)(1 − 2P + Q)/(1 + 2P + Q),   R̂ = (4m̃/Δt)(1 − Q)/(1 + 2P + Q)
+//! ```
+
+use super::{MAX_MODES, StringParams};
+
+/// One mode of a string.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Mode {
+    /// Wavenumber β (1/m).
+    pub(super) beta: f64,
+    /// Undamped angular frequency ω0 (rad/s).
+    pub(super) omega0: f64,
+    /// Damped angular frequency ω (rad/s; 0 when overdamped).
+    omega: f64,
+    /// Decay rate σ (1/s).
+    pub(super) sigma: f64,
+    underdamped: bool,
+}
+
+impl Mode {
+    /// `(P, Q)` of the mode's homogeneous recursion `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}` at time step
+    /// `dt` (s): `P = e^{−σΔt} cos(ωΔt)` (overdamped: `e^{−σΔt} cosh(γΔt)`, `γ = √(σ² − ω0²)`),
+    /// `Q = e^{−2σΔt}`.
+    pub(super) fn recursion(&self, dt: f64) -> (f64, f64) {
+        let decay = (-self.sigma * dt).exp();
+        let p = if self.underdamped {
+            decay * (self.omega * dt).cos()
+        } else {
+            // e^{−σΔt} cosh(γΔt) as the mean of two decaying exponentials (0 < γ < σ): the
+            // product form gives 0·∞ = NaN once σΔt passes about 710.
+            let gamma = (self.sigma * self.sigma - self.omega0 * self.omega0).sqrt();
+            0.5 * ((gamma - self.sigma) * dt).exp() + 0.5 * ((-gamma - self.sigma) * dt).exp()
+        };
+        (p, decay * decay)
+    }
+}
+
+/// The modes of a string that ring strictly below Nyquist and a frequency limit, in order.
+/// `ω_i` increases with `i`, so the sequence stops at the first mode that fails (an overdamped
+/// mode, which does not ring, is kept while `ω0_i` is below the limit).
+pub(super) struct ModeCounter<'a> {
+    params: &'a StringParams,
+    /// π·min(fs, 2 f_max) (rad/s).
+    limit: f64,
+    i: usize,
+}
+
+impl<'a> ModeCounter<'a> {
+    pub(super) fn new(params: &'a StringParams, sample_rate: f64, max_frequency: f64) -> Self {
+        Self { params, limit: std::f64::consts::PI * sample_rate.min(2.0 * max_frequency), i: 0 }
+    }
+
+    /// Number of modes, counting at most `MAX_MODES + 1`.
+    pub(super) fn count(mut self) -> usize {
+        let mut n = 0;
+        while n <= MAX_MODES && self.next().is_some() {
+            n += 1;
+        }
+        n
+    }
+}
+
+impl Iterator for ModeCounter<'_> {
+    type Item = Mode;
+
+    fn next(&mut self) -> Option<Mode> {
+        let p = self.params;
+        self.i += 1;
+        let beta = self.i as f64 * std::f64::consts::PI / p.length;
+        let b2 = beta * beta;
+        let omega0 = ((p.tension * b2 + p.bending_stiffness * b2 * b2) / p.linear_density).sqrt();
+        let sigma = p.damping.sigma(beta, omega0);
+        let underdamped = sigma < omega0;
+        let omega = if underdamped { (omega0 * omega0 - sigma * sigma).sqrt() } else { 0.0 };
+        if !(omega < self.limit) || !omega0.is_finite() || (!underdamped && omega0 >= self.limit) {
+            return None;
+        }
+        Some(Mode { beta, omega0, omega, sigma, underdamped })
+    }
+}
+
+/// The scheme's per-mode coefficients for a mode whose homogeneous recursion is
+/// `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}` (module docs), with time step `dt` (s) and modal mass `m̃` (kg).
+pub(super) struct Coefficients {
+    /// `A = 2P`.
+    pub(super) a: f64,
+    /// `B = 1 + Q`.
+    pub(super) b: f64,
+    /// `C = Δt²(1 + 2P + Q)/(4m̃)` (m/N).
+    pub(super) c: f64,
+    /// `K̂` (N/m).
+    pub(super) stiffness: f64,
+    /// `R̂` (kg/s).
+    pub(super) resistance: f64,
+}
+
+impl Coefficients {
+    #[inline]
+    pub(super) fn new(p: f64, q: f64, dt: f64, modal_mass: f64) -> Self {
+        let den = 1.0 + 2.0 * p + q;
+        Self {
+            a: 2.0 * p,
+            b: 1.0 + q,
+            c: dt * dt * den / (4.0 * modal_mass),
+            stiffness: 4.0 * modal_mass / (dt * dt) * (1.0 - 2.0 * p + q) / den,
+            resistance: 4.0 * modal_mass / dt * (1.0 - q) / den,
+        }
+    }
+}

@@ -1,0 +1,126 @@
+//! The modal state and its update, one sample at a time (docs/physics.md §6.2).
+//!
+//! ```text
+//! ũ^{n+1} = ũ^{n−1} − z̃ + Σ_k (C∘h_k) F_k,   z̃ = B ũ^{n−1} − A ũ^n
+//! ```
+//!
+//! in two passes over the modes ([`ModalString::history`], [`ModalString::advance`]), or, with no
+//! force, by the homogeneous recursion `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}` for a run of steps
+//! ([`ModalString::free_steps`]). Every [`FLUSH_INTERVAL`] steps amplitudes below [`FLUSH_BELOW`]
+//! are set to zero (docs/physics.md §10.11).
+
+use super::{FLUSH_BELOW, FLUSH_INTERVAL, ModalString, kernel};
+
+/// Set the amplitudes below [`FLUSH_BELOW`] (m) to zero. Written as a select, not a branch, so
+/// it compiles to a few vector instructions per chunk instead of a mispredicted branch per mode.
+#[inline]
+fn flush_tiny(u: &mut [f64]) {
+    for u in u {
+        *u = if u.abs() < FLUSH_BELOW { 0.0 } else { *u };
+    }
+}
+
+impl ModalString {
+    /// Modal displacements `ũ^n` (m), M entries.
+    pub fn state(&self) -> &[f64] {
+        &self.u_now[..self.modes()]
+    }
+
+    /// Modal displacements `ũ^{n−1}` (m), M entries.
+    pub fn previous_state(&self) -> &[f64] {
+        &self.u_prev[..self.modes()]
+    }
+
+    /// Set the modal state `ũ^{n−1}`, `ũ^n` (m). Slices must have [`modes`](Self::modes) entries.
+    pub fn set_state(&mut self, previous: &[f64], now: &[f64]) {
+        let m = self.modes();
+        self.u_prev[..m].copy_from_slice(previous);
+        self.u_now[..m].copy_from_slice(now);
+        self.history_ready = false;
+    }
+
+    /// Bring the string to rest.
+    pub fn reset(&mut self) {
+        self.u_prev.fill(0.0);
+        self.u_now.fill(0.0);
+        self.since_flush = 0;
+        self.history_ready = false;
+    }
+
+    /// First pass of a step: compute `z̃ = B ũ^{n−1} − A ũ^n` and return its projections on
+    /// each of the `K` vectors (m). Vectors have [`padded_len`](Self::padded_len) entries.
+    /// When the previous step was an [`advance`](Self::advance), `z̃` is already there and this
+    /// pass only projects it.
+    #[inline]
+    pub fn history<const K: usize>(&mut self, vectors: [&[f64]; K]) -> [f64; K] {
+        if self.history_ready {
+            return kernel::projections(self.isa, &self.history, vectors);
+        }
+        self.history_ready = true;
+        kernel::history(self.isa, &self.coef_a, &self.coef_b, &self.u_prev, &self.u_now, &mut self.history, vectors)
+    }
+
+    /// Second pass: `ũ^{n+1} = ũ^{n−1} − z̃ + Σ_k gains_k · F_k`, where `gains_k = C∘h_k` (m/N,
+    /// see [`input_gains`](Self::input_gains)) and `F_k` (N) are the modal forces along each contact
+    /// vector; then step the state on. Returns `outputᵀ ũ^{n+1}`. The same pass computes the next
+    /// step's `z̃`, so that the next [`history`](Self::history) only projects it.
+    #[inline]
+    pub fn advance<const K: usize>(&mut self, forces: [(&[f64], f64); K], output: &[f64]) -> f64 {
+        self.advance_projecting(forces, output, []).0
+    }
+
+    /// [`advance`](Self::advance), also projecting the next step's `z̃` on the `J` vectors `next`
+    /// in the same pass: the second value is what [`history(next)`](Self::history) would return
+    /// next, bit for bit, so a caller whose vectors stay put can skip that pass. It is `None`
+    /// when this step flushed tiny amplitudes (the new `z̃` is then recomputed from the flushed
+    /// state by the next `history`).
+    #[inline]
+    pub fn advance_projecting<const K: usize, const J: usize>(
+        &mut self,
+        forces: [(&[f64], f64); K],
+        output: &[f64],
+        next: [&[f64]; J],
+    ) -> (f64, Option<[f64; J]>) {
+        debug_assert!(self.history_ready, "advance follows history");
+        let (a, b) = (&self.coef_a, &self.coef_b);
+        let (projection, next) =
+            kernel::advance(self.isa, a, b, &mut self.u_prev, &self.u_now, &mut self.history, forces, output, next);
+        self.finish_step();
+        (projection, self.history_ready.then_some(next))
+    }
+
+    /// `outputs.len()` steps with no force on the string, by the homogeneous recursion
+    /// `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}` with the coefficients of [`history`](Self::history) and
+    /// [`advance`](Self::advance) (which compute `ũ^{n−1} − z̃`, the same recursion rounded
+    /// differently: a few ulps per step), writing each step's `outputᵀ ũ^{n+1}` into `outputs`.
+    /// The state stays in registers between steps (see `kernel::free_run`).
+    pub fn free_steps(&mut self, output: &[f64], outputs: &mut [f64]) {
+        let mut done = 0;
+        while done < outputs.len() {
+            let until_flush = (FLUSH_INTERVAL - self.since_flush) as usize;
+            let n = (outputs.len() - done).min(until_flush).min(kernel::RUN);
+            let (a, b) = (&self.coef_a, &self.coef_b);
+            kernel::free_run(self.isa, a, b, &mut self.u_prev, &mut self.u_now, output, &mut outputs[done..done + n]);
+            // `free_run` leaves the last state in `u_now`; `finish_step` swaps, so undo that.
+            std::mem::swap(&mut self.u_prev, &mut self.u_now);
+            self.since_flush += n as u32 - 1;
+            self.finish_step();
+            done += n;
+        }
+        self.history_ready = false;
+    }
+
+    /// Step the state on, flushing tiny amplitudes every [`FLUSH_INTERVAL`] steps (a flush makes
+    /// the next `z̃` stale).
+    #[inline]
+    pub(super) fn finish_step(&mut self) {
+        std::mem::swap(&mut self.u_prev, &mut self.u_now);
+        self.since_flush += 1;
+        if self.since_flush == FLUSH_INTERVAL {
+            self.since_flush = 0;
+            self.history_ready = false;
+            flush_tiny(&mut self.u_prev);
+            flush_tiny(&mut self.u_now);
+        }
+    }
+}
