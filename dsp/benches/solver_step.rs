@@ -39,7 +39,7 @@ const STEPS: usize = 424;
 /// "Well below 0" for free flight (m): more than the peak compression 8.7e-5 m.
 const FREE_BELOW: f64 = -1e-4;
 /// QSA segment counts.
-const SEGMENTS: [usize; 4] = [1, 5, 20, 64];
+const BENCHED_SEGMENTS: [usize; 4] = [1, 5, 20, 64];
 
 const KAPPA: f64 = 1e8;
 const ALPHA: f64 = 1.3;
@@ -239,7 +239,7 @@ fn solver_step(c: &mut Criterion) {
             Sequences::steps(&case.seq.free)
         ));
     }
-    for n in SEGMENTS {
+    for n in BENCHED_SEGMENTS {
         let case = case(format!("qsa_N{n}"), qsa(n));
         note(&mut summary, &case);
         bench_case(c, &case);

@@ -58,9 +58,9 @@ const SEED_ENV: &str = "QSA_FUZZ_SEED";
 const CEILING_DB: f64 = 12.0;
 
 /// Permutations per render call (the host's buffers run across permutations within a call).
-const CHUNK: usize = 50;
+const PERMUTATIONS_PER_CALL: usize = 50;
 
-/// Permutations between re-activations (which apply `Voices`). A multiple of [`CHUNK`].
+/// Permutations between re-activations (which apply `Voices`). A multiple of [`PERMUTATIONS_PER_CALL`].
 const REACTIVATE_EVERY: usize = 500;
 
 /// Longest hold after a run of permutations (0.1 s), and the ring-out after the last one.
@@ -459,11 +459,11 @@ fn random_parameter_permutations_never_give_a_non_finite_or_loud_sample() {
     let mut blocks: Vec<usize> = Vec::new();
     let mut inside = [0usize; INTERVALS.len()];
     let mut next_event = 0;
-    for first in (0..count).step_by(CHUNK) {
+    for first in (0..count).step_by(PERMUTATIONS_PER_CALL) {
         if first > 0 && first % REACTIVATE_EVERY == 0 {
             plugin.reactivate();
         }
-        let (from, to) = run.span(first, first + CHUNK);
+        let (from, to) = run.span(first, first + PERMUTATIONS_PER_CALL);
         let end = run.score[next_event..].partition_point(|e| e.0 < to) + next_event;
         let chunk: Score = run.score[next_event..end].iter().map(|&(t, ev)| (t - from, ev)).collect();
         next_event = end;
@@ -485,14 +485,14 @@ fn random_parameter_permutations_never_give_a_non_finite_or_loud_sample() {
             *n = (*n).min(to - t);
             t += *n;
         }
-        for p in &run.permutations[first..(first + CHUNK).min(count)] {
+        for p in &run.permutations[first..(first + PERMUTATIONS_PER_CALL).min(count)] {
             let b = boundaries[boundaries.partition_point(|&s| s <= p.start) - 1];
             if p.start > b {
                 inside[INTERVALS.iter().position(|&i| i == p.interval).expect("an interval")] += 1;
             }
         }
         // Every sample, permutation by permutation.
-        for index in first..(first + CHUNK).min(count) {
+        for index in first..(first + PERMUTATIONS_PER_CALL).min(count) {
             let (a, b) = run.span(index, index + 1);
             for (channel, samples) in
                 [("left", &audio.left[a - from..b - from]), ("right", &audio.right[a - from..b - from])]

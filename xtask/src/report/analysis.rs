@@ -15,7 +15,7 @@
 
 use qsa_dsp::contact::Method;
 
-use super::error::{Config, ErrorRow, OVERSAMPLING, SEGMENTS};
+use super::error::{Config, ErrorRow, OVERSAMPLING, SWEPT_SEGMENTS};
 use super::fit::{LineFit, fit_line};
 
 /// Smallest N in the fits of the error against N.
@@ -85,7 +85,7 @@ fn find<'a>(rows: &'a [ErrorRow], case: &str, method: Method, segments: usize, k
 /// Every fitted order, case by case.
 pub fn orders(rows: &[ErrorRow], cases: &[&str]) -> Vec<Order> {
     let mut out = Vec::new();
-    let fitted_segments: Vec<usize> = SEGMENTS.iter().copied().filter(|&n| n >= ORDER_MIN_SEGMENTS).collect();
+    let fitted_segments: Vec<usize> = SWEPT_SEGMENTS.iter().copied().filter(|&n| n >= ORDER_MIN_SEGMENTS).collect();
     let (n_lo, n_hi) = (fitted_segments[0], fitted_segments[fitted_segments.len() - 1]);
     let (k_lo, k_hi) = (OVERSAMPLING[0], OVERSAMPLING[OVERSAMPLING.len() - 1]);
     for &case in cases {

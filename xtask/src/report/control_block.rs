@@ -21,10 +21,10 @@ use super::gestures::Gesture;
 pub const BLOCKS: [usize; 4] = [1, 8, 64, 256];
 
 /// QSA's segment count in the study (the slide phrase's).
-pub const SEGMENTS: usize = 5;
+pub const STUDY_SEGMENTS: usize = 5;
 
 /// The methods compared.
-pub const METHODS: [Method; 2] = [Method::Qsa, Method::Imp];
+pub const STUDY_METHODS: [Method; 2] = [Method::Qsa, Method::Imp];
 
 /// One configuration's figures.
 #[derive(Debug, Clone, PartialEq)]
@@ -44,7 +44,7 @@ pub struct BlockRow {
 }
 
 fn settings(method: Method) -> SolverSettings {
-    SolverSettings { method, segments: SEGMENTS, v_ref: None }
+    SolverSettings { method, segments: STUDY_SEGMENTS, v_ref: None }
 }
 
 /// Every row for both gestures and methods; `timing_runs` renders per configuration are timed
@@ -53,7 +53,7 @@ pub fn study(timing_runs: usize, tick: &dyn Fn()) -> Vec<BlockRow> {
     let mut rows = Vec::new();
     for gesture in [Gesture::glide(), Gesture::vibrato()] {
         let window = gesture.window();
-        for method in METHODS {
+        for method in STUDY_METHODS {
             let frames: Vec<Vec<Frame>> =
                 BLOCKS.iter().map(|&nb| gesture.scene(nb).frames(settings(method), 1)).collect();
             let error = |f: &[Frame], field: fn(&Frame) -> f64| {
@@ -102,7 +102,7 @@ pub fn csv(rows: &[BlockRow]) -> String {
     for r in rows {
         let _ = writeln!(
             out,
-            "{},{},{SEGMENTS},{},{:.4},{:.4},{:.4e}",
+            "{},{},{STUDY_SEGMENTS},{},{:.4},{:.4},{:.4e}",
             r.gesture,
             r.method.name(),
             r.block,

@@ -49,7 +49,7 @@ use qsa_dsp::scene::Frame;
 use super::cases::Case;
 
 /// QSA segment counts N of the sweep.
-pub const SEGMENTS: [usize; 13] = [1, 2, 3, 4, 5, 6, 8, 10, 13, 20, 30, 50, 100];
+pub const SWEPT_SEGMENTS: [usize; 13] = [1, 2, 3, 4, 5, 6, 8, 10, 13, 20, 30, 50, 100];
 
 /// Oversampling factors k of the sweep.
 pub const OVERSAMPLING: [usize; 4] = [1, 2, 4, 8];

@@ -188,7 +188,7 @@ pub fn quick_check(scenes: &Path, report_dir: &Path) -> Result<QuickOutcome, Rep
         std::fs::read_to_string(&csv_path).map_err(|source| ReportError::Io { path: csv_path.clone(), source })?;
     let stored = error::parse_csv(&text).map_err(|e| ReportError::Scene(format!("{}: {e}", csv_path.display())))?;
     let cases = cases::cases(scenes)?;
-    let configs = error::configs(&error::SEGMENTS, &error::OVERSAMPLING);
+    let configs = error::configs(&error::SWEPT_SEGMENTS, &error::OVERSAMPLING);
     let bar = progress(cases.len() * configs.len(), "errors (quick)");
     let mut fresh = Vec::new();
     for case in &cases {
@@ -230,7 +230,7 @@ fn full(args: &ReportArgs) -> Result<Vec<PathBuf>, ReportError> {
     let start = Instant::now();
     std::fs::create_dir_all(&args.out).map_err(|source| ReportError::Io { path: args.out.clone(), source })?;
     let cases = cases::cases(&args.scenes)?;
-    let configs = error::configs(&error::SEGMENTS, &error::OVERSAMPLING);
+    let configs = error::configs(&error::SWEPT_SEGMENTS, &error::OVERSAMPLING);
     let bar = progress(cases.len() * (3 * configs.len() + error::TIMING_RUNS + 1), "error vs run time");
     let mut rows: Vec<ErrorRow> = Vec::new();
     let mut reference_checks = Vec::new();
@@ -244,7 +244,7 @@ fn full(args: &ReportArgs) -> Result<Vec<PathBuf>, ReportError> {
     bar.finish_and_clear();
     let error_seconds = start.elapsed().as_secs_f64();
     let fig4 = fig4::study(&cases[0].scene);
-    let bar = progress(2 * control_block::METHODS.len() * control_block::BLOCKS.len(), "control block");
+    let bar = progress(2 * control_block::STUDY_METHODS.len() * control_block::BLOCKS.len(), "control block");
     let blocks = control_block::study(error::TIMING_RUNS, &|| bar.inc(1));
     bar.finish_and_clear();
     let stability_start = Instant::now();

@@ -15,7 +15,7 @@ use super::ReportError;
 use super::analysis::{self, Order, Signal, Verdict};
 use super::cases::Case;
 use super::control_block::{self, BlockRow};
-use super::error::{self, CHECK_OVERSAMPLING, ErrorRow, REFERENCE_OVERSAMPLING, SEGMENTS, TIMING_RUNS};
+use super::error::{self, CHECK_OVERSAMPLING, ErrorRow, REFERENCE_OVERSAMPLING, SWEPT_SEGMENTS, TIMING_RUNS};
 use super::fig4::{self, Fig4Study};
 use super::files::make_readable;
 use super::plot;
@@ -101,7 +101,7 @@ pub fn write_all(dir: &Path, r: &Results, started: std::time::Instant) -> Result
         .cases
         .iter()
         .map(|c| {
-            let points = SEGMENTS
+            let points = SWEPT_SEGMENTS
                 .iter()
                 .filter_map(|&n| {
                     r.rows.iter().find(|row| {
@@ -308,7 +308,7 @@ fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
         let _ = writeln!(w, "| method | 1x | 2x | 4x | 8x |");
         let _ = writeln!(w, "|---|---|---|---|---|");
         let methods: Vec<(Method, usize)> =
-            SEGMENTS.iter().map(|&n| (Method::Qsa, n)).chain([(Method::Exp, 0), (Method::Imp, 0)]).collect();
+            SWEPT_SEGMENTS.iter().map(|&n| (Method::Qsa, n)).chain([(Method::Exp, 0), (Method::Imp, 0)]).collect();
         for (method, n) in methods {
             let name = if method == Method::Qsa { format!("qsa N={n}") } else { method.name().to_owned() };
             let _ = write!(w, "| {name} |");
@@ -496,7 +496,7 @@ fn control_block_section(w: &mut String, rows: &[BlockRow]) {
          at 44.1 kHz, QSA N = {} and IMP, each against the same method at N_b = 1 over the samples where the \
          slide moves (log10 of the relative L2 difference; −2 = 1 %). RTF is the whole render's (median of the \
          timing runs). Data: [`{CONTROL_BLOCK_CSV}`]({CONTROL_BLOCK_CSV}).\n",
-        control_block::SEGMENTS
+        control_block::STUDY_SEGMENTS
     );
     let _ = writeln!(w, "| gesture | method | N_b | output error | force error | RTF |");
     let _ = writeln!(w, "|---|---|---|---|---|---|");

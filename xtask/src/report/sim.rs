@@ -18,7 +18,7 @@
 //! The scenes are built by the scene builder ([`qsa_dsp::scene_file::build()`], with
 //! [`Sampling::oversampled`]) from the [`SceneDescription`] of the set-up, and run either for
 //! every per-sample [`Frame`] (with energy bookkeeping) or through the real-time path, timed
-//! ([`TimedOutput`], in calls of [`CHUNK`] samples). At `k = 1` a string has exactly the modes
+//! ([`TimedOutput`], in calls of [`CALL_SAMPLES`] samples). At `k = 1` a string has exactly the modes
 //! the renderer gives it (every mode below Nyquist), so the stability sweep builds its scenes here
 //! too.
 
@@ -32,7 +32,7 @@ use qsa_dsp::scene_file::{
 use crate::bench::TimedOutput;
 
 /// Samples per call of the real-time path, as a plugin would run a voice.
-pub const CHUNK: usize = 64;
+pub const CALL_SAMPLES: usize = 64;
 
 /// A physical set-up: the scene kind and its parameters.
 #[derive(Debug, Clone)]
@@ -100,7 +100,7 @@ impl CaseScene {
 
     /// Wall-clock seconds of one render through the real-time path.
     pub fn timed(&self, settings: SolverSettings, k: usize) -> f64 {
-        self.build(settings, k, TimedOutput { chunk: CHUNK })
+        self.build(settings, k, TimedOutput { chunk: CALL_SAMPLES })
     }
 
     /// The set-up as a scene description at the base rate; its solver is QSA at the case's

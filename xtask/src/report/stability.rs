@@ -149,7 +149,7 @@ impl Kind {
 }
 
 /// The methods every set runs with.
-pub const METHODS: [Method; 3] = [Method::Qsa, Method::Imp, Method::Exp];
+pub const SWEPT_METHODS: [Method; 3] = [Method::Qsa, Method::Imp, Method::Exp];
 
 /// One parameter set.
 #[derive(Debug, Clone)]
@@ -885,7 +885,7 @@ impl Sweep {
 pub fn sweep(sets: usize, excerpt_scene: Option<&CaseScene>, tick: &dyn Fn()) -> Sweep {
     let mut tallies = Vec::new();
     for kind in Kind::ALL {
-        let mut kind_tallies: Vec<Tally> = METHODS.iter().map(|&m| Tally::new(kind, m)).collect();
+        let mut kind_tallies: Vec<Tally> = SWEPT_METHODS.iter().map(|&m| Tally::new(kind, m)).collect();
         let corner_sets = corners(kind, excerpt_scene);
         let all = (0..sets).map(|i| random_set(kind, i)).chain(corner_sets);
         for set in all {
@@ -915,7 +915,7 @@ pub fn rerun(id: &str, excerpt_scene: Option<&CaseScene>) -> Result<String, Repo
     let parts: Vec<&str> = id.split('/').collect();
     let [scene, method, set] = parts[..] else { return Err(usage()) };
     let kind = Kind::ALL.into_iter().find(|k| k.name() == scene).ok_or_else(usage)?;
-    let method = METHODS.into_iter().find(|m| m.name() == method).ok_or_else(usage)?;
+    let method = SWEPT_METHODS.into_iter().find(|m| m.name() == method).ok_or_else(usage)?;
     let param_set = if let Some(j) = set.strip_prefix("corner-") {
         let j: usize = j.parse().map_err(|_| usage())?;
         corners(kind, excerpt_scene).into_iter().nth(j).ok_or_else(usage)?
