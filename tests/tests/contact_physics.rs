@@ -126,7 +126,7 @@ fn energy_is_conserved_over_1000_steps_on_fig4() {
 
 /// Sustained soft contact: κ is chosen so that the analytic contact lasts T_c = 1.2 s (52,920
 /// samples at 44.1 kHz) for a 10 g mass at 1 cm/s, so all 40,000 steps are in contact and rounding
-/// accumulates in every step. Physics §9.4 suggests 1e-9 for long sustained contacts (worst
+/// accumulates in every step. docs/physics.md §9.4 suggests 1e-9 for long sustained contacts (worst
 /// measured 8.8e-11 over its sweep).
 #[test]
 fn energy_is_conserved_over_40000_step_sustained_contacts() {

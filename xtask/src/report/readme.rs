@@ -440,9 +440,9 @@ fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
         .collect();
     let _ = writeln!(
         w,
-        "In short, at the base rate: {}. Physics §1.5 expects the spline's force error to fall as N^−2 for α ≥ 2 \
-         and more slowly for α < 2, and the scheme to be second order in Δt; where R² is low (the rattling slide, \
-         the unresolved stiff hammer) the numbers do not follow a power law.\n",
+        "In short, at the base rate: {}. The spline's force error should fall as N^−2 for α ≥ 2 and more slowly \
+         for α < 2 (docs/physics.md §1.5), and the scheme should be second order in Δt; where R² is low (the \
+         rattling slide, the unresolved stiff hammer) the numbers do not follow a power law.\n",
         summary.join("; ")
     );
 
