@@ -20,7 +20,7 @@ use super::fig4::{self, Fig4Study};
 use super::files::make_readable;
 use super::plot;
 use super::sim::Setup;
-use super::stability::{self, BUDGET_LIMIT, ENERGY_LIMIT, Sweep, Tally};
+use super::stability::{self, BUDGET_LIMIT, ENERGY_LIMIT, Summary, Tally};
 
 /// The error table.
 pub const ERROR_CSV: &str = "error-vs-runtime.csv";
@@ -69,7 +69,7 @@ pub struct Results<'a> {
     /// The control-block study.
     pub blocks: &'a [BlockRow],
     /// The stability sweep.
-    pub sweep: &'a Sweep,
+    pub sweep: &'a stability::Sweep,
     /// Wall times.
     pub timing: Timing,
 }
@@ -123,8 +123,9 @@ pub fn write_all(dir: &Path, r: &Results, started: std::time::Instant) -> Result
     plot::trajectories(&fig4_path, r.fig4)?;
     written.push(fig4_path);
     written.push(write_text(dir, CONTROL_BLOCK_CSV, &control_block::csv(r.blocks))?);
-    written.push(write_text(dir, STABILITY_CSV, &stability_csv(r.sweep))?);
-    written.push(write_text(dir, STABILITY_MD, &stability_md(r.sweep))?);
+    let summary = Summary::from_sweep(r.sweep);
+    written.push(write_text(dir, STABILITY_CSV, &stability_csv(&summary))?);
+    written.push(write_text(dir, STABILITY_MD, &stability_md(&summary))?);
     let timing = Timing { total_seconds: started.elapsed().as_secs_f64(), ..r.timing };
     written.push(write_text(dir, README, &readme(r, &orders, timing))?);
     Ok(written)
@@ -480,7 +481,7 @@ fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
 
     // ------------------------------------------------------------------ stability
     let _ = writeln!(w, "## Stability\n");
-    stability_summary(w, r.sweep);
+    stability_summary(w, &Summary::from_sweep(r.sweep));
     let _ =
         writeln!(w, "\nDetails, worst cases and the commands that rerun them: [`{STABILITY_MD}`]({STABILITY_MD}).\n");
     s
@@ -706,7 +707,7 @@ fn duel_conclusion(tally: [usize; 4]) -> &'static str {
     }
 }
 
-fn stability_summary(w: &mut String, sweep: &Sweep) {
+fn stability_summary(w: &mut String, sweep: &Summary) {
     let failures = sweep.failures();
     let non_finite: usize = sweep.tallies.iter().map(|t| t.non_finite.len() + t.panics.len()).sum();
     let _ = writeln!(
@@ -748,39 +749,8 @@ fn stability_summary(w: &mut String, sweep: &Sweep) {
     }
 }
 
-fn stability_csv(sweep: &Sweep) -> String {
-    let mut out = String::from(
-        "scene,method,random_sets,corners,non_finite,panics,conservative_runs,worst_drift,worst_drift_set,\
-lossy_runs,worst_increase,worst_increase_set,max_compression_ratio,max_compression_set,max_work,max_work_set,\
-over_sign_test_bound,newton_cap_hits,energy_failures,worst_excess,worst_excess_set,budget_failures\n",
-    );
-    for tally in &sweep.tallies {
-        let worst = |list: &Vec<stability::Worst>| {
-            list.first().map_or((String::new(), String::new()), |x| (format!("{:.3e}", x.value), x.id.clone()))
-        };
-        let (drift, drift_set) = worst(&tally.drift);
-        let (increase, increase_set) = worst(&tally.increase);
-        let (compression, compression_set) = worst(&tally.compression);
-        let (work, work_set) = worst(&tally.work);
-        let (excess, excess_set) = worst(&tally.excess);
-        let _ = writeln!(
-            out,
-            "{},{},{},{},{},{},{},{drift},{drift_set},{},{increase},{increase_set},{compression},{compression_set},{work},{work_set},{},{},{},{excess},{excess_set},{}",
-            tally.kind.name(),
-            tally.method.name(),
-            tally.random,
-            tally.corners,
-            tally.non_finite.len(),
-            tally.panics.len(),
-            tally.conservative,
-            tally.lossy,
-            tally.over_bound.len(),
-            tally.newton_cap,
-            tally.energy_failures.len(),
-            tally.budget_failures.len()
-        );
-    }
-    out
+fn stability_csv(summary: &Summary) -> String {
+    summary.to_csv()
 }
 
 fn worst_list(w: &mut String, tally: &Tally, title: &str, list: &[stability::Worst], format: fn(f64) -> String) {
@@ -794,7 +764,7 @@ fn worst_list(w: &mut String, tally: &Tally, title: &str, list: &[stability::Wor
     let _ = writeln!(w);
 }
 
-fn stability_md(sweep: &Sweep) -> String {
+fn stability_md(sweep: &Summary) -> String {
     let mut s = String::new();
     let w = &mut s;
     let _ = writeln!(w, "# Stability on stiff and extreme cases\n");

@@ -101,6 +101,12 @@ pub const ENERGY_LIMIT: f64 = 1e-6;
 /// Worst cases kept per measure.
 const KEEP: usize = 5;
 
+/// Counts per tally in `stability.csv` ([`Tally::COUNT_NAMES`]).
+const COUNTS: usize = 5;
+
+/// Lists of worst cases and failures per tally in `stability.csv` ([`Tally::LIST_NAMES`]).
+const LISTS: usize = 10;
+
 /// The three scene kinds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
@@ -787,6 +793,78 @@ impl Tally {
         }
     }
 
+    /// Names of the counts in `stability.csv`, in the order of [`Self::counts`].
+    pub const COUNT_NAMES: [&'static str; COUNTS] =
+        ["random_sets", "corners", "conservative_runs", "lossy_runs", "newton_cap_hits"];
+
+    /// The counts, named as in `stability.csv`.
+    pub fn counts(&self) -> [(&'static str, usize); COUNTS] {
+        let values = [self.random, self.corners, self.conservative, self.lossy, self.newton_cap];
+        std::array::from_fn(|i| (Self::COUNT_NAMES[i], values[i]))
+    }
+
+    fn counts_mut(&mut self) -> [&mut usize; COUNTS] {
+        [&mut self.random, &mut self.corners, &mut self.conservative, &mut self.lossy, &mut self.newton_cap]
+    }
+
+    /// The failure lists, each with the words `failures` prints before its entries.
+    pub fn failure_lists(&self) -> [(&'static str, &Vec<Worst>); 5] {
+        [
+            ("non-finite", &self.non_finite),
+            ("panic", &self.panics),
+            ("over the sign-test bound", &self.over_bound),
+            ("energy error over the limit", &self.energy_failures),
+            ("energy above the supplied work", &self.budget_failures),
+        ]
+    }
+
+    /// Names of the lists of worst cases and failures in `stability.csv`, in the order of
+    /// [`Self::lists`].
+    pub const LIST_NAMES: [&'static str; LISTS] = [
+        "non_finite",
+        "panics",
+        "worst_drift",
+        "worst_increase",
+        "max_compression_ratio",
+        "max_work",
+        "over_sign_test_bound",
+        "energy_failures",
+        "worst_excess",
+        "budget_failures",
+    ];
+
+    /// Every list of worst cases and failures, named as in `stability.csv`.
+    pub fn lists(&self) -> [(&'static str, &Vec<Worst>); LISTS] {
+        let lists = [
+            &self.non_finite,
+            &self.panics,
+            &self.drift,
+            &self.increase,
+            &self.compression,
+            &self.work,
+            &self.over_bound,
+            &self.energy_failures,
+            &self.excess,
+            &self.budget_failures,
+        ];
+        std::array::from_fn(|i| (Self::LIST_NAMES[i], lists[i]))
+    }
+
+    fn lists_mut(&mut self) -> [&mut Vec<Worst>; LISTS] {
+        [
+            &mut self.non_finite,
+            &mut self.panics,
+            &mut self.drift,
+            &mut self.increase,
+            &mut self.compression,
+            &mut self.work,
+            &mut self.over_bound,
+            &mut self.energy_failures,
+            &mut self.excess,
+            &mut self.budget_failures,
+        ]
+    }
+
     fn add(&mut self, set: &ParamSet, m: &Measure) {
         if set.id.starts_with("corner") {
             self.corners += 1;
@@ -861,23 +939,196 @@ impl Sweep {
 
     /// Every failure, one line each, with the command that reruns it.
     pub fn failures(&self) -> Vec<String> {
-        let mut out = Vec::new();
+        failures(&self.tallies)
+    }
+}
+
+fn failures(tallies: &[Tally]) -> Vec<String> {
+    let mut out = Vec::new();
+    for t in tallies {
+        for (what, list) in t.failure_lists() {
+            for w in list {
+                out.push(format!("{what}: {} ({:.3e}; {})", t.command(&w.id), w.value, w.about));
+            }
+        }
+    }
+    out
+}
+
+/// What the sweep found, as `stability.csv` holds it: everything `stability.md` and the
+/// stability section of the README print (counts, worst cases with their set ids and parameters,
+/// every failure), so that the text can be regenerated from the committed CSV alone.
+///
+/// # The CSV
+///
+/// One value per line, `scene,method,measure,rank,value,set,parameters`:
+/// - `all,all,random_sets_per_kind,,S,,`: the random sets per kind;
+/// - per scene kind and method, in report order, the counts (`rank` empty, `value` an integer):
+///   `random_sets`, `corners`, `conservative_runs`, `lossy_runs`, `newton_cap_hits`;
+/// - then each list of worst cases or failures (see [`Tally::lists`] for the names), one line per
+///   entry, `rank` 1, 2, … in order, `value` in Rust's shortest round-trip exponent form (so the
+///   parsed value is bit for bit the measured one; `NaN` for a panic), `set` the id that
+///   `--rerun` takes and `parameters` the set's description.
+///
+/// A field holding a comma, a quote or a line break is quoted (RFC 4180: in double quotes,
+/// quotes doubled). [`Summary::parse_csv`] reads back exactly what [`Summary::to_csv`] wrote.
+#[derive(Debug, Clone)]
+pub struct Summary {
+    /// Random sets per kind.
+    pub sets: usize,
+    /// One tally per kind and method, in report order.
+    pub tallies: Vec<Tally>,
+}
+
+/// Header of `stability.csv`.
+const CSV_HEADER: &str = "scene,method,measure,rank,value,set,parameters";
+
+/// Name of the sweep-wide line of `stability.csv`.
+const CSV_SETS: &str = "random_sets_per_kind";
+
+impl Summary {
+    /// The summary of `sweep`.
+    pub fn from_sweep(sweep: &Sweep) -> Self {
+        Self { sets: sweep.sets, tallies: sweep.tallies.clone() }
+    }
+
+    /// Total runs.
+    pub fn runs(&self) -> usize {
+        self.tallies.iter().map(Tally::runs).sum()
+    }
+
+    /// Every failure, one line each, with the command that reruns it.
+    pub fn failures(&self) -> Vec<String> {
+        failures(&self.tallies)
+    }
+
+    /// The tally of `kind` and `method`.
+    pub fn tally(&self, kind: Kind, method: Method) -> Option<&Tally> {
+        self.tallies.iter().find(|t| t.kind == kind && t.method == method)
+    }
+
+    /// `stability.csv` (see the type's docs).
+    pub fn to_csv(&self) -> String {
+        let mut out = String::new();
+        let mut line = |fields: [&str; 7]| {
+            let quoted: Vec<String> = fields.iter().map(|f| csv_field(f)).collect();
+            out.push_str(&quoted.join(","));
+            out.push('\n');
+        };
+        line(CSV_HEADER.split(',').collect::<Vec<_>>().try_into().expect("seven columns"));
+        line(["all", "all", CSV_SETS, "", &self.sets.to_string(), "", ""]);
         for t in &self.tallies {
-            let lists = [
-                ("non-finite", &t.non_finite),
-                ("panic", &t.panics),
-                ("over the sign-test bound", &t.over_bound),
-                ("energy error over the limit", &t.energy_failures),
-                ("energy above the supplied work", &t.budget_failures),
-            ];
-            for (what, list) in lists {
-                for w in list {
-                    out.push(format!("{what}: {} ({:.3e}; {})", t.command(&w.id), w.value, w.about));
+            let (scene, method) = (t.kind.name(), t.method.name());
+            for (name, count) in t.counts() {
+                line([scene, method, name, "", &count.to_string(), "", ""]);
+            }
+            for (name, list) in t.lists() {
+                for (rank, w) in list.iter().enumerate() {
+                    line([scene, method, name, &(rank + 1).to_string(), &format!("{:e}", w.value), &w.id, &w.about]);
                 }
             }
         }
         out
     }
+
+    /// Read what [`Self::to_csv`] wrote.
+    pub fn parse_csv(text: &str) -> Result<Summary, String> {
+        let records = csv_records(text)?;
+        let mut rows = records.iter().enumerate().map(|(i, r)| (i + 1, r));
+        match rows.next() {
+            Some((_, header)) if header.join(",") == CSV_HEADER => {}
+            _ => return Err(format!("the first line must be {CSV_HEADER:?}")),
+        }
+        let mut sets = None;
+        let mut tallies: Vec<(Tally, [bool; COUNTS])> = Vec::new();
+        for (line, row) in rows {
+            let at = |message: String| format!("line {line}: {message}");
+            let [scene, method, measure, rank, value, set, parameters] = &row[..] else {
+                return Err(at(format!("expected 7 fields, found {}", row.len())));
+            };
+            let integer = || value.parse::<usize>().map_err(|_| at(format!("{measure}: {value:?} is not a count")));
+            if (scene.as_str(), method.as_str(), measure.as_str()) == ("all", "all", CSV_SETS) {
+                sets = Some(integer()?);
+                continue;
+            }
+            let kind =
+                Kind::ALL.into_iter().find(|k| k.name() == scene).ok_or_else(|| at(format!("scene {scene:?}")))?;
+            let method = Method::from_name(method).ok_or_else(|| at(format!("method {method:?}")))?;
+            if tallies.last().is_none_or(|(t, _)| (t.kind, t.method) != (kind, method)) {
+                if tallies.iter().any(|(t, _)| (t.kind, t.method) == (kind, method)) {
+                    return Err(at(format!("{scene}/{} appears twice", method.name())));
+                }
+                tallies.push((Tally::new(kind, method), [false; COUNTS]));
+            }
+            let (tally, seen) = tallies.last_mut().expect("pushed above");
+            if let Some(i) = Tally::COUNT_NAMES.iter().position(|n| n == measure) {
+                if !rank.is_empty() || !set.is_empty() || !parameters.is_empty() || seen[i] {
+                    return Err(at(format!("{measure}: a count is given once, with no rank, set or parameters")));
+                }
+                *tally.counts_mut().into_iter().nth(i).expect("a count per name") = integer()?;
+                seen[i] = true;
+                continue;
+            }
+            let i = Tally::LIST_NAMES
+                .iter()
+                .position(|n| n == measure)
+                .ok_or_else(|| at(format!("unknown measure {measure:?}")))?;
+            let list = tally.lists_mut().into_iter().nth(i).expect("a list per name");
+            if rank.parse::<usize>() != Ok(list.len() + 1) {
+                return Err(at(format!("{measure}: rank {rank:?} where {} was due", list.len() + 1)));
+            }
+            let value = value.parse::<f64>().map_err(|_| at(format!("{measure}: {value:?} is not a number")))?;
+            list.push(Worst { value, id: set.clone(), about: parameters.clone() });
+        }
+        let sets = sets.ok_or_else(|| format!("no {CSV_SETS} line"))?;
+        let tallies = tallies
+            .into_iter()
+            .map(|(t, seen)| match seen.iter().position(|s| !s) {
+                Some(i) => Err(format!("{}/{}: no {} line", t.kind.name(), t.method.name(), Tally::COUNT_NAMES[i])),
+                None => Ok(t),
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Summary { sets, tallies })
+    }
+}
+
+/// A CSV field, quoted if it holds a comma, a quote or a line break.
+fn csv_field(field: &str) -> String {
+    if field.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", field.replace('"', "\"\""))
+    } else {
+        field.to_owned()
+    }
+}
+
+/// The records of a CSV text whose lines end in `\n` (RFC 4180 quoting).
+fn csv_records(text: &str) -> Result<Vec<Vec<String>>, String> {
+    let (mut records, mut record, mut field) = (Vec::new(), Vec::new(), String::new());
+    let (mut quoted, mut chars) = (false, text.chars().peekable());
+    while let Some(c) = chars.next() {
+        match (quoted, c) {
+            (true, '"') if chars.peek() == Some(&'"') => {
+                chars.next();
+                field.push('"');
+            }
+            (true, '"') => quoted = false,
+            (true, c) => field.push(c),
+            (false, '"') if field.is_empty() => quoted = true,
+            (false, ',') => record.push(std::mem::take(&mut field)),
+            (false, '\n') => {
+                record.push(std::mem::take(&mut field));
+                records.push(std::mem::take(&mut record));
+            }
+            (false, c) => field.push(c),
+        }
+    }
+    if quoted {
+        return Err("a quoted field is not closed".to_owned());
+    }
+    if !field.is_empty() || !record.is_empty() {
+        return Err("the last line does not end in a line break".to_owned());
+    }
+    Ok(records)
 }
 
 /// Run `sets` random sets and the corners of every kind with every method. The slide corners
@@ -973,6 +1224,75 @@ mod tests {
             }
         }
         assert_ne!(random_set(Kind::MassBarrier, 0).about, random_set(Kind::MassBarrier, 1).about);
+    }
+
+    /// A summary whose parameters hold commas, quotes and line breaks, whose values need every
+    /// digit (1/3, 0.1 + 0.2, the smallest subnormal) or are not finite (a panic's NaN), and
+    /// whose lists are of every length from empty to [`KEEP`].
+    fn awkward_summary() -> Summary {
+        let worst = |value: f64, id: &str, about: &str| Worst { value, id: id.to_owned(), about: about.to_owned() };
+        let mut tallies = Vec::new();
+        for (k, kind) in Kind::ALL.into_iter().enumerate() {
+            for (m, method) in SWEPT_METHODS.into_iter().enumerate() {
+                let mut t = Tally::new(kind, method);
+                for (c, count) in t.counts_mut().into_iter().enumerate() {
+                    *count = 10 * k + m + c;
+                }
+                for (l, list) in t.lists_mut().into_iter().enumerate() {
+                    for r in 0..(k + m + l) % (KEEP + 1) {
+                        let about = format!("κ {r}e2, \"quoted\", panic: line one\nline two, l {l}");
+                        list.push(worst(1.0 / 3.0 + 0.1 + 0.2 * r as f64, &format!("corner-{r}"), &about));
+                    }
+                }
+                t.panics.push(worst(f64::NAN, "17", "m 1 kg (panic: index out of bounds, \"x\")"));
+                t.drift.push(worst(f64::from_bits(1), "9999", ""));
+                t.work.push(worst(f64::INFINITY, "3", ","));
+                tallies.push(t);
+            }
+        }
+        Summary { sets: 10_000, tallies }
+    }
+
+    #[test]
+    fn the_csv_reads_back_into_the_same_summary_and_text() {
+        let summary = awkward_summary();
+        let csv = summary.to_csv();
+        let back = Summary::parse_csv(&csv).expect("the CSV parses");
+        assert_eq!(back.to_csv(), csv);
+        assert_eq!(back.sets, summary.sets);
+        assert_eq!(back.tallies.len(), summary.tallies.len());
+        for (a, b) in summary.tallies.iter().zip(&back.tallies) {
+            assert_eq!((a.kind, a.method), (b.kind, b.method));
+            assert_eq!(a.counts(), b.counts());
+            for ((name, x), (_, y)) in a.lists().into_iter().zip(b.lists()) {
+                assert_eq!(x.len(), y.len(), "{name}");
+                for (x, y) in x.iter().zip(y) {
+                    assert_eq!((x.value.to_bits(), &x.id, &x.about), (y.value.to_bits(), &y.id, &y.about), "{name}");
+                }
+            }
+        }
+        assert_eq!(back.failures(), summary.failures());
+    }
+
+    #[test]
+    fn a_damaged_csv_is_refused_with_the_line_at_fault() {
+        let csv = awkward_summary().to_csv();
+        let records = csv_records(&csv).expect("the CSV parses");
+        let without = |prefix: &str| {
+            let mut kept = records.clone();
+            kept.remove(kept.iter().position(|r| r.join(",").starts_with(prefix)).expect("the record"));
+            let lines: Vec<String> =
+                kept.iter().map(|r| r.iter().map(|f| csv_field(f)).collect::<Vec<_>>().join(",")).collect();
+            lines.join("\n") + "\n"
+        };
+        let missing_count = Summary::parse_csv(&without("mass-barrier,imp,lossy_runs,")).unwrap_err();
+        assert!(missing_count.contains("mass-barrier/imp: no lossy_runs line"), "{missing_count}");
+        let missing_rank = Summary::parse_csv(&without("slide-gesture,exp,worst_drift,1,")).unwrap_err();
+        assert!(missing_rank.contains("worst_drift: rank \"2\" where 1 was due"), "{missing_rank}");
+        let unknown = Summary::parse_csv(&csv.replace(",max_work,", ",most_work,")).unwrap_err();
+        assert!(unknown.contains("unknown measure \"most_work\""), "{unknown}");
+        assert!(Summary::parse_csv(&csv[..csv.len() - 1]).is_err());
+        assert!(Summary::parse_csv(&csv.replacen("all,all,random_sets_per_kind,,10000,,\n", "", 1)).is_err());
     }
 
     #[test]
