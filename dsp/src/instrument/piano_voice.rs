@@ -52,6 +52,41 @@ pub const RELEASE_ENERGY: f64 = 1e-14;
 /// energy for a piano voice, the energy at the pluck plus the controls' work for a slide voice.
 pub const GUARD_FACTOR: f64 = 10.0;
 
+/// The guard's fade-out: a voice caught over its bound is faded linearly to silence across one
+/// control block (no step in the output), then brought to rest at the next block.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GuardFade {
+    /// While fading: the gain now and its decrease per sample.
+    fade: Option<(f64, f64)>,
+}
+
+impl GuardFade {
+    /// Start fading out over the next `samples` samples.
+    pub fn start(&mut self, samples: usize) {
+        self.fade = Some((1.0, 1.0 / samples.max(1) as f64));
+    }
+
+    /// Forget the fade (the voice has been silenced).
+    pub fn clear(&mut self) {
+        self.fade = None;
+    }
+
+    /// Whether a fade has started.
+    pub fn is_fading(&self) -> bool {
+        self.fade.is_some()
+    }
+
+    /// Apply the fade to a rendered block (no change when not fading).
+    pub fn apply(&mut self, out: &mut [f64]) {
+        if let Some((gain, step)) = &mut self.fade {
+            for x in out {
+                *x *= *gain;
+                *gain = (*gain - *step).max(0.0);
+            }
+        }
+    }
+}
+
 /// Decay rate that silences a stolen voice before its new note (1/s): −87 dB in 5 ms.
 pub const STEAL_RATE: f64 = 2000.0;
 
@@ -129,8 +164,8 @@ pub struct PianoVoice {
     pending_released: bool,
     /// Mean square of the output over the latest rendered block (N²).
     loudness: f64,
-    /// While the guard fades the voice out: its gain now and its decrease per sample.
-    guard_fade: Option<(f64, f64)>,
+    /// The guard's fade-out, once the voice has been caught over its bound.
+    guard_fade: GuardFade,
     /// How many times the guard has silenced this voice.
     trips: u32,
 }
@@ -168,7 +203,7 @@ impl PianoVoice {
             pending: None,
             pending_released: false,
             loudness: 0.0,
-            guard_fade: None,
+            guard_fade: GuardFade::default(),
             trips: 0,
         }
     }
@@ -279,7 +314,7 @@ impl PianoVoice {
     /// Silence the voice at once, counted as a guard trip.
     fn trip(&mut self) {
         self.trips += 1;
-        self.guard_fade = None;
+        self.guard_fade.clear();
         self.silence();
     }
 
@@ -321,7 +356,7 @@ impl PianoVoice {
         if !self.sounding && self.pending.is_none() {
             return;
         }
-        if self.guard_fade.is_some() {
+        if self.guard_fade.is_fading() {
             self.trip();
             return;
         }
@@ -358,7 +393,7 @@ impl PianoVoice {
         // energy (the hammer's and what the string had); far more, or a non-finite state, is a
         // fault to silence, not to play.
         if !(string_energy <= GUARD_FACTOR * self.reference_energy) {
-            self.guard_fade = Some((1.0, 1.0 / len as f64));
+            self.guard_fade.start(len);
         }
         // Once the hammer is out of the string's reach for good, the string alone sounds.
         if self.core.retired() && string_energy < RELEASE_ENERGY * self.reference_energy {
@@ -391,11 +426,8 @@ impl PianoVoice {
         if !self.loudness.is_finite() {
             out.fill(0.0);
             self.trip();
-        } else if let Some((gain, step)) = &mut self.guard_fade {
-            for x in out {
-                *x *= *gain;
-                *gain = (*gain - *step).max(0.0);
-            }
+        } else {
+            self.guard_fade.apply(out);
         }
     }
 }

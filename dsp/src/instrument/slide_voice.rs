@@ -47,7 +47,7 @@ use crate::contact::{Method, PowerLaw};
 use crate::control::Live;
 use crate::exciter::SlideParams;
 use crate::instrument::notes::NoteParam;
-use crate::instrument::piano_voice::{GUARD_FACTOR, RELEASE_ENERGY, Strike};
+use crate::instrument::piano_voice::{GUARD_FACTOR, GuardFade, RELEASE_ENERGY, Strike};
 use crate::instrument::settings::{HAND_RANGE, HandSource, Settings};
 use crate::instrument::solvers::Solvers;
 use crate::preset::slide_guitar;
@@ -129,8 +129,8 @@ pub struct SlideVoice {
     energy_at_pluck: f64,
     /// The controls' work at the latest pluck (J).
     work_at_pluck: f64,
-    /// While the guard fades the voice out: its gain now and its decrease per sample.
-    guard_fade: Option<(f64, f64)>,
+    /// The guard's fade-out, once the voice has been caught over its bound.
+    guard_fade: GuardFade,
     /// How many times the guard has silenced this voice.
     trips: u32,
     /// Time into the pluck (s), while plucking.
@@ -189,7 +189,7 @@ impl SlideVoice {
             solver: (settings.method, settings.segments),
             energy_at_pluck: 0.0,
             work_at_pluck: 0.0,
-            guard_fade: None,
+            guard_fade: GuardFade::default(),
             trips: 0,
             pluck: None,
             reference_energy: f64::MIN_POSITIVE,
@@ -325,7 +325,7 @@ impl SlideVoice {
     /// it, the fingers off.
     fn trip(&mut self) {
         self.trips += 1;
-        self.guard_fade = None;
+        self.guard_fade.clear();
         self.silence();
         self.rest_lifted();
     }
@@ -344,7 +344,7 @@ impl SlideVoice {
         if !self.sounding {
             return;
         }
-        if self.guard_fade.is_some() {
+        if self.guard_fade.is_fading() {
             self.trip();
             return;
         }
@@ -395,7 +395,7 @@ impl SlideVoice {
         // The guard leaves out the contact's small share (below the bound, which includes it).
         let (kinetic, energy) = self.core.energies();
         if self.over_budget(energy) {
-            self.guard_fade = Some((1.0, 1.0 / len as f64));
+            self.guard_fade.start(len);
         }
         // A pressed slide holds static energy in the string and the hand for ever, so silence is
         // judged on the string's motion.
@@ -440,11 +440,8 @@ impl SlideVoice {
         if !out.iter().all(|x| x.is_finite()) {
             out.fill(0.0);
             self.trip();
-        } else if let Some((gain, step)) = &mut self.guard_fade {
-            for x in out {
-                *x *= *gain;
-                *gain = (*gain - *step).max(0.0);
-            }
+        } else {
+            self.guard_fade.apply(out);
         }
     }
 }
