@@ -1,0 +1,112 @@
+//! The per-note rule (`qsa_dsp::preset::piano_note`) against published measurements of real
+//! grand pianos that the rule was not fitted to: how long the hammer stays on the string, across
+//! the keyboard and across dynamic levels (docs/physics.md §8.4 has the sources and the table).
+//!
+//! The contact duration is the first continuous stretch of samples in which the instrument's
+//! hammer touches its string (`Instrument::in_contact`), played one sample per call at 48 kHz,
+//! so it is measured to ±1 sample (21 µs). Dynamic levels are set by hammer speed: piano 1 m/s,
+//! mezzo-forte 2.5 m/s, forte 5 m/s (Askenfelt & Jansson 1990 give about 5 m/s for forte;
+//! Chaigne & Askenfelt 1994 simulate mezzo-forte at 2.5 m/s).
+
+use qsa_dsp::instrument::{Event, Instrument, Settings, hammer_speed};
+use qsa_dsp::preset::key_frequency;
+
+const FS: f64 = 48_000.0;
+/// Hammer speeds of piano, mezzo-forte and forte (m/s).
+const PIANO: f64 = 1.0;
+const MEZZO_FORTE: f64 = 2.5;
+const FORTE: f64 = 5.0;
+
+/// The MIDI velocity (0–1) at which the instrument's hammer leaves at `speed` (m/s).
+fn velocity_for(speed: f64) -> f32 {
+    let v = (speed / hammer_speed(0.0)).ln() / (hammer_speed(1.0) / hammer_speed(0.0)).ln();
+    assert!((hammer_speed(v) - speed).abs() < 1e-9 * speed, "{speed} m/s is outside the velocity curve");
+    v as f32
+}
+
+/// Duration of the hammer's first contact with its string (s) when `key` is struck at `speed`.
+fn contact_duration(key: u8, speed: f64) -> f64 {
+    let mut piano = Instrument::new(FS, 1, Settings { limiter: false, ..Settings::default() });
+    piano.handle(Event::NoteOn { channel: 0, key, velocity: velocity_for(speed) });
+    let (mut l, mut r) = ([0.0f32; 1], [0.0f32; 1]);
+    let mut first = None;
+    for n in 0..(0.02 * FS) as usize {
+        piano.process(&mut l, &mut r);
+        match (piano.in_contact() > 0, first) {
+            (true, None) => first = Some(n),
+            (false, Some(start)) => return (n - start) as f64 / FS,
+            _ => {}
+        }
+    }
+    panic!("key {key} at {speed} m/s: no contact that ends within 20 ms");
+}
+
+fn period(key: u8) -> f64 {
+    1.0 / key_frequency(key)
+}
+
+/// Chaigne's measurements on five grands (A. Chaigne, "Historic pianos: hammers and strings",
+/// after Chaigne et al., JASA 140(5), 2016) and Askenfelt & Jansson (JASA 88(1), 1990): the
+/// force pulse is shorter than the string's period in the lowest four octaves and longer in the
+/// top one, C6 to C7. Measured here at mezzo-forte: below 0.74 periods up to C5, 1.00 at C6 (the
+/// crossover), 1.06 to 1.35 from C♯6 to C7.
+#[test]
+fn the_hammer_leaves_within_a_period_in_the_lowest_four_octaves_and_stays_longer_from_c6_to_c7() {
+    for key in 24..=72 {
+        let ratio = contact_duration(key, MEZZO_FORTE) / period(key);
+        assert!(ratio < 1.0, "key {key}: the contact lasts {ratio:.2} periods");
+    }
+    for key in 85..=96 {
+        let ratio = contact_duration(key, MEZZO_FORTE) / period(key);
+        assert!(ratio > 1.0, "key {key}: the contact lasts {ratio:.2} periods");
+    }
+    let c6 = contact_duration(84, MEZZO_FORTE) / period(84);
+    println!("C6: the contact lasts {c6:.3} periods at mezzo-forte");
+    assert!((c6 - 1.0).abs() < 0.05, "C6, where the measurements cross over, lasts {c6:.3} periods");
+}
+
+/// Askenfelt & Jansson (1990) and Chaigne (2016): under one millisecond at C7, at every dynamic
+/// level from piano to forte.
+#[test]
+fn the_contact_at_c7_lasts_under_a_millisecond_from_piano_to_forte() {
+    for speed in [PIANO, 1.6, MEZZO_FORTE, 3.5, FORTE] {
+        let t = contact_duration(96, speed);
+        println!("C7 at {speed} m/s: {:.3} ms", 1e3 * t);
+        assert!(t < 1e-3, "C7 at {speed} m/s: {:.3} ms", 1e3 * t);
+    }
+}
+
+/// Askenfelt & Jansson (1990, their Fig. 6): at C4 the contact duration varies by about ±20 %
+/// around its mezzo-forte value over the range from piano to forte.
+#[test]
+fn the_contact_at_c4_stays_within_twenty_percent_of_mezzo_forte_from_piano_to_forte() {
+    let mf = contact_duration(60, MEZZO_FORTE);
+    for speed in [PIANO, FORTE] {
+        let change = contact_duration(60, speed) / mf - 1.0;
+        println!("C4 at {speed} m/s: {:+.1} % of mezzo-forte ({:.3} ms)", 100.0 * change, 1e3 * mf);
+        assert!(change.abs() <= 0.2, "C4 at {speed} m/s: {:+.1} %", 100.0 * change);
+    }
+}
+
+/// Russell & Rossing (Acustica 84, 1998): for every real piano hammer measured, the pulse grew
+/// shorter as the hammer sped up. Here on every key above the lowest octave, at 0.7 to 6 m/s,
+/// to within one sample. (In the lowest octave, A0 to G♯1, the first contact at forte outlasts
+/// the one at mezzo-forte by up to two samples, 2 %: the string's response, not the felt, ends
+/// those contacts.)
+#[test]
+fn the_contact_shortens_as_the_hammer_speeds_up_on_every_key_above_the_lowest_octave() {
+    let speeds = [0.7, PIANO, 1.6, MEZZO_FORTE, 3.5, FORTE, 6.0];
+    for key in 33..=108 {
+        let durations: Vec<f64> = speeds.iter().map(|&v| contact_duration(key, v)).collect();
+        for (pair, v) in durations.windows(2).zip(speeds.windows(2)) {
+            assert!(
+                pair[1] <= pair[0] + 1.0 / FS,
+                "key {key}: {:.3} ms at {} m/s, {:.3} ms at {} m/s",
+                1e3 * pair[0],
+                v[0],
+                1e3 * pair[1],
+                v[1]
+            );
+        }
+    }
+}
