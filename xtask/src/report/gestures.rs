@@ -133,7 +133,8 @@ impl Gesture {
 /// uniform in [1, 4]; slide mass ∈ [0.1 g, 1 kg] (the plugin: 5–200 g); hand stiffness k_H ∈
 /// [1e2, 1e6] N/m; hand damping r_H = 0 in a third, else uniform in [0, 100] kg/s; finger damping
 /// uniform in [0, 50] s/m; the string lossless in a quarter; N_b = 1 in a third, else uniform in
-/// [1, 256]; fs ∈ [22.05, 192] kHz. Over the run the slide moves between random positions in
+/// [1, 256]; fs ∈ [22.05, `max_fs`] kHz (the stability sweep: 192 kHz, 96 kHz for its runs of
+/// seconds). Over the run the slide moves between random positions in
 /// [0.15, 0.45] L at random speeds up to 5 m/s, with a vibrato of up to ±5 mm at up to 10 Hz;
 /// the hand jumps between random heights in ±3 mm (pressing, rattling and lifting); each
 /// finger's force switches between 0 and up to 3 N. Changes come at random times, three in ten
@@ -153,14 +154,15 @@ pub struct Trajectory {
 }
 
 impl Trajectory {
-    /// Draw a trajectory from `rng`; `seconds(fs, modes)` gives the run's length (s) for the drawn
-    /// sample rate (Hz) and the number of modes the string has there.
-    pub fn draw(rng: &mut Pcg64, seconds: impl Fn(f64, usize) -> f64) -> Self {
+    /// Draw a trajectory from `rng` at a sample rate up to `max_fs` (Hz, at least 22.05 kHz);
+    /// `seconds(fs, modes)` gives the run's length (s) for the drawn sample rate (Hz) and the
+    /// number of modes the string has there.
+    pub fn draw(rng: &mut Pcg64, max_fs: f64, seconds: impl Fn(f64, usize) -> f64) -> Self {
         let g = slide_guitar();
         let length = g.string.length;
         let pick = |rng: &mut Pcg64, lo: f64, hi: f64| lo + (hi - lo) * rng.random::<f64>();
         let log = |rng: &mut Pcg64, lo: f64, hi: f64| (lo.ln() + rng.random::<f64>() * (hi / lo).ln()).exp();
-        let fs = log(rng, 22_050.0, 192_000.0).round();
+        let fs = log(rng, 22_050.0, max_fs.max(22_050.0)).round();
         let lossless = rng.random_bool(0.25);
         let string =
             if lossless { qsa_dsp::string::StringParams { damping: Damping::LOSSLESS, ..g.string } } else { g.string };

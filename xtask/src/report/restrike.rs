@@ -3,7 +3,9 @@
 //!
 //! Each strike throws a fresh hammer from just beyond where the string is under it
 //! ([`HammerCore::strike`]) and refits QSA over the hammer's kinetic energy plus the string's
-//! energy, as `PianoVoice::play` does. The damper lands as the voice's does: its rate at the
+//! energy, as `PianoVoice::play` does, or ([`VrefRule::Incoming`]) over the hammer's kinetic
+//! energy alone: on a string that swings the compression can then outgrow the fit, and QSA
+//! works on its last segment extended beyond the last knot. The damper lands as the voice's does: its rate at the
 //! fundamental rises towards its target with a time constant, and every [`DAMPER_UPDATE`] the
 //! modes' extra decay rates `D·g_i` ([`damper_shares`]) are set anew.
 //!
@@ -20,7 +22,7 @@
 //!   energy of an unchanged state moves by a little: that change is the work of the parameter
 //!   change.
 
-use qsa_dsp::contact::{Method, PowerLaw};
+use qsa_dsp::contact::{Method, PowerLaw, QuadSpline};
 use qsa_dsp::exciter::HammerParams;
 use qsa_dsp::instrument::{DAMPER_UPDATE, Solvers, damper_shares};
 use qsa_dsp::scene::{Frame, HammerCore, HammerStringParams, OutputKind, Pickup};
@@ -39,6 +41,27 @@ pub struct Damper {
     pub rate: f64,
     /// Time constant of the felt settling (s).
     pub time: f64,
+}
+
+/// The reference energy V_ref (J) each strike refits QSA over.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VrefRule {
+    /// The hammer's kinetic energy plus the string's energy, as the piano voice does.
+    IncomingAndString,
+    /// The hammer's kinetic energy alone.
+    Incoming,
+}
+
+/// A run: every frame, the initial energy `H^{−1/2}` (J) and, for QSA, each fit in force with
+/// the sample it took over at.
+#[derive(Debug, Clone)]
+pub struct Record {
+    /// One frame per sample.
+    pub frames: Vec<Frame>,
+    /// `H^{−1/2}` (J).
+    pub initial_energy: f64,
+    /// QSA's fits: (first sample, spline), in time order; empty for IMP and EXP.
+    pub fits: Vec<(usize, QuadSpline)>,
 }
 
 /// A string struck again and again.
@@ -60,6 +83,8 @@ pub struct Restrike {
     pub damper: Option<Damper>,
     /// Samples to render.
     pub samples: usize,
+    /// What each strike's QSA fit spans.
+    pub v_ref: VrefRule,
 }
 
 impl Restrike {
@@ -79,6 +104,12 @@ impl Restrike {
 
     /// Every frame and the initial energy of a run with `method` (QSA with `segments`).
     pub fn frames_and_energy(&self, method: Method, segments: usize) -> (Vec<Frame>, f64) {
+        let record = self.run(method, segments);
+        (record.frames, record.initial_energy)
+    }
+
+    /// A run with `method` (QSA with `segments`), with QSA's fits.
+    pub fn run(&self, method: Method, segments: usize) -> Record {
         let string = self.modal_string();
         let params = HammerStringParams {
             string: self.string,
@@ -94,6 +125,8 @@ impl Restrike {
         let initial = core.energy();
         let (mut work, mut next) = (0.0, 0);
         let mut frames = Vec::with_capacity(self.samples);
+        // The fit QSA starts with, in force until a strike's fit replaces it.
+        let mut fits = if method == Method::Qsa { vec![(0, solvers.qsa.spline().clone())] } else { Vec::new() };
         for n in 0..self.samples {
             while let Some(&(at, speed)) = self.strikes.get(next)
                 && at <= n
@@ -113,10 +146,15 @@ impl Restrike {
                 core.strike(&hammer);
                 // The new felt is clear of the string: no contact energy after the strike.
                 work += core.energy() - before;
-                let y_ref =
-                    self.law.compression_at_energy((hammer.kinetic_energy() + string_energy).max(f64::MIN_POSITIVE));
+                let v_ref = match self.v_ref {
+                    VrefRule::IncomingAndString => hammer.kinetic_energy() + string_energy,
+                    VrefRule::Incoming => hammer.kinetic_energy(),
+                };
+                let y_ref = self.law.compression_at_energy(v_ref.max(f64::MIN_POSITIVE));
                 // A fit that cannot be made keeps the previous solver, as the voice does.
-                solvers.restart(method, self.law, y_ref, segments, core.compressions());
+                if solvers.restart(method, self.law, y_ref, segments, core.compressions()) && method == Method::Qsa {
+                    fits.push((n, solvers.qsa.spline().clone()));
+                }
             }
             if let Some(d) = self.damper.filter(|d| n >= d.at) {
                 damper_now += (d.rate - damper_now) * (1.0 - (-dt / d.time).exp());
@@ -139,7 +177,7 @@ impl Restrike {
             frame.control_work = work;
             frames.push(frame);
         }
-        (frames, initial)
+        Record { frames, initial_energy: initial, fits }
     }
 }
 
@@ -159,6 +197,7 @@ mod tests {
             strikes,
             damper,
             samples: 9_600,
+            v_ref: VrefRule::IncomingAndString,
         }
     }
 

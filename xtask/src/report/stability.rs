@@ -7,31 +7,36 @@
 //! so any set can be rebuilt alone (`cargo xtask report --rerun SCENE/METHOD/i`). Each set is run
 //! with QSA (its own N), IMP and EXP. Ranges (log-uniform unless noted):
 //!
-//! - contact: κ ∈ [1e2, 1e16] N/m^α, α ∈ [1, 4] (uniform); QSA N ∈ [1, 64];
+//! - contact: κ ∈ [1e2, 1e16] N/m^α, α ∈ [1, 4] (uniform); QSA N ∈ [1, 100 000], the most a scene
+//!   file takes (`MAX_SCENE_SEGMENTS`; the instrument plays at most 64);
 //! - sample rate fs ∈ [8, 384] kHz (whole Hz);
+//! - strings: a preset's, or in half of the `hammer-string`, `slide-string` and `hammer-ringing`
+//!   sets a random one ([`random_string`]: L ∈ [0.05, 2] m, T ∈ [50, 2000] N, ρA ∈ [2e-4, 0.2]
+//!   kg/m, EI ∈ [1e-7, 0.2] N·m², fundamental in [20, 5000] Hz, damping `σ_i = b1 + b3 ω0_i²`
+//!   with b1 ∈ [0.05, 20] 1/s, b3 ∈ [1e-11, 1e-7] s);
 //! - `mass-barrier`: mass ∈ [0.1 g, 1 kg], approach speed v0 ∈ [1e-3, 50] m/s, reaching the barrier
 //!   0.5 to 3 samples after the start (uniform); the run lasts the estimated Hertz contact time
 //!   (docs/physics.md §9.1, `T_c ≤ 3.2·y_max/v0`) plus 20 %, plus 16 samples, between 32 and 4000 samples;
-//! - `hammer-string`: the `piano-note` string of a MIDI key in [21, 108] (uniform), lossless in half
-//!   of the sets; hammer mass ∈ [0.1 g, 1 kg], speed ∈ [1e-3, 50] m/s, striking position ∈
-//!   [0.05, 0.5] L (uniform), gap 0.5 to 3 samples of travel; twice the rigid-barrier contact time,
-//!   between 64 samples and `min(2000, 4e5 / modes)`;
-//! - `slide-string`: the `slide-guitar` string, slide and fingers, lossless in half of the sets
-//!   (no string damping, hand damping r_H = 0, finger damping r = 0; otherwise the preset's string
-//!   and fingers and r_H ∈ [0.5, 50] kg/s); slide mass ∈ [0.1 g, 1 kg], hand stiffness k_H ∈
-//!   [1e2, 1e5] N/m, slide position ∈ [0.1, 0.9] L (uniform), left finger 2 cm behind it, right
-//!   finger at 0.9 L, each finger pressing with a constant force (left ∈ [0, 2] N, right ∈ [0, 3] N,
-//!   each zero in half of the sets); control block N_b ∈ [1, 256]; the hand descends at the drawn
-//!   speed ∈ [1e-3, 50] m/s from 0.5 to 3 samples of travel above the string to a press depth of
-//!   min(v·T/2, 10 mm) (T the run length) and holds; between 64 samples and
-//!   `min(1500, 3e5 / modes)`. Positions are fixed;
+//! - `hammer-string`: the `piano-note` string of a MIDI key in [21, 108] (uniform) or a random
+//!   string, lossless in half of the sets; hammer mass ∈ [0.1 g, 1 kg], speed ∈ [1e-3, 50] m/s,
+//!   striking position ∈ [0.05, 0.5] L (uniform), gap 0.5 to 3 samples of travel; twice the
+//!   rigid-barrier contact time, between 64 samples and `min(2000, 4e5 / modes)`;
+//! - `slide-string`: the `slide-guitar` slide and fingers on the preset's string or a random one,
+//!   lossless in half of the sets (no string damping, hand damping r_H = 0, finger damping r = 0;
+//!   otherwise the string's damping, the preset's fingers and r_H ∈ [0.5, 50] kg/s); slide mass ∈
+//!   [0.1 g, 1 kg], hand stiffness k_H ∈ [1e2, 1e5] N/m, slide position ∈ [0.1, 0.9] L (uniform),
+//!   left finger 2 cm behind it, right finger at 0.9 L, each finger pressing with a constant force
+//!   (left ∈ [0, 2] N, right ∈ [0, 3] N, each zero in half of the sets); control block N_b ∈
+//!   [1, 256]; the hand descends at the drawn speed ∈ [1e-3, 50] m/s from 0.5 to 3 samples of
+//!   travel above the string to a press depth of min(v·T/2, 10 mm) (T the run length) and holds;
+//!   between 64 samples and `min(1500, 3e5 / modes)`. Positions are fixed;
 //! - `slide-gesture`: the slide in motion, a random control trajectory per set
 //!   ([`Trajectory`](super::gestures::Trajectory): κ 1e2–1e16, α 1–4, slide mass 0.1 g–1 kg,
 //!   k_H 1e2–1e6 N/m, hand and finger damping from 0 to beyond the plugin's, N_b 1–256,
 //!   fs 22.05–192 kHz; the slide travelling at up to 5 m/s with a vibrato of up to ±5 mm at up
 //!   to 10 Hz, the hand pressing, rattling and lifting, the fingers' forces switching on and
-//!   off, jumps from one sample to the next among them), QSA N ∈ [1, 64]; the run lasts
-//!   `min(4000, 8e5 / modes)` samples, at least 256;
+//!   off, jumps from one sample to the next among them); the run lasts `min(4000, 8e5 / modes)`
+//!   samples, at least 256;
 //! - `hammer-restrike`: a piano string struck again and again as the piano voice does
 //!   ([`Restrike`]): the `piano-note` string of a key in [21, 108] (uniform, band-limited to
 //!   20 kHz as the instrument prepares it), κ ∈ [1e2, 1e16], α ∈ [1, 4] (uniform), hammer mass
@@ -39,47 +44,80 @@
 //!   the first at once, the others from one sample to 30 ms apart (on a string still swinging,
 //!   perhaps during the last contact); in two sets of three a damper (rate at the fundamental
 //!   1–2000 1/s, settling in 0.5–20 ms) lands within the estimated contact time of a random
-//!   strike; the run lasts `min(6000, 2e6 / modes)` samples, at least 256.
+//!   strike; each strike refits QSA over the hammer's energy plus the string's, as the voice
+//!   does, or, in half of the sets, over the hammer's energy alone ([`VrefRule`]), so that a
+//!   strike on a swinging string can compress the felt beyond the fit; the run lasts
+//!   `min(6000, 2e6 / modes)` samples, at least 256.
 //!
-//! In every scene but the two moving ones the energy balance is exact in exact arithmetic. The
-//! moving ones book what their controls put in as `control_work` (the hand, the fingers and the
-//! slide's travel; the hammers thrown and caught, and the damper's changes of the decay rates),
-//! and their balance `H + losses − control_work` is exact too (docs/physics.md §7.5).
+//! Two kinds run for seconds, one random set in [`LONG_EVERY`] (the sets of other kinds last
+//! 32 to 6000 samples):
+//! - `hammer-ringing`: a string struck and left ringing for 2 to 3 s (uniform), as a
+//!   [`Restrike`]: a key's string (hammer 0.1 to 10 times the key's, at the key's striking
+//!   position) or a random one (hammer 1–50 g at [0.05, 0.5] L, uniform), band-limited to
+//!   20 kHz; κ, α as above, fs ∈ [22.05, 96] kHz; 1 to 4 strikes at [0.05, 20] m/s, the first at
+//!   once, each next from one sample to 0.5 s after the last; a damper in a third of the sets,
+//!   landing at a random sample; V_ref as in `hammer-restrike`, either rule in half of the sets;
+//! - `slide-rattling`: a random slide trajectory as in `slide-gesture`, 2 to 3 s long (uniform),
+//!   at fs ∈ [22.05, 96] kHz: the hand presses, lifts and drops the slide on the ringing string
+//!   for seconds.
+//!
+//! In the four moving kinds (the two re-striking, the two slide trajectories) the controls book
+//! what they put in as `control_work` (the hand, the fingers and the slide's travel; the hammers
+//! thrown and caught, and the damper's changes of the decay rates), and the balance
+//! `H + losses − control_work` is exact in exact arithmetic (docs/physics.md §7.5), as the plain
+//! balance is in every other scene.
 //!
 //! Corners (see [`corners`]): contacts much shorter than one sample (κ = 1e16, 0.1 g at 50 m/s,
 //! 8 kHz), contacts lasting the whole run (κ = 1e2, 1 kg at 1 mm/s), grazing contacts (v0 = 1e-9
-//! m/s and v0 = 0 at the barrier), the shipped Fig. 5 strike with N = 64, and the report's slide
-//! excerpt (moving slide and fingers) with N_b = 1 and 256.
+//! m/s and v0 = 0 at the barrier), the shipped Fig. 5 strike with N = 64 and with N = 100 000,
+//! the report's slide excerpt (moving slide and fingers) with N_b = 1 and 256, and a pianissimo
+//! on a C4 still swinging from a fortissimo with V_ref from the pianissimo hammer alone and
+//! N = 100 000 (for 0.2 s, and ringing for 3 s).
 //!
 //! # Measures, per run
 //!
-//! With `E^n = H^{n+1/2} + L^n` (numerical energy plus the booked net losses, which is constant in
-//! exact arithmetic for every scene here) and `scale = max(|H^{−1/2}|, max_n |H^{n+1/2}|)`:
+//! With `E^n = H^{n+1/2} + L^n − W^n` (numerical energy plus the booked net losses less the
+//! controls' work, which is constant in exact arithmetic for every scene here) and
+//! `scale = max(|H^{−1/2}|, max_n |H^{n+1/2}|)`:
 //! - non-finite: any NaN or infinity in any frame (must never happen), or a panic;
 //! - energy drift `max_n |E^n − E^{−1/2}| / scale` in conservative sets (no loss mechanism);
 //! - energy increase `max_n (E^n − E^{−1/2})⁺ / scale` in lossy sets: energy the scheme created;
-//! - compression ratio `max_n y^n / y_ref`, with `y_ref` from the scene's default V_ref;
+//! - excess (moving kinds) `max_n (H^{n+1/2} − H^{−1/2} − W^n)⁺ / scale`;
+//! - compression ratio `max_n y^n / y_ref`, with `y_ref` from the scene's default V_ref (for
+//!   re-strikes, the first strike's fit);
+//! - energy bounds (see [`energy_bounds`]): `max_n y^n / y_max^n` with `y_max^n` the compression
+//!   at which the method's potential (QSA: the fit in force, its last quadratic extended beyond
+//!   the last knot; IMP and EXP: the law) stores twice the energy available,
+//!   `H^{−1/2} + W^n + ENERGY_LIMIT·scale`, and `max_n |v^{n+1/2}| / √(2·that/M)` for the
+//!   exciter of mass M;
 //! - work: the largest number of QSA sign tests (bound `2⌈log2(N+1)⌉ + 1`) or IMP Newton
 //!   iterations (cap 100) in one step.
 //!
-//! A run **fails** if it is non-finite or panics, if QSA exceeds its sign-test bound, or if the
-//! energy error exceeds [`ENERGY_LIMIT`].
+//! A run **fails** if it is non-finite or panics, if QSA exceeds its sign-test bound, if the
+//! energy error exceeds [`ENERGY_LIMIT`], if the stored energy of a moving kind exceeds the
+//! supplied work by [`BUDGET_LIMIT`], if the exciter's speed exceeds its energy bound (any
+//! method: EXP's energy holds the kinetic energy as the others' do), or if QSA's or IMP's
+//! compression exceeds its energy bound. EXP's compression is reported against the law's bound
+//! but not counted: EXP's energy holds `½ψ²` in place of the potential, and nothing ties ψ to
+//! the compression, so its compression is not bounded by the energy (at stiff contacts sampled
+//! coarsely the bodies pass deep into each other before ψ builds up the force); its energy and
+//! its speed stay bounded, which is the stability it claims.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-use qsa_dsp::contact::{MAX_ITERATIONS, Method, PowerLaw, SolverSettings};
+use qsa_dsp::contact::{MAX_ITERATIONS, Method, PowerLaw, QuadSpline, SolverSettings};
 use qsa_dsp::control::Breakpoints;
 use qsa_dsp::exciter::{FingerParams, HammerParams, SlideParams};
 use qsa_dsp::preset::{chaigne_askenfelt_c4, piano_note, slide_guitar};
 use qsa_dsp::scene::{Frame, HammerStringParams, MassBarrierParams, OutputKind, Pickup, SlideStringParams};
-use qsa_dsp::scene_file::{Common, OutputOptions, SlideAutomation, SlideStringDescription};
+use qsa_dsp::scene_file::{Common, MAX_SCENE_SEGMENTS, OutputOptions, SlideAutomation, SlideStringDescription};
 use qsa_dsp::string::{Damping, ModalString, StringParams};
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
 use super::ReportError;
 use super::gestures::{self, Trajectory};
-use super::restrike::{Damper, Restrike};
+use super::restrike::{Damper, Record, Restrike, VrefRule};
 use super::sim::{CaseScene, Setup};
 
 /// Random parameter sets per scene kind (each run with every method).
@@ -98,6 +136,9 @@ pub const BUDGET_LIMIT: f64 = 1e-9;
 /// run at κ ≥ 1e12 (docs/physics.md §3.5, §9.4); 1e-6 flags anything systematic.
 pub const ENERGY_LIMIT: f64 = 1e-6;
 
+/// One random set in this many of the long kinds ([`Kind::long`]): they run 2 to 3 s each.
+pub const LONG_EVERY: usize = 100;
+
 /// Worst cases kept per measure.
 const KEEP: usize = 5;
 
@@ -105,7 +146,7 @@ const KEEP: usize = 5;
 const COUNTS: usize = 5;
 
 /// Lists of worst cases and failures per tally in `stability.csv` ([`Tally::LIST_NAMES`]).
-const LISTS: usize = 10;
+const LISTS: usize = 13;
 
 /// The three scene kinds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -120,12 +161,23 @@ pub enum Kind {
     HammerRestrike,
     /// The slide in motion: random control trajectories.
     SlideGesture,
+    /// A string struck once or a few times and left ringing for 2 to 3 s.
+    HammerRinging,
+    /// The slide rattling on the string for 2 to 3 s: random control trajectories.
+    SlideRattling,
 }
 
 impl Kind {
     /// All kinds, in report order.
-    pub const ALL: [Kind; 5] =
-        [Kind::MassBarrier, Kind::HammerString, Kind::HammerRestrike, Kind::SlideString, Kind::SlideGesture];
+    pub const ALL: [Kind; 7] = [
+        Kind::MassBarrier,
+        Kind::HammerString,
+        Kind::HammerRestrike,
+        Kind::HammerRinging,
+        Kind::SlideString,
+        Kind::SlideGesture,
+        Kind::SlideRattling,
+    ];
 
     /// Name as in scene files.
     pub fn name(self) -> &'static str {
@@ -135,6 +187,8 @@ impl Kind {
             Kind::SlideString => "slide-string",
             Kind::HammerRestrike => "hammer-restrike",
             Kind::SlideGesture => "slide-gesture",
+            Kind::HammerRinging => "hammer-ringing",
+            Kind::SlideRattling => "slide-rattling",
         }
     }
 
@@ -145,12 +199,24 @@ impl Kind {
             Kind::SlideString => 2,
             Kind::SlideGesture => 3,
             Kind::HammerRestrike => 4,
+            Kind::HammerRinging => 5,
+            Kind::SlideRattling => 6,
         }
     }
 
     /// Whether the controls move during a run (the energy budget applies).
     pub fn moving(self) -> bool {
-        matches!(self, Kind::HammerRestrike | Kind::SlideGesture)
+        matches!(self, Kind::HammerRestrike | Kind::SlideGesture | Kind::HammerRinging | Kind::SlideRattling)
+    }
+
+    /// Whether the kind's runs last seconds; it then runs one set in [`LONG_EVERY`].
+    pub fn long(self) -> bool {
+        matches!(self, Kind::HammerRinging | Kind::SlideRattling)
+    }
+
+    /// Random sets of this kind in a sweep of `sets` per kind.
+    pub fn random_sets(self, sets: usize) -> usize {
+        if self.long() { sets.div_ceil(LONG_EVERY) } else { sets }
     }
 }
 
@@ -186,11 +252,38 @@ pub enum Run {
 }
 
 impl Run {
-    /// Every frame and the initial energy with `settings`.
-    fn frames_and_energy(&self, settings: SolverSettings) -> (Vec<Frame>, f64) {
+    /// Every frame, the initial energy and QSA's fits with `settings`.
+    fn record(&self, settings: SolverSettings) -> Record {
         match self {
-            Run::Scene(scene) => scene.frames_and_energy(settings, 1),
-            Run::Restrike(r) => r.frames_and_energy(settings.method, settings.segments),
+            Run::Scene(scene) => {
+                let (frames, initial_energy) = scene.frames_and_energy(settings, 1);
+                // The scene fits QSA once, over the scene's V_ref.
+                let fit = (settings.method == Method::Qsa)
+                    .then(|| QuadSpline::from_reference_energy(scene.law, scene.v_ref, settings.segments).ok())
+                    .flatten();
+                Record { frames, initial_energy, fits: fit.map(|f| vec![(0, f)]).unwrap_or_default() }
+            }
+            Run::Restrike(r) => r.run(settings.method, settings.segments),
+        }
+    }
+
+    /// The contact law.
+    pub fn law(&self) -> PowerLaw {
+        match self {
+            Run::Scene(scene) => scene.law,
+            Run::Restrike(r) => r.law,
+        }
+    }
+
+    /// Mass of the exciter (kg): the mass, the hammer or the slide.
+    pub fn exciter_mass(&self) -> f64 {
+        match self {
+            Run::Scene(scene) => match &scene.setup {
+                Setup::MassBarrier(p) => p.mass,
+                Setup::Hammer(p) => p.hammer.mass,
+                Setup::Slide(p, _) => p.slide.mass,
+            },
+            Run::Restrike(r) => r.hammer_mass,
         }
     }
 
@@ -243,7 +336,7 @@ struct Draw {
 fn draw_common(rng: &mut Pcg64) -> Draw {
     let law = PowerLaw::new(log_uniform(rng, 1e2, 1e16), rng.random_range(1.0..=4.0)).expect("a valid law");
     let fs = log_uniform(rng, 8_000.0, 384_000.0).round() as u32;
-    let segments = log_int(rng, 1, 64);
+    let segments = log_int(rng, 1, MAX_SCENE_SEGMENTS);
     let v = log_uniform(rng, 1e-3, 50.0);
     let mass = log_uniform(rng, 1e-4, 1.0);
     let lead = rng.random_range(0.5..3.0);
@@ -267,10 +360,45 @@ fn mass_barrier(id: String, law: PowerLaw, fs: u32, segments: usize, mass: f64, 
     }
 }
 
+/// A random string (log-uniform unless noted): L ∈ [0.05, 2] m, T ∈ [50, 2000] N, ρA ∈ [2e-4,
+/// 0.2] kg/m, EI ∈ [1e-7, 0.2] N·m², drawn again until the fundamental lies in [20, 5000] Hz;
+/// damping `σ_i = b1 + b3 ω0_i²` with b1 ∈ [0.05, 20] 1/s and b3 ∈ [1e-11, 1e-7] s. These span
+/// the plain and wound strings of pianos and guitars (a piano's C4: 0.62 m, 670 N, 6.3 g/m,
+/// EI 9.8e-3 N·m²; a guitar's low E: 0.65 m, 100 N, 5.9 g/m). A string must also be one the
+/// scene at `fs` (Hz) can hold ([`ModalString::new`] accepts it: at most 4096 modes below
+/// Nyquist), or it is drawn again.
+fn random_string(rng: &mut Pcg64, fs: f64) -> StringParams {
+    loop {
+        let string = StringParams {
+            length: log_uniform(rng, 0.05, 2.0),
+            tension: log_uniform(rng, 50.0, 2000.0),
+            linear_density: log_uniform(rng, 2e-4, 0.2),
+            bending_stiffness: log_uniform(rng, 1e-7, 0.2),
+            damping: Damping::PerMode { b1: log_uniform(rng, 0.05, 20.0), b3: log_uniform(rng, 1e-11, 1e-7) },
+        };
+        if (20.0..=5000.0).contains(&string.fundamental()) && ModalString::new(string, fs).is_ok() {
+            return string;
+        }
+    }
+}
+
+/// A compact description of a string.
+fn string_about(s: &StringParams) -> String {
+    format!(
+        "string L {:.3} m, T {:.0} N, ρA {:.3e} kg/m, EI {:.3e} N·m², f0 {:.1} Hz",
+        s.length,
+        s.tension,
+        s.linear_density,
+        s.bending_stiffness,
+        s.fundamental()
+    )
+}
+
 struct HammerDraw {
     string: StringParams,
     lossless: bool,
-    key: u8,
+    /// The string: a piano key's or a random one.
+    which: String,
     mass: f64,
     v: f64,
     position: f64,
@@ -288,8 +416,8 @@ fn hammer_string(id: String, law: PowerLaw, fs: u32, segments: usize, h: HammerD
     let energy = hammer.kinetic_energy();
     let v_ref = if energy > 0.0 { energy } else { law.potential(1e-3) };
     let about = format!(
-        "key {}, {}, hammer {:.3e} kg at {:.3e} m/s, x {:.3} L, gap {:.3e} m",
-        h.key,
+        "{}, {}, hammer {:.3e} kg at {:.3e} m/s, x {:.3} L, gap {:.3e} m",
+        h.which,
         if h.lossless { "lossless" } else { "lossy" },
         h.mass,
         h.v,
@@ -307,6 +435,8 @@ fn hammer_string(id: String, law: PowerLaw, fs: u32, segments: usize, h: HammerD
 }
 
 struct SlideDraw {
+    /// A random string instead of the preset's.
+    string: Option<StringParams>,
     lossless: bool,
     mass: f64,
     stiffness: f64,
@@ -322,7 +452,8 @@ struct SlideDraw {
 fn slide_string(id: String, law: PowerLaw, fs: u32, segments: usize, d: SlideDraw) -> ParamSet {
     let fsf = f64::from(fs);
     let g = slide_guitar();
-    let string = if d.lossless { StringParams { damping: Damping::LOSSLESS, ..g.string } } else { g.string };
+    let string = d.string.unwrap_or(g.string);
+    let string = if d.lossless { StringParams { damping: Damping::LOSSLESS, ..string } } else { string };
     let finger_damping = if d.lossless { 0.0 } else { g.left.damping };
     let length = string.length;
     let params = SlideStringParams {
@@ -358,7 +489,8 @@ fn slide_string(id: String, law: PowerLaw, fs: u32, segments: usize, d: SlideDra
     };
     let v_ref = SlideStringDescription { common, params, controls: controls.clone() }.default_v_ref();
     let about = format!(
-        "{}, slide {:.3e} kg, k_H {:.3e} N/m, r_H {:.3e} kg/s, x_o {:.3} L, fingers {:.3}/{:.3} N, N_b {}, hand {:.3e} m/s to -{:.3e} m",
+        "{}, {}, slide {:.3e} kg, k_H {:.3e} N/m, r_H {:.3e} kg/s, x_o {:.3} L, fingers {:.3}/{:.3} N, N_b {}, hand {:.3e} m/s to -{:.3e} m",
+        d.string.as_ref().map_or("the preset's string".to_owned(), string_about),
         if d.lossless { "lossless" } else { "lossy" },
         d.mass,
         d.stiffness,
@@ -382,14 +514,23 @@ fn slide_string(id: String, law: PowerLaw, fs: u32, segments: usize, d: SlideDra
 
 /// A slide gesture from `rng` (see the module docs).
 fn slide_gesture(id: String, rng: &mut Pcg64) -> ParamSet {
-    let t = Trajectory::draw(rng, |fs, modes| samples_within(8e5 / modes as f64, 1.0, 256, 4000) as f64 / fs);
-    let segments = log_int(rng, 1, 64);
-    gesture_set(id, &t, segments)
+    let t =
+        Trajectory::draw(rng, 192_000.0, |fs, modes| samples_within(8e5 / modes as f64, 1.0, 256, 4000) as f64 / fs);
+    let segments = log_int(rng, 1, MAX_SCENE_SEGMENTS);
+    gesture_set(Kind::SlideGesture, id, &t, segments)
 }
 
-fn gesture_set(id: String, t: &Trajectory, segments: usize) -> ParamSet {
+/// A slide rattling for 2 to 3 s (uniform) from `rng` (see the module docs).
+fn slide_rattling(id: String, rng: &mut Pcg64) -> ParamSet {
+    let seconds = rng.random_range(2.0..=3.0);
+    let t = Trajectory::draw(rng, 96_000.0, |_, _| seconds);
+    let segments = log_int(rng, 1, MAX_SCENE_SEGMENTS);
+    gesture_set(Kind::SlideRattling, id, &t, segments)
+}
+
+fn gesture_set(kind: Kind, id: String, t: &Trajectory, segments: usize) -> ParamSet {
     let about = format!("{}, N {segments}", t.about());
-    ParamSet { kind: Kind::SlideGesture, id, run: Run::Scene(t.scene()), segments, conservative: true, about }
+    ParamSet { kind, id, run: Run::Scene(t.scene()), segments, conservative: true, about }
 }
 
 /// Repeated strikes from `rng` (see the module docs).
@@ -398,7 +539,7 @@ fn hammer_restrike(id: String, rng: &mut Pcg64) -> ParamSet {
     let note = piano_note(key);
     let law = PowerLaw::new(log_uniform(rng, 1e2, 1e16), rng.random_range(1.0..=4.0)).expect("a valid law");
     let fs = log_uniform(rng, 22_050.0, 192_000.0).round() as u32;
-    let segments = log_int(rng, 1, 64);
+    let segments = log_int(rng, 1, MAX_SCENE_SEGMENTS);
     let hammer_mass = note.hammer_mass * log_uniform(rng, 0.1, 10.0);
     let mut set = Restrike {
         string: note.string,
@@ -409,6 +550,7 @@ fn hammer_restrike(id: String, rng: &mut Pcg64) -> ParamSet {
         strikes: Vec::new(),
         damper: None,
         samples: 0,
+        v_ref: if rng.random_bool(0.5) { VrefRule::Incoming } else { VrefRule::IncomingAndString },
     };
     let fsf = f64::from(fs);
     set.samples = samples_within(2e6 / set.modal_string().modes() as f64, 1.0, 256, 6000);
@@ -429,10 +571,45 @@ fn hammer_restrike(id: String, rng: &mut Pcg64) -> ParamSet {
             time: log_uniform(rng, 5e-4, 0.02),
         });
     }
-    restrike_set(id, key, set, segments)
+    restrike_set(Kind::HammerRestrike, id, &format!("key {key}"), set, segments)
 }
 
-fn restrike_set(id: String, key: u8, set: Restrike, segments: usize) -> ParamSet {
+/// A string struck and left ringing for 2 to 3 s from `rng` (see the module docs).
+fn hammer_ringing(id: String, rng: &mut Pcg64) -> ParamSet {
+    let (string, which, hammer_mass, position) = if rng.random_bool(0.5) {
+        let key = rng.random_range(21..=108u8);
+        let note = piano_note(key);
+        (note.string, format!("key {key}"), note.hammer_mass * log_uniform(rng, 0.1, 10.0), note.strike_position)
+    } else {
+        // Checked at the highest rate the kind draws, with every mode below Nyquist: the run
+        // keeps only those below 20 kHz.
+        let string = random_string(rng, 96_000.0);
+        let about = string_about(&string);
+        (string, about, log_uniform(rng, 1e-3, 0.05), rng.random_range(0.05..=0.5))
+    };
+    let law = PowerLaw::new(log_uniform(rng, 1e2, 1e16), rng.random_range(1.0..=4.0)).expect("a valid law");
+    let fs = log_uniform(rng, 22_050.0, 96_000.0).round() as u32;
+    let fsf = f64::from(fs);
+    let segments = log_int(rng, 1, MAX_SCENE_SEGMENTS);
+    let samples = (rng.random_range(2.0..=3.0) * fsf).round() as usize;
+    let mut strikes = vec![(0, log_uniform(rng, 0.05, 20.0))];
+    for _ in 0..rng.random_range(0..=3) {
+        let at = strikes.last().map_or(0, |s| s.0) + (log_uniform(rng, 1.0, 0.5 * fsf) as usize).max(1);
+        if at < samples {
+            strikes.push((at, log_uniform(rng, 0.05, 20.0)));
+        }
+    }
+    let damper = rng.random_bool(1.0 / 3.0).then(|| Damper {
+        at: rng.random_range(0..samples),
+        rate: log_uniform(rng, 1.0, 2000.0),
+        time: log_uniform(rng, 5e-4, 0.02),
+    });
+    let v_ref = if rng.random_bool(0.5) { VrefRule::Incoming } else { VrefRule::IncomingAndString };
+    let set = Restrike { string, law, sample_rate: fs, hammer_mass, position, strikes, damper, samples, v_ref };
+    restrike_set(Kind::HammerRinging, id, &which, set, segments)
+}
+
+fn restrike_set(kind: Kind, id: String, which: &str, set: Restrike, segments: usize) -> ParamSet {
     let fs = f64::from(set.sample_rate);
     let strikes: Vec<String> =
         set.strikes.iter().map(|&(n, v)| format!("{:.2} ms at {v:.3} m/s", n as f64 / fs * 1e3)).collect();
@@ -444,13 +621,18 @@ fn restrike_set(id: String, key: u8, set: Restrike, segments: usize) -> ParamSet
         set.sample_rate,
         segments,
         &format!(
-            "key {key}, hammer {:.3e} kg, strikes {}, {damper}, {} samples",
+            "{which}, hammer {:.3e} kg at x {:.3} L, strikes {}, {damper}, V_ref {}, {} samples",
             set.hammer_mass,
+            set.position,
             strikes.join(", "),
+            match set.v_ref {
+                VrefRule::Incoming => "hammer only",
+                VrefRule::IncomingAndString => "hammer and string",
+            },
             set.samples
         ),
     );
-    ParamSet { kind: Kind::HammerRestrike, id, run: Run::Restrike(set), segments, conservative: true, about }
+    ParamSet { kind, id, run: Run::Restrike(set), segments, conservative: true, about }
 }
 
 /// Random set `index` of `kind`.
@@ -460,6 +642,8 @@ pub fn random_set(kind: Kind, index: usize) -> ParamSet {
     match kind {
         Kind::SlideGesture => return slide_gesture(id, &mut rng),
         Kind::HammerRestrike => return hammer_restrike(id, &mut rng),
+        Kind::HammerRinging => return hammer_ringing(id, &mut rng),
+        Kind::SlideRattling => return slide_rattling(id, &mut rng),
         _ => {}
     }
     let d = draw_common(&mut rng);
@@ -467,11 +651,17 @@ pub fn random_set(kind: Kind, index: usize) -> ParamSet {
     match kind {
         Kind::MassBarrier => mass_barrier(id, d.law, d.fs, d.segments, d.mass, d.v, -d.lead * d.v / fsf),
         Kind::HammerString => {
-            let key = rng.random_range(21..=108u8);
+            let (string, which) = if rng.random_bool(0.5) {
+                let key = rng.random_range(21..=108u8);
+                (piano_note(key).string, format!("key {key}"))
+            } else {
+                let string = random_string(&mut rng, fsf);
+                (string, string_about(&string))
+            };
             let h = HammerDraw {
-                string: piano_note(key).string,
+                string,
                 lossless: rng.random_bool(0.5),
-                key,
+                which,
                 mass: d.mass,
                 v: d.v,
                 position: rng.random_range(0.05..=0.5),
@@ -480,8 +670,10 @@ pub fn random_set(kind: Kind, index: usize) -> ParamSet {
             hammer_string(id, d.law, d.fs, d.segments, h)
         }
         Kind::SlideString => {
+            let string = rng.random_bool(0.5).then(|| random_string(&mut rng, fsf));
             let lossless = rng.random_bool(0.5);
             let s = SlideDraw {
+                string,
                 lossless,
                 mass: d.mass,
                 stiffness: log_uniform(&mut rng, 1e2, 1e5),
@@ -495,7 +687,9 @@ pub fn random_set(kind: Kind, index: usize) -> ParamSet {
             };
             slide_string(id, d.law, d.fs, d.segments, s)
         }
-        Kind::SlideGesture | Kind::HammerRestrike => unreachable!("drawn above"),
+        Kind::SlideGesture | Kind::HammerRestrike | Kind::HammerRinging | Kind::SlideRattling => {
+            unreachable!("drawn above")
+        }
     }
 }
 
@@ -532,7 +726,7 @@ pub fn corners(kind: Kind, excerpt_scene: Option<&CaseScene>) -> Vec<ParamSet> {
             let h = |mass, v, gap, lossless| HammerDraw {
                 string: c4.string,
                 lossless,
-                key: 60,
+                which: "Chaigne–Askenfelt C4".to_owned(),
                 mass,
                 v,
                 position: c4.strike_position,
@@ -545,10 +739,13 @@ pub fn corners(kind: Kind, excerpt_scene: Option<&CaseScene>) -> Vec<ParamSet> {
                 hammer_string(id(3), law(4.5e9, 2.5), 44_100, 6, h(2.97e-3, 1e-9, 0.5e-9 / 44_100.0, true)),
                 hammer_string(id(4), law(4.5e9, 2.5), 44_100, 6, h(2.97e-3, 0.0, 1e-12, true)),
                 hammer_string(id(5), law(4.5e9, 2.5), 44_100, 64, h(2.97e-3, 3.5, 2e-4, false)),
+                // The most segments a scene takes.
+                hammer_string(id(6), law(4.5e9, 2.5), 44_100, MAX_SCENE_SEGMENTS, h(2.97e-3, 3.5, 2e-4, false)),
             ]
         }
         Kind::SlideString => {
             let s = |lossless, mass, stiffness, v, block| SlideDraw {
+                string: None,
                 lossless,
                 mass,
                 stiffness,
@@ -606,11 +803,16 @@ pub fn corners(kind: Kind, excerpt_scene: Option<&CaseScene>) -> Vec<ParamSet> {
                 seconds: 0.2,
                 lanes: lanes.clone(),
             };
-            vec![gesture_set(id(0), &stiff(1), 1), gesture_set(id(1), &stiff(256), 64)]
+            vec![
+                gesture_set(Kind::SlideGesture, id(0), &stiff(1), 1),
+                gesture_set(Kind::SlideGesture, id(1), &stiff(256), 64),
+            ]
         }
-        Kind::HammerRestrike => {
+        Kind::HammerRestrike | Kind::HammerRinging => {
             // A pianissimo 100 ms after a fortissimo on C4, with the damper landing in its
-            // contact, and twenty seeded repeated notes at 10 Hz for 2 s.
+            // contact, and twenty seeded repeated notes at 10 Hz for 2 s; the same pianissimo with
+            // QSA fitted over the hammer's energy alone and the most segments a scene takes, and
+            // (ringing) that pair of strikes left to ring for 3 s.
             let note = piano_note(60);
             let set = |strikes, damper, samples| Restrike {
                 string: note.string,
@@ -621,6 +823,7 @@ pub fn corners(kind: Kind, excerpt_scene: Option<&CaseScene>) -> Vec<ParamSet> {
                 strikes,
                 damper,
                 samples,
+                v_ref: VrefRule::IncomingAndString,
             };
             let pp_after_ff = set(
                 vec![(0, sweep_speed(1.0)), (4_800, sweep_speed(0.0))],
@@ -629,8 +832,20 @@ pub fn corners(kind: Kind, excerpt_scene: Option<&CaseScene>) -> Vec<ParamSet> {
             );
             let mut rng = Pcg64::seed_from_u64(SEED);
             let repeated = set((0..20).map(|i| (i * 4_800, sweep_speed(rng.random::<f64>()))).collect(), None, 96_000);
-            vec![restrike_set(id(0), 60, pp_after_ff, 6), restrike_set(id(1), 60, repeated, 6)]
+            let incoming = Restrike { v_ref: VrefRule::Incoming, ..pp_after_ff.clone() };
+            let ringing = Restrike { samples: 144_000, damper: None, ..incoming.clone() };
+            let max = MAX_SCENE_SEGMENTS;
+            if kind == Kind::HammerRinging {
+                return vec![restrike_set(kind, id(0), "key 60", ringing, max)];
+            }
+            vec![
+                restrike_set(kind, id(0), "key 60", pp_after_ff, 6),
+                restrike_set(kind, id(1), "key 60", repeated, 6),
+                restrike_set(kind, id(2), "key 60", incoming, max),
+            ]
         }
+        // No hand-picked corner: the random trajectories press, rattle and lift for seconds.
+        Kind::SlideRattling => Vec::new(),
     }
 }
 
@@ -650,6 +865,10 @@ pub struct Measure {
     pub excess: f64,
     /// Largest compression / y_ref.
     pub compression_ratio: f64,
+    /// Largest compression over its energy bound, `max_n y^n / y_max^n` (see [`energy_bounds`]).
+    pub compression_bound: f64,
+    /// Largest exciter speed over its energy bound, `max_n |v^{n+1/2}| / v_max^n`.
+    pub velocity_bound: f64,
     /// Largest solver work in one step.
     pub max_work: u32,
     /// Samples rendered.
@@ -664,11 +883,67 @@ fn finite(f: &Frame) -> bool {
         .all(|v| v.is_finite())
 }
 
+/// The compression `y` (m, ≥ 0) at which `spline` stores `energy` (J): the inverse of `V̂`
+/// beyond 0, through the last segment's quadratic beyond the last knot.
+pub fn spline_compression_at(spline: &QuadSpline, energy: f64) -> f64 {
+    if energy <= 0.0 {
+        return 0.0;
+    }
+    let n = spline.segments();
+    // The first knot storing at least `energy`; segment N carries on beyond the last knot.
+    let (mut lo, mut hi) = (1, n);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if spline.knot_potential(mid) >= energy { hi = mid } else { lo = mid + 1 }
+    }
+    let p = lo;
+    let (a, d) = (spline.curvature(p), spline.knot_slope(p - 1));
+    let c = energy - spline.knot_potential(p - 1);
+    // h ≥ 0 with a·h² + d·h = c, in the form without cancellation.
+    let h = if c <= 0.0 { 0.0 } else { 2.0 * c / (d + (d * d + 4.0 * a * c).sqrt()) };
+    spline.knot(p - 1) + h
+}
+
+/// The energy bounds of one run, frame by frame, as ratios (≤ 1 when the bound holds):
+/// `(max_n y^n / y_max^n, max_n |v^{n+1/2}| / v_max^n)`.
+///
+/// The numerical energy of QSA and IMP is a sum of non-negative terms, the exciter's
+/// `½M(v^{n+1/2})²` and the contact's `½(V(y^{n+1}) + V(y^n))` among them (V̂ of the fit in force
+/// for QSA, the law for IMP), and it never exceeds what came in, `H^{n+1/2} ≤ H^{−1/2} + W^n`
+/// (W the controls' work). With the allowance `E^n = H^{−1/2} + W^n + ENERGY_LIMIT·scale` (the
+/// energy error a run may show anyway): `V(y^n) ≤ 2E^n`, so `y^n ≤ y_max^n = V⁻¹(2E^n)`, and
+/// `|v^{n+1/2}| ≤ v_max^n = √(2E^n/M)`. The factor 2 is real: a sample whose neighbour is out of
+/// contact holds the whole contact energy in half the discrete potential. EXP's energy holds
+/// `½ψ²` in place of the potential and its compression is not bound to it; its `y_max` is taken
+/// from the law, as IMP's, and reported only. A run with no allowance left (`E^n ≤ 0`) has bounds
+/// of zero and ratios of infinity.
+fn energy_bounds(set: &ParamSet, method: Method, record: &Record, scale: f64) -> (f64, f64) {
+    let (law, mass) = (set.run.law(), set.run.exciter_mass());
+    let (mut compression, mut velocity) = (0.0f64, 0.0f64);
+    let mut fit = 0;
+    for (n, f) in record.frames.iter().enumerate() {
+        while record.fits.get(fit + 1).is_some_and(|&(from, _)| from <= n) {
+            fit += 1;
+        }
+        let allowed = record.initial_energy + f.control_work + ENERGY_LIMIT * scale;
+        let ratio = |value: f64, bound: f64| if value <= 0.0 { 0.0 } else { value / bound.max(0.0) };
+        velocity = velocity.max(ratio(f.velocity.abs(), (2.0 * allowed / mass).sqrt()));
+        if f.compression > 0.0 {
+            let y_max = match (method, record.fits.get(fit)) {
+                (Method::Qsa, Some((_, spline))) => spline_compression_at(spline, 2.0 * allowed),
+                _ => law.compression_at_energy((2.0 * allowed).max(0.0)),
+            };
+            compression = compression.max(ratio(f.compression, y_max));
+        }
+    }
+    (compression, velocity)
+}
+
 /// Run `set` with `method`.
 pub fn measure(set: &ParamSet, method: Method) -> Measure {
     let settings = SolverSettings { method, segments: set.segments, v_ref: None };
-    let result = catch_unwind(AssertUnwindSafe(|| set.run.frames_and_energy(settings)));
-    let (frames, e0) = match result {
+    let result = catch_unwind(AssertUnwindSafe(|| set.run.record(settings)));
+    let record = match result {
         Ok(run) => run,
         Err(payload) => {
             let message = payload
@@ -683,15 +958,19 @@ pub fn measure(set: &ParamSet, method: Method) -> Measure {
                 increase: f64::NAN,
                 excess: f64::NAN,
                 compression_ratio: f64::NAN,
+                compression_bound: f64::NAN,
+                velocity_bound: f64::NAN,
                 max_work: 0,
                 samples: 0,
                 contact_samples: 0,
             };
         }
     };
+    let (frames, e0) = (&record.frames, record.initial_energy);
     let scale = frames.iter().map(|f| f.energy.abs()).fold(e0.abs(), f64::max);
     let scale = if scale > 0.0 { scale } else { 1.0 };
     let deviation = |f: &Frame| (f.balance() - e0) / scale;
+    let (compression_bound, velocity_bound) = energy_bounds(set, method, &record, scale);
     Measure {
         non_finite: !e0.is_finite() || !frames.iter().all(finite),
         panic: None,
@@ -699,6 +978,8 @@ pub fn measure(set: &ParamSet, method: Method) -> Measure {
         increase: frames.iter().map(|f| deviation(f).max(0.0)).fold(0.0, f64::max),
         excess: frames.iter().map(|f| (f.energy - e0 - f.control_work) / scale).fold(0.0, f64::max),
         compression_ratio: frames.iter().map(|f| f.compression).fold(f64::NEG_INFINITY, f64::max) / set.run.y_ref(),
+        compression_bound,
+        velocity_bound,
         max_work: frames.iter().map(|f| f.work).max().unwrap_or(0),
         samples: frames.len(),
         contact_samples: frames.iter().filter(|f| f.force != 0.0).count(),
@@ -768,6 +1049,13 @@ pub struct Tally {
     pub excess: Vec<Worst>,
     /// Runs of the moving kinds over [`BUDGET_LIMIT`].
     pub budget_failures: Vec<Worst>,
+    /// Largest compression over its energy bound (`y/y_max`).
+    pub compression_bound: Vec<Worst>,
+    /// Largest exciter speed over its energy bound (`|v|/v_max`).
+    pub velocity_bound: Vec<Worst>,
+    /// Runs beyond an energy bound: the speed for every method, the compression for QSA and IMP
+    /// (value: the larger ratio counted).
+    pub bound_failures: Vec<Worst>,
 }
 
 impl Tally {
@@ -790,6 +1078,9 @@ impl Tally {
             energy_failures: Vec::new(),
             excess: Vec::new(),
             budget_failures: Vec::new(),
+            compression_bound: Vec::new(),
+            velocity_bound: Vec::new(),
+            bound_failures: Vec::new(),
         }
     }
 
@@ -808,13 +1099,14 @@ impl Tally {
     }
 
     /// The failure lists, each with the words `failures` prints before its entries.
-    pub fn failure_lists(&self) -> [(&'static str, &Vec<Worst>); 5] {
+    pub fn failure_lists(&self) -> [(&'static str, &Vec<Worst>); 6] {
         [
             ("non-finite", &self.non_finite),
             ("panic", &self.panics),
             ("over the sign-test bound", &self.over_bound),
             ("energy error over the limit", &self.energy_failures),
             ("energy above the supplied work", &self.budget_failures),
+            ("beyond the energy bound of compression or speed", &self.bound_failures),
         ]
     }
 
@@ -831,6 +1123,9 @@ impl Tally {
         "energy_failures",
         "worst_excess",
         "budget_failures",
+        "worst_compression_bound",
+        "worst_velocity_bound",
+        "bound_failures",
     ];
 
     /// Every list of worst cases and failures, named as in `stability.csv`.
@@ -846,6 +1141,9 @@ impl Tally {
             &self.energy_failures,
             &self.excess,
             &self.budget_failures,
+            &self.compression_bound,
+            &self.velocity_bound,
+            &self.bound_failures,
         ];
         std::array::from_fn(|i| (Self::LIST_NAMES[i], lists[i]))
     }
@@ -862,6 +1160,9 @@ impl Tally {
             &mut self.energy_failures,
             &mut self.excess,
             &mut self.budget_failures,
+            &mut self.compression_bound,
+            &mut self.velocity_bound,
+            &mut self.bound_failures,
         ]
     }
 
@@ -908,6 +1209,13 @@ impl Tally {
             keep(&mut self.increase, m.increase, set);
         }
         keep(&mut self.compression, m.compression_ratio, set);
+        keep(&mut self.compression_bound, m.compression_bound, set);
+        keep(&mut self.velocity_bound, m.velocity_bound, set);
+        let counted =
+            if self.method == Method::Exp { m.velocity_bound } else { m.velocity_bound.max(m.compression_bound) };
+        if counted > 1.0 {
+            record(&mut self.bound_failures, counted);
+        }
         keep(&mut self.work, f64::from(m.max_work), set);
     }
 
@@ -1138,7 +1446,7 @@ pub fn sweep(sets: usize, excerpt_scene: Option<&CaseScene>, tick: &dyn Fn()) ->
     for kind in Kind::ALL {
         let mut kind_tallies: Vec<Tally> = SWEPT_METHODS.iter().map(|&m| Tally::new(kind, m)).collect();
         let corner_sets = corners(kind, excerpt_scene);
-        let all = (0..sets).map(|i| random_set(kind, i)).chain(corner_sets);
+        let all = (0..kind.random_sets(sets)).map(|i| random_set(kind, i)).chain(corner_sets);
         for set in all {
             for tally in &mut kind_tallies {
                 let m = measure(&set, tally.method);
@@ -1152,8 +1460,9 @@ pub fn sweep(sets: usize, excerpt_scene: Option<&CaseScene>, tick: &dyn Fn()) ->
 }
 
 /// Number of sets (random and corners) per kind that [`sweep`] runs, for progress bars.
-pub fn sets_per_kind(sets: usize, with_excerpt: bool) -> [usize; 5] {
-    Kind::ALL.map(|k| sets + corners(k, None).len() + usize::from(with_excerpt && k == Kind::SlideString) * 2)
+pub fn sets_per_kind(sets: usize, with_excerpt: bool) -> [usize; Kind::ALL.len()] {
+    Kind::ALL
+        .map(|k| k.random_sets(sets) + corners(k, None).len() + usize::from(with_excerpt && k == Kind::SlideString) * 2)
 }
 
 /// Rerun one set, `SCENE/METHOD/SET`, and describe it as one JSON line.
@@ -1188,6 +1497,8 @@ pub fn rerun(id: &str, excerpt_scene: Option<&CaseScene>) -> Result<String, Repo
         "energy_increase": m.increase,
         "energy_excess": m.excess,
         "compression_ratio": m.compression_ratio,
+        "compression_over_energy_bound": m.compression_bound,
+        "speed_over_energy_bound": m.velocity_bound,
         "y_ref": param_set.run.y_ref(),
         "max_work": m.max_work,
         "sign_test_bound": (method == Method::Qsa).then(|| sign_test_bound(param_set.segments)),
@@ -1220,7 +1531,7 @@ mod tests {
                 if kind.moving() {
                     assert!((22_050..=192_000).contains(&fs), "{kind:?} {i}: {fs} Hz");
                 }
-                assert!((1..=64).contains(&a.segments));
+                assert!((1..=MAX_SCENE_SEGMENTS).contains(&a.segments));
             }
         }
         assert_ne!(random_set(Kind::MassBarrier, 0).about, random_set(Kind::MassBarrier, 1).about);
