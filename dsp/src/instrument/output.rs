@@ -1,10 +1,14 @@
-//! The output stage: the user's gain, ramped, and the safety limiter.
+//! The output stage: the user's gain, smoothed, and the safety limiter.
 //!
 //! # Gain
 //!
-//! The gain changes only at control-block boundaries and is ramped linearly across the block
-//! from its old value to its new one, so a jump of the parameter (−36 dB to +12 dB in one step)
-//! bends the waveform's envelope instead of stepping it.
+//! The gain parameter is read at control-block boundaries and the applied gain follows it through
+//! two one-pole stages in series, each with time constant τ = [`GAIN_SMOOTHING`]:
+//! `a[n] = a[n−1] + (G − a[n−1]) k`, `g[n] = g[n−1] + (a[n] − g[n−1]) k`, `k = 1 − e^{−1/(τ fs)}`.
+//! A jump of the parameter (−36 dB to +12 dB in one step) becomes a glide that starts with zero
+//! slope and settles to 1e-3 of the step in about 11τ: no step and no kink in the envelope, so
+//! neither a single jump nor a gain automated anew at every control block is heard as a click or
+//! a buzz at the block rate.
 //!
 //! # Safety limiter
 //!
@@ -30,6 +34,9 @@
 //! ten notes below 0 dBFS); it is there for 32 unison voices at full gain and for a gain raised
 //! by +12 dB.
 
+/// Time constant of each of the gain smoother's two one-pole stages (s).
+pub const GAIN_SMOOTHING: f64 = 0.005;
+
 /// Largest magnitude the limiter lets through: −0.1 dBFS.
 pub const CEILING: f64 = 0.988_553_094_656_939_4;
 
@@ -44,13 +51,15 @@ pub fn lookahead_samples(sample_rate: f64) -> usize {
     ((LOOKAHEAD * sample_rate).round() as usize).max(1)
 }
 
-/// Gain ramp and safety limiter, sized once for a sample rate; allocation-free after that.
+/// Gain smoother and safety limiter, sized once for a sample rate; allocation-free after that.
 #[derive(Debug, Clone)]
 pub struct OutputStage {
-    /// Gain at the end of the current block.
-    gain: f64,
-    /// Gain at the start of the current block and its increment per sample.
-    ramp: (f64, f64),
+    /// The gain parameter G.
+    target: f64,
+    /// The smoother's two stages `(a, g)`: `g` is the gain applied to the newest frame.
+    smooth: (f64, f64),
+    /// The smoother's coefficient k.
+    smoothing: f64,
     /// Frames in the delay line and the gains the limiter tracks, one ring of W entries each.
     delay: Vec<(f32, f32)>,
     needed: Vec<f64>,
@@ -72,8 +81,9 @@ impl OutputStage {
     pub fn new(sample_rate: f64, gain: f64) -> Self {
         let w = lookahead_samples(sample_rate);
         Self {
-            gain,
-            ramp: (gain, 0.0),
+            target: gain,
+            smooth: (gain, gain),
+            smoothing: 1.0 - (-1.0 / (GAIN_SMOOTHING * sample_rate)).exp(),
             delay: vec![(0.0, 0.0); w],
             needed: vec![1.0; w],
             released: vec![1.0; w],
@@ -90,10 +100,9 @@ impl OutputStage {
         self.delay.len() - 1
     }
 
-    /// Start a block of `len` samples whose gain ramps to `gain`.
-    pub fn begin_block(&mut self, gain: f64, len: usize) {
-        self.ramp = (self.gain, (gain - self.gain) / len.max(1) as f64);
-        self.gain = gain;
+    /// Set the gain parameter G that the applied gain glides to.
+    pub fn set_gain(&mut self, gain: f64) {
+        self.target = gain;
     }
 
     /// Silence the delay line and release the limiter (all sound off).
@@ -106,14 +115,15 @@ impl OutputStage {
         self.held = 1.0;
     }
 
-    /// Apply the gain ramp, then the limiter if `limit`, to the frames in `left` and `right`
-    /// (in place, the same length), which continue the current block.
+    /// Apply the smoothed gain, then the limiter if `limit`, to the frames in `left` and `right`
+    /// (in place, the same length).
     pub fn process(&mut self, left: &mut [f32], right: &mut [f32], limit: bool) {
         let w = self.delay.len();
         for (l, r) in left.iter_mut().zip(right.iter_mut()) {
-            let (g0, step) = &mut self.ramp;
-            let frame = (f64::from(*l) * *g0, f64::from(*r) * *g0);
-            *g0 += *step;
+            let (a, g) = &mut self.smooth;
+            *a += (self.target - *a) * self.smoothing;
+            *g += (*a - *g) * self.smoothing;
+            let frame = (f64::from(*l) * *g, f64::from(*r) * *g);
 
             let peak = frame.0.abs().max(frame.1.abs());
             let need = if limit && peak > CEILING { CEILING / peak } else { 1.0 };
@@ -151,7 +161,6 @@ mod tests {
     #[test]
     fn below_the_ceiling_the_stage_is_a_pure_delay() {
         let mut stage = OutputStage::new(48_000.0, 1.0);
-        stage.begin_block(1.0, 64);
         let input: Vec<f32> = (0..200).map(|i| (0.9 * (0.3 * i as f64).sin()) as f32).collect();
         let (mut l, mut r) = (input.clone(), input.clone());
         stage.process(&mut l, &mut r, true);
@@ -171,7 +180,6 @@ mod tests {
         let n = 4_800;
         let input: Vec<f32> = (0..n).map(|i| if (1_000..2_000).contains(&i) { 10.0 } else { 0.5 } as f32).collect();
         let (mut l, mut r) = (input.clone(), input.clone());
-        stage.begin_block(1.0, n);
         stage.process(&mut l, &mut r, true);
         let peak = l.iter().fold(0.0f32, |m, x| m.max(x.abs()));
         assert!(peak <= CEILING as f32, "peak {peak}");
@@ -188,29 +196,35 @@ mod tests {
     fn switched_off_the_limiter_passes_everything() {
         let mut stage = OutputStage::new(44_100.0, 1.0);
         let (mut l, mut r) = (vec![10.0f32; 300], vec![-10.0f32; 300]);
-        stage.begin_block(1.0, 300);
         stage.process(&mut l, &mut r, false);
         assert_eq!((l[299], r[299]), (10.0, -10.0));
     }
 
-    /// A gain jump ramps across its block: −36 dB to +12 dB over 64 samples.
+    /// A gain jump (−36 dB to +12 dB) glides: the applied gain never steps by more than the
+    /// smoother allows in one sample (k² of the jump in the first sample, k/e at most), its slope
+    /// changes by less than k² of the jump per sample (no kink), and it is within 1e-3 of the jump
+    /// of its target 11τ later.
     #[test]
-    fn a_gain_jump_ramps_across_the_block() {
-        let lo = 10f64.powf(-36.0 / 20.0);
-        let hi = 10f64.powf(12.0 / 20.0);
-        let mut stage = OutputStage::new(48_000.0, lo);
-        let (mut l, mut r) = (vec![0.01f32; 400], vec![0.01f32; 400]);
-        stage.begin_block(lo, 200);
-        stage.process(&mut l[..200], &mut r[..200], true);
-        stage.begin_block(hi, 64);
-        stage.process(&mut l[200..264], &mut r[200..264], true);
-        stage.begin_block(hi, 136);
-        stage.process(&mut l[264..], &mut r[264..], true);
+    fn a_gain_jump_glides_without_a_step_or_a_kink() {
+        let fs = 48_000.0;
+        let (lo, hi) = (10f64.powf(-36.0 / 20.0), 10f64.powf(12.0 / 20.0));
+        let mut stage = OutputStage::new(fs, lo);
+        let n = 3200;
+        let (mut l, mut r) = (vec![0.01f32; n], vec![0.01f32; n]);
+        stage.process(&mut l[..200], &mut r[..200], false);
+        stage.set_gain(hi);
+        stage.process(&mut l[200..], &mut r[200..], false);
         let lat = stage.latency();
-        let step = (hi - lo) * 0.01 / 64.0;
-        for i in 200 + lat..264 + lat {
-            let expected = 0.01 * (lo + (hi - lo) * (i - lat - 200) as f64 / 64.0);
-            assert!((f64::from(l[i]) - expected).abs() < 1e-3 * step + 1e-9, "sample {i}");
-        }
+        let gain: Vec<f64> = l[lat..].iter().map(|&x| f64::from(x) / 0.01).collect();
+        let k = 1.0 - (-1.0 / (GAIN_SMOOTHING * fs)).exp();
+        let jump = hi - lo;
+        let steps: Vec<f64> = gain.windows(2).map(|g| g[1] - g[0]).collect();
+        let largest_step = steps.iter().copied().fold(0.0, f64::max);
+        assert!(largest_step <= jump * k / std::f64::consts::E * 1.01, "step {largest_step}");
+        let largest_kink = steps.windows(2).map(|s| (s[1] - s[0]).abs()).fold(0.0, f64::max);
+        assert!(largest_kink <= jump * k * k * 1.01, "kink {largest_kink}");
+        let settled = 200 + (11.0 * GAIN_SMOOTHING * fs) as usize;
+        assert!((gain[settled] - hi).abs() < 1e-3 * jump, "gain {} after 11 τ", gain[settled]);
+        assert!((gain[199] - lo).abs() < 1e-6 * lo, "the gain held before the jump");
     }
 }
