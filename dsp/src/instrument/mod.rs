@@ -45,7 +45,7 @@
 //! # Output
 //!
 //! The voices are summed (each scaled to full scale by [`OUTPUT_SCALE`] or [`SLIDE_SCALE`]), then
-//! pass the output stage ([`OutputStage`]): the gain, ramped across each control block, and the
+//! pass the output stage ([`OutputStage`]): the gain, smoothed over a few milliseconds, and the
 //! safety limiter, which holds every sample at or below −0.1 dBFS when it is on. The limiter looks
 //! 1 ms ahead, so the output is late by [`Instrument::latency`] samples, on or off.
 //!
@@ -83,7 +83,9 @@ pub use presets::{
     CATEGORIES, FACTORY_PRESETS, Preset, PresetError, factory_presets, find_preset, load_factory_presets, parse_preset,
 };
 pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, hammer_speed};
-pub use slide_voice::{ChannelState, HAND_SPEED, OPEN_KEY, PLUCK_TIME, REST_FORCE, SLIDE_SPEED, SlideVoice, TRAIL};
+pub use slide_voice::{
+    ChannelState, HAND_ACCELERATION, HAND_SPEED, OPEN_KEY, PLUCK_TIME, REST_FORCE, SLIDE_SPEED, SlideVoice, TRAIL,
+};
 pub use solvers::Solvers;
 pub use voicing::{VOICING_DB, VOICING_VELOCITIES, voicing_gain};
 
@@ -539,20 +541,20 @@ impl Instrument {
     fn begin_block(&mut self) {
         self.settings = self.requested;
         let len = self.settings.block;
-        self.output.begin_block(self.settings.gain, len);
+        self.output.set_gain(self.settings.gain);
         for v in &mut self.voices {
             let sustained = self.sustain[usize::from(v.strike.channel)];
             v.begin_block(&self.settings, sustained, len, self.now);
         }
-        // The pickup slides to a new position instead of jumping: its weights change a little at
-        // each block, never in one audible step.
+        // The pickup slides to a new position instead of jumping: its weights move a little in
+        // each block, linearly across the block, never in one audible step.
         let reach = PICKUP_SPEED * len as f64 / self.sample_rate;
         let pickup = self.pickup + (self.settings.pickup_position - self.pickup).clamp(-reach, reach);
         let move_pickup = self.pickup != pickup;
         self.pickup = pickup;
         for v in &mut self.slides {
             if move_pickup {
-                v.set_pickup(self.pickup);
+                v.set_pickup(self.pickup, len);
             }
             if v.sounding {
                 v.begin_block(&self.settings, &self.channels[usize::from(v.strike.channel)], len);

@@ -12,7 +12,11 @@
 //!   [`SLIDE_SPEED`] (a jump of the setting or the tuning becomes a fast slide); it is kept
 //!   between 5 mm and 0.8 L;
 //! - hand height from the setting or a controller (0 lifts the slide by 2 mm, full presses it
-//!   2 mm in: [`HAND_RANGE`]), moving at most [`HAND_SPEED`];
+//!   2 mm in: [`HAND_RANGE`]), moving at most [`HAND_SPEED`] and speeding up or slowing down at
+//!   most [`HAND_ACCELERATION`] ([`approach`]): the hand's damping `r_H` passes a change of its
+//!   speed straight on to a pressed slide and so to the string, and a hand that reversed at once
+//!   (the setting or a controller jumping at every control block) would kick the string with a
+//!   step of force each time, heard as clicks;
 //! - per note, a host's polyphonic modulation offsets the `slide_position` and `hand_height`
 //!   settings (where they act: not following keys, and the hand height from the parameter), the
 //!   sums clamped to the settings' ranges. Tuning, offsets and poly pressure belong to the note:
@@ -33,7 +37,7 @@
 //! taking over from EXP (whose auxiliary variable, not the compression, carries the potential)
 //! evaluates the potential at a compression EXP may have let grow far beyond it; energy from
 //! nowhere, up to thousands of joules. So a silent voice whose note asks for other ones starts
-//! from rest, the slide lifted, and the hand lowers it at [`HAND_SPEED`].
+//! from rest, the slide lifted, and the hand lowers it at [`HAND_SPEED`] at most.
 //!
 //! # Guard
 //!
@@ -71,6 +75,28 @@ pub const SLIDE_SPEED: f64 = 5.0;
 
 /// Fastest the hand moves the slide towards or away from the string (m/s).
 pub const HAND_SPEED: f64 = 0.5;
+
+/// Largest acceleration of the hand (m/s²): from rest to [`HAND_SPEED`] in 10 ms, a quick
+/// player's hand (5 g).
+pub const HAND_ACCELERATION: f64 = 50.0;
+
+/// One control block of `span` seconds of a hand at `position` (m) moving at `velocity` (m/s)
+/// towards `target` (m): the new position and velocity. The hand moves at most [`HAND_SPEED`],
+/// changes its speed by at most `Δv = a·span` per block (`a` = [`HAND_ACCELERATION`]), and never
+/// faster than it can still stop at the target: slowing by `Δv` a block from `v` covers
+/// `span·(v²/(2Δv) + v/2)`, so `|v| ≤ (√(Δv² + 8Δv|e|/span) − Δv)/2` for a distance `e` to go; a
+/// hand that would pass the target in this block stops on it (and sheds its last `Δv` in the
+/// next).
+pub fn approach(position: f64, velocity: f64, target: f64, span: f64) -> (f64, f64) {
+    let error = target - position;
+    let dv = HAND_ACCELERATION * span;
+    let stopping = 0.5 * ((dv * dv + 8.0 * dv * error.abs() / span).sqrt() - dv);
+    let wanted = error.signum() * HAND_SPEED.min(stopping);
+    let velocity = velocity + (wanted - velocity).clamp(-dv, dv);
+    let moved = velocity * span;
+    let arrives = if error >= 0.0 { moved >= error } else { moved <= error };
+    (if arrives { target } else { position + moved }, velocity)
+}
 
 /// The right finger's pluck force (N) for a note of `velocity` (0..1): `0.3 + 2.7·velocity`.
 pub fn pluck_force(velocity: f64) -> f64 {
@@ -117,8 +143,9 @@ pub struct SlideVoice {
     glided: f64,
     /// Slide position x_o (m), after the speed limit.
     x_o: f64,
-    /// Hand height w_H (m), after the speed limit.
+    /// Hand height w_H (m) and the hand's speed (m/s), after the limits of [`approach`].
     hand: f64,
+    hand_velocity: f64,
     /// The slide and hand of the current note.
     slide: SlideParams,
     /// The contact law of the current note.
@@ -184,6 +211,7 @@ impl SlideVoice {
             glided: 0.0,
             x_o,
             hand: HAND_RANGE.0,
+            hand_velocity: 0.0,
             slide,
             law,
             solver: (settings.method, settings.segments),
@@ -335,6 +363,7 @@ impl SlideVoice {
         let lifted = SlideControls { hand_height: HAND_RANGE.0, left_force: 0.0, right_force: 0.0, ..self.live.0 };
         self.live.0 = lifted;
         self.hand = lifted.hand_height;
+        self.hand_velocity = 0.0;
         self.core.rest(lifted);
     }
 
@@ -368,8 +397,7 @@ impl SlideVoice {
             HandSource::ChannelPressure => pressed(channel.pressure),
             HandSource::PolyPressure => pressed(self.poly_pressure),
         };
-        let step = HAND_SPEED * span;
-        self.hand += (hand_height - self.hand).clamp(-step, step);
+        (self.hand, self.hand_velocity) = approach(self.hand, self.hand_velocity, hand_height, span);
         let right_force = match self.pluck {
             Some(t) if t < PLUCK_TIME => {
                 self.pluck = Some(t + span);
@@ -421,9 +449,10 @@ impl SlideVoice {
         self.core.in_contact()
     }
 
-    /// Move the pickup (fraction of the length).
-    pub fn set_pickup(&mut self, position: f64) {
-        self.core.set_pickup(Pickup { kind: OutputKind::Velocity, position });
+    /// Move the pickup to `position` (fraction of the length), gliding over the next `samples`
+    /// samples.
+    pub fn set_pickup(&mut self, position: f64, samples: usize) {
+        self.core.set_pickup(Pickup { kind: OutputKind::Velocity, position }, samples);
     }
 
     /// Render `out.len()` samples of string velocity at the pickup (m/s, see
@@ -451,6 +480,41 @@ mod tests {
     use super::*;
 
     const FS: f64 = 44100.0;
+
+    /// The hand from lifted (−2 mm) to pressed (+2 mm) and back, and a target jumping at every
+    /// 64-sample block (48 kHz): never faster than `HAND_SPEED`, never a change of speed above
+    /// `HAND_ACCELERATION` per block, never past a target it is approaching (beyond 1 nm), and
+    /// on a still target within 20 ms.
+    #[test]
+    fn the_hand_approaches_its_target_with_bounded_speed_and_acceleration() {
+        let span = 64.0 / 48_000.0;
+        let dv = HAND_ACCELERATION * span;
+        let mut rng = 0x2545_f491_4f6c_dd1du64;
+        let mut random = || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut x, mut v) = (-2e-3, 0.0);
+        for (target, blocks) in [(2e-3, 15), (-2e-3, 15)] {
+            let start = x;
+            for _ in 0..blocks {
+                let (x1, v1) = approach(x, v, target, span);
+                assert!(v1.abs() <= HAND_SPEED + 1e-12 && (v1 - v).abs() <= dv + 1e-12, "v {v} → {v1}");
+                assert!((x1 - start).abs() <= (target - start).abs() + 1e-9, "past {target}: {x1}");
+                (x, v) = (x1, v1);
+            }
+            assert_eq!(x, target, "on the target within {} ms", 15.0 * span * 1e3);
+            assert!(v.abs() <= dv, "arrived at {v} m/s");
+        }
+        for _ in 0..10_000 {
+            let target = -3e-3 + 6e-3 * random();
+            let (x1, v1) = approach(x, v, target, span);
+            assert!(v1.abs() <= HAND_SPEED + 1e-12 && (v1 - v).abs() <= dv + 1e-12, "v {v} → {v1}");
+            (x, v) = (x1, v1);
+        }
+    }
 
     /// A voice plucked and rendered for `blocks` blocks of the default 64 samples.
     fn plucked(blocks: usize) -> (SlideVoice, Settings) {

@@ -448,6 +448,11 @@ pub struct SlideCore {
     theta: [[[f64; 3]; 3]; 3],
     pickup: Vec<f64>,
     kind: OutputKind,
+    /// While the pickup glides to new weights ([`set_pickup`](Self::set_pickup)): the weights it
+    /// left, their projection `pᵀũ^n` on the state, and the glide's steps done and in all.
+    pickup_from: Vec<f64>,
+    out_from: f64,
+    glide: (usize, usize),
     /// Finger damping parameters r (s/m).
     r: [f64; 2],
     block: usize,
@@ -494,6 +499,8 @@ impl SlideCore {
         let block = params.block.max(1);
         let mut pickup = string.vector();
         params.pickup.weights(&string, &mut pickup);
+        let mut pickup_from = string.vector();
+        pickup_from.clone_from(&pickup);
         let sho = SlideHand::new(params.slide, fs, start.hand_height);
         let mut core = Self {
             vectors: ContactVectors::new(&string, &params.left, &params.right),
@@ -501,6 +508,9 @@ impl SlideCore {
             theta: [[[0.0; 3]; 3]; 3],
             pickup,
             kind: params.pickup.kind,
+            pickup_from,
+            out_from: 0.0,
+            glide: (0, 0),
             r: [params.left.damping, params.right.damping],
             block,
             inv_block: 1.0 / block as f64,
@@ -555,6 +565,8 @@ impl SlideCore {
         self.y_prev = -self.sho.previous();
         self.y_now = -self.sho.position();
         self.out_now = 0.0;
+        self.out_from = 0.0;
+        self.glide = (0, 0);
         self.last_force = 0.0;
     }
 
@@ -578,13 +590,44 @@ impl SlideCore {
         self.next_block = block.max(1);
     }
 
-    /// Move the pickup to `pickup` (the string's output weights). Never allocates.
-    pub fn set_pickup(&mut self, pickup: Pickup) {
+    /// Move the pickup to `pickup` (the string's output weights), gliding over the next `glide`
+    /// steps: each step's output is `(1 − t)·o_from + t·o_to` at `t = j/glide` for the `j`-th step,
+    /// the outputs the weights heard now and the new weights give, so the output's weighting moves
+    /// linearly across the glide instead of stepping (a step of the weights makes a step of the
+    /// output proportional to the string's slope at the pickup). A change of output kind, or of the
+    /// string's modes, does not glide. Never allocates.
+    pub fn set_pickup(&mut self, pickup: Pickup, glide: usize) {
+        let (done, len) = self.glide;
+        if self.pickup_from.len() == self.pickup.len() {
+            if done < len {
+                let t = done as f64 / len as f64;
+                for (from, to) in self.pickup_from.iter_mut().zip(&self.pickup) {
+                    *from += t * (to - *from);
+                }
+            } else {
+                self.pickup_from.copy_from_slice(&self.pickup);
+            }
+        }
         let s = &self.string;
         s.fit_vector(&mut self.pickup);
         pickup.weights(s, &mut self.pickup);
+        let glides = glide > 0 && self.kind == pickup.kind && self.pickup_from.len() == self.pickup.len();
         self.kind = pickup.kind;
         self.out_now = s.project_state(&self.pickup).1;
+        self.out_from = s.project_state(&self.pickup_from).1;
+        self.glide = if glides { (0, glide) } else { (0, 0) };
+    }
+
+    /// One step's output while the pickup glides (see [`set_pickup`](Self::set_pickup)), from
+    /// `output`, the new weights' output, after the string has advanced.
+    #[cold]
+    fn glide_output(&mut self, output: f64) -> f64 {
+        let out_next = self.string.project_state(&self.pickup_from).1;
+        let from = self.kind.sample(self.out_from, out_next, self.dt);
+        self.out_from = out_next;
+        self.glide.0 += 1;
+        let t = self.glide.0 as f64 / self.glide.1 as f64;
+        from + t * (output - from)
     }
 
     /// What a monitor shows: `(compression y^n (m), latest contact force (N), slide position x_o (m))`.
@@ -740,7 +783,10 @@ impl SlideCore {
         let exchange = self.sho.advance(z_sho, force, &controls.hand);
         // The controls' work `Δt(P_H + Σ P_φ) − ½F J`, `Δt P_φ = F_φe s_φ/2` (docs/physics.md §7.5.3).
         self.control_work += -0.5 * force * jump + exchange.supplied + 0.5 * (f[0] * s_f[0] + f[1] * s_f[1]);
-        let output = self.kind.sample(self.out_now, out_next, self.dt);
+        let mut output = self.kind.sample(self.out_now, out_next, self.dt);
+        if self.glide.0 < self.glide.1 {
+            output = self.glide_output(output);
+        }
         let mut frame = Frame {
             output,
             displacement: w_now,
