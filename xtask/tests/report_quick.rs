@@ -3,8 +3,10 @@
 //! for digit (the errors are deterministic, reproduced bit for bit by the same binary on the same
 //! machine; only the run times depend on timing, and they are not compared; rows the report marks
 //! as sensitive to rounding are left out, see `QUICK_MAX_SENSITIVITY`), and a small seeded
-//! stability sweep must show no failure. Tampered copies of the CSVs (the error table and the
-//! control-block table), each moved by one unit of its last printed place, must be caught.
+//! stability sweep must show no failure; the committed README.md and stability.md must be what the
+//! committed data files give. Tampered copies of the CSVs (the error table and the control-block
+//! table), each moved by one unit of its last printed place, must be caught, and so must a README
+//! changed by hand.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -47,7 +49,7 @@ fn an_error_figure_moved_by_one_unit_of_its_last_printed_place_is_caught() {
     let value: f64 = fields[column].parse().expect("a number");
     fields[column] = format!("{:.4}", value + LAST_PLACE);
     lines[row] = fields.join(",");
-    let dir = tempfile::tempdir().expect("a temporary directory");
+    let dir = copy_of_the_report();
     fs::write(dir.path().join("error-vs-runtime.csv"), lines.join("\n") + "\n").expect("write the copy");
     // Move the glide's QSA output error at N_b = 64 by one unit of the last place.
     let blocks = fs::read_to_string(root.join("docs/report/control-block.csv")).expect("the committed CSV");
@@ -65,11 +67,47 @@ fn an_error_figure_moved_by_one_unit_of_its_last_printed_place_is_caught() {
         .collect();
     fs::write(dir.path().join("control-block.csv"), blocks.join("\n") + "\n").expect("write the copy");
     match quick_check(&root.join("scenes"), dir.path()) {
-        Err(ReportError::Mismatch(2, message)) => {
+        Err(ReportError::Mismatch(count, message)) => {
             println!("{message}");
             assert!(message.contains("fig5-hammer qsa N=6 1x: error_vs_imp"), "{message}");
             assert!(message.contains("glide/qsa/N_b 64: output error"), "{message}");
+            // The texts made from the tampered data may differ too (the fitted orders print 4
+            // decimals); nothing else may.
+            let derived = message.lines().filter(|l| l.starts_with("convergence.csv:")).count();
+            assert_eq!(count, 2 + derived, "{message}");
         }
-        other => panic!("expected exactly two mismatches, got {other:?}"),
+        other => panic!("expected the two moved figures to be caught, got {other:?}"),
+    }
+}
+
+/// A temporary copy of the committed report's text and data files.
+fn copy_of_the_report() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    for entry in fs::read_dir(root().join("docs/report")).expect("the report directory") {
+        let path = entry.expect("an entry").path();
+        if path.extension().is_some_and(|e| e == "csv" || e == "md") {
+            fs::copy(&path, dir.path().join(path.file_name().expect("a name"))).expect("copy");
+        }
+    }
+    dir
+}
+
+#[test]
+fn a_readme_figure_typed_by_hand_is_caught() {
+    let root = root();
+    let dir = copy_of_the_report();
+    let readme = fs::read_to_string(dir.path().join("README.md")).expect("the committed README");
+    // Change the first run time the README prints ("RTF 1.39e-3" becomes "RTF 1.38e-3", say).
+    let at = readme.find("RTF ").expect("a run time in the README") + 4;
+    let digit = readme[at..].chars().next().expect("a digit");
+    let other = if digit == '1' { '2' } else { '1' };
+    let edited = format!("{}{other}{}", &readme[..at], &readme[at + 1..]);
+    fs::write(dir.path().join("README.md"), edited).expect("write the copy");
+    match quick_check(&root.join("scenes"), dir.path()) {
+        Err(ReportError::Mismatch(1, message)) => {
+            println!("{message}");
+            assert!(message.starts_with("README.md: line "), "{message}");
+        }
+        other => panic!("expected exactly one mismatch, in README.md, got {other:?}"),
     }
 }

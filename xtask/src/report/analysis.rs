@@ -24,8 +24,20 @@ pub const ORDER_MIN_SEGMENTS: usize = 4;
 /// Error targets (log10) of the QSA-against-EXP comparison.
 pub const TARGETS: [f64; 5] = [-1.0, -1.5, -2.0, -2.5, -3.0];
 
-/// Two run times within this ratio of each other are called equal (the machine's noise).
+/// Two run times within this ratio of each other are always called equal, however small the
+/// rows' own spreads (see [`faster`]).
 pub const NOISE_RATIO: f64 = 1.2;
+
+/// The smallest error difference the report reads as real (log10; 0.05 is 12 % of the error
+/// itself): two errors closer than this count as equal, and a target missed by less counts as
+/// neither reached nor missed. Where the reference's own error is close to a row's, the
+/// uncertainty is larger ([`uncertainty`]).
+pub const ERROR_TOLERANCE: f64 = 0.05;
+
+/// Errors above this (log10; −1 = 10 %) are too large for two solutions' agreement to say
+/// anything about their contact solvers: when both are this far off, each is dominated by the
+/// time-step error, and "as accurate" is a coincidence of two wrong answers.
+pub const USEFUL_ERROR: f64 = -1.0;
 
 /// Which signal's error against the reference a selection uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -42,6 +54,14 @@ impl Signal {
         match self {
             Signal::Force => row.error_vs_reference,
             Signal::Output => row.output_error_vs_reference,
+        }
+    }
+
+    /// This signal's error of the 16× reference against 32× from a `(force, output)` pair.
+    pub fn check(self, check: (f64, f64)) -> f64 {
+        match self {
+            Signal::Force => check.0,
+            Signal::Output => check.1,
         }
     }
 
@@ -132,7 +152,7 @@ pub fn orders(rows: &[ErrorRow], cases: &[&str]) -> Vec<Order> {
 }
 
 /// The timed row of `case` with the lowest RTF among those whose `signal` error against the
-/// reference is at most `target` and that `pick` accepts.
+/// reference is at most `target` and that `pick` accepts (no regard to noise; see [`reach`]).
 pub fn cheapest<'a>(
     rows: &'a [ErrorRow],
     case: &str,
@@ -145,6 +165,101 @@ pub fn cheapest<'a>(
         .min_by(|a, b| a.rtf.unwrap_or(f64::INFINITY).total_cmp(&b.rtf.unwrap_or(f64::INFINITY)))
 }
 
+/// A row's timing noise: how far its median run is above its fastest, relative to the median,
+/// `(rtf − rtf_min) / rtf`. The runs of a case go round-robin over its configurations
+/// ([`super::error::measure_rtf`]), so this spread is what the machine's interruptions did to
+/// this configuration during the sweep. 0 for an untimed row.
+pub fn noise(row: &ErrorRow) -> f64 {
+    match (row.rtf, row.rtf_min) {
+        (Some(t), Some(min)) if t > 0.0 => (t - min) / t,
+        _ => 0.0,
+    }
+}
+
+/// Whether `a` is faster than `b` beyond the timing noise: `b`'s median run time exceeds `a`'s by
+/// more than the two rows' noises together ([`noise`]) and by more than [`NOISE_RATIO`].
+pub fn faster(a: &ErrorRow, b: &ErrorRow) -> bool {
+    match (a.rtf, b.rtf) {
+        (Some(ta), Some(tb)) => tb / ta > NOISE_RATIO.max(1.0 + noise(a) + noise(b)),
+        _ => false,
+    }
+}
+
+/// How uncertain an error `e` measured against a reference whose own error is `check` is (log10):
+/// the true error lies between `log10(10^e − 10^check)` and `log10(10^e + 10^check)`, so by
+/// `log10(1 + 10^(check − e))` at most upward; never less than [`ERROR_TOLERANCE`].
+pub fn uncertainty(e: f64, check: f64) -> f64 {
+    ERROR_TOLERANCE.max((1.0 + 10f64.powf(check - e)).log10())
+}
+
+/// Whether an error `e` is resolved by a reference whose own error is `check`: an error below the
+/// reference's own says only that the row agrees with the reference better than the reference
+/// agrees with a finer render.
+pub fn resolved(e: f64, check: f64) -> bool {
+    e >= check
+}
+
+/// Whether a `target` can be told apart by a reference whose own error is `check`.
+pub fn target_resolved(target: f64, check: f64) -> bool {
+    target >= check + ERROR_TOLERANCE
+}
+
+/// The plugin's default: its method and segment count, at the host's rate.
+pub fn plugin_default() -> Config {
+    let settings = qsa_dsp::instrument::Settings::default();
+    Config { method: settings.method, segments: settings.segments, oversampling: 1 }
+}
+
+/// The cheapest configuration within a target, with those that tie with it.
+#[derive(Debug, Clone)]
+pub struct Pick<'a> {
+    /// The configuration to recommend: the plugin's default if it ties with the cheapest,
+    /// otherwise the cheapest.
+    pub row: &'a ErrorRow,
+    /// Other configurations within the target that are not slower than the cheapest beyond the
+    /// noise ([`faster`]), by increasing run time.
+    pub ties: Vec<&'a ErrorRow>,
+}
+
+/// What can be said about the cheapest way to a target.
+#[derive(Debug, Clone)]
+pub enum Reach<'a> {
+    /// The target is below the reference's resolution ([`target_resolved`]).
+    Unresolved,
+    /// No configuration reaches it.
+    Nothing,
+    /// The pick.
+    Found(Pick<'a>),
+}
+
+/// The cheapest row of `case` reaching `target` on `signal` (over the rows `pick` accepts), the
+/// rows that tie with it within the timing noise, and whether the reference resolves the target.
+pub fn reach<'a>(
+    rows: &'a [ErrorRow],
+    case: &str,
+    signal: Signal,
+    target: f64,
+    check: f64,
+    pick: impl Fn(&Config) -> bool,
+) -> Reach<'a> {
+    if !target_resolved(target, check) {
+        return Reach::Unresolved;
+    }
+    let mut within: Vec<&ErrorRow> = rows
+        .iter()
+        .filter(|r| r.case == case && pick(&r.config) && signal.of(r) <= target && r.rtf.is_some())
+        .collect();
+    within.sort_by(|a, b| a.rtf.unwrap_or(f64::INFINITY).total_cmp(&b.rtf.unwrap_or(f64::INFINITY)));
+    let Some(&cheapest) = within.first() else {
+        return Reach::Nothing;
+    };
+    let tied: Vec<&ErrorRow> = within.iter().copied().filter(|r| !faster(cheapest, r)).collect();
+    let default = plugin_default();
+    let row = tied.iter().copied().find(|r| r.config == default).unwrap_or(cheapest);
+    let ties = tied.into_iter().filter(|r| !std::ptr::eq(*r, row)).collect();
+    Reach::Found(Pick { row, ties })
+}
+
 /// The row of `case` with the smallest `signal` error against the reference.
 pub fn most_accurate<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal) -> Option<&'a ErrorRow> {
     rows.iter()
@@ -152,91 +267,270 @@ pub fn most_accurate<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal) -> Op
         .min_by(|a, b| signal.of(a).total_cmp(&signal.of(b)))
 }
 
-/// The Pareto front of `case` over all methods for `signal`, by increasing RTF.
-pub fn pareto<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal) -> Vec<&'a ErrorRow> {
+/// The Pareto front of `case` over all methods for `signal`, by increasing RTF, with errors below
+/// the reference's resolution `check` counted as `check` (no row is credited with an accuracy the
+/// reference cannot confirm, so the cheapest of such rows stands for them).
+pub fn pareto<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal, check: f64) -> Vec<&'a ErrorRow> {
     let points: Vec<(f64, f64, &ErrorRow)> =
-        rows.iter().filter(|r| r.case == case).filter_map(|r| r.rtf.map(|t| (t, signal.of(r), r))).collect();
+        rows.iter().filter(|r| r.case == case).filter_map(|r| r.rtf.map(|t| (t, signal.of(r).max(check), r))).collect();
     super::pareto::front(&points).into_iter().map(|p| p.2).collect()
 }
 
-/// QSA against EXP at one target: the cheapest of each, if any reaches it.
-#[derive(Debug, Clone, Copy)]
+/// QSA against EXP at one target.
+#[derive(Debug, Clone)]
 pub struct Duel<'a> {
     /// Error target (log10).
     pub target: f64,
-    /// Cheapest QSA configuration within the target.
+    /// The cheapest QSA configuration within the target.
     pub qsa: Option<&'a ErrorRow>,
-    /// Cheapest EXP configuration within the target.
+    /// The cheapest EXP configuration within the target.
     pub exp: Option<&'a ErrorRow>,
+    /// The cheapest QSA configuration within the target widened by its error's uncertainty.
+    pub qsa_near: Option<&'a ErrorRow>,
+    /// The same for EXP.
+    pub exp_near: Option<&'a ErrorRow>,
+    /// Whether the reference resolves the target.
+    pub resolved: bool,
 }
 
 /// The outcome of a [`Duel`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Verdict {
-    /// QSA is faster by more than the noise, or only QSA reaches the target.
+    /// QSA reaches the target faster than EXP comes near it, beyond the noise.
     Qsa,
-    /// EXP is faster by more than the noise, or only EXP reaches the target.
+    /// EXP reaches the target faster than QSA comes near it, beyond the noise.
     Exp,
-    /// Both reach it within the noise of each other.
+    /// Both reach it (or one reaches it and the other misses it by less than the error's
+    /// uncertainty) with run times within the noise, or the faster one only nearly reaches it.
     Tie,
     /// Neither reaches it.
     Neither,
+    /// The reference does not resolve the target.
+    Unresolved,
+}
+
+/// The cheapest row of `case` with `signal` error at most `bound(row)`, among `method`'s.
+fn cheapest_by<'a>(
+    rows: &'a [ErrorRow],
+    case: &str,
+    signal: Signal,
+    method: Method,
+    bound: impl Fn(&ErrorRow) -> f64,
+) -> Option<&'a ErrorRow> {
+    rows.iter()
+        .filter(|r| r.case == case && r.config.method == method && r.rtf.is_some() && signal.of(r) <= bound(r))
+        .min_by(|a, b| a.rtf.unwrap_or(f64::INFINITY).total_cmp(&b.rtf.unwrap_or(f64::INFINITY)))
 }
 
 impl Duel<'_> {
-    /// Who wins.
+    /// Who wins. A method wins only if its cheapest row within the target is faster, beyond the
+    /// noise, than the other method's cheapest row within the target widened by that row's
+    /// uncertainty: a target missed by less than the error's own uncertainty does not decide.
     pub fn verdict(&self) -> Verdict {
-        match (self.qsa.and_then(|r| r.rtf), self.exp.and_then(|r| r.rtf)) {
-            (Some(q), Some(e)) if q * NOISE_RATIO < e => Verdict::Qsa,
-            (Some(q), Some(e)) if e * NOISE_RATIO < q => Verdict::Exp,
-            (Some(_), Some(_)) => Verdict::Tie,
-            (Some(_), None) => Verdict::Qsa,
-            (None, Some(_)) => Verdict::Exp,
-            (None, None) => Verdict::Neither,
+        if !self.resolved {
+            return Verdict::Unresolved;
+        }
+        let beats = |winner: Option<&ErrorRow>, other_near: Option<&ErrorRow>| match (winner, other_near) {
+            (Some(_), None) => true,
+            (Some(w), Some(o)) => faster(w, o),
+            (None, _) => false,
+        };
+        if beats(self.qsa, self.exp_near) {
+            Verdict::Qsa
+        } else if beats(self.exp, self.qsa_near) {
+            Verdict::Exp
+        } else if self.qsa.is_none() && self.exp.is_none() {
+            Verdict::Neither
+        } else {
+            Verdict::Tie
         }
     }
 
     /// The verdict in words.
-    pub fn words(&self) -> &'static str {
-        match (self.verdict(), self.qsa.is_some(), self.exp.is_some()) {
-            (Verdict::Qsa, _, false) => "only QSA reaches it",
-            (Verdict::Exp, false, _) => "only EXP reaches it",
-            (Verdict::Qsa, ..) => "QSA faster",
-            (Verdict::Exp, ..) => "EXP faster",
-            (Verdict::Tie, ..) => "tie (within noise)",
-            (Verdict::Neither, ..) => "neither reaches it",
+    pub fn words(&self) -> String {
+        match self.verdict() {
+            Verdict::Unresolved => "unresolved (target below the reference's resolution)".to_owned(),
+            Verdict::Qsa if self.exp_near.is_none() => "only QSA reaches it".to_owned(),
+            Verdict::Exp if self.qsa_near.is_none() => "only EXP reaches it".to_owned(),
+            Verdict::Qsa => "QSA faster".to_owned(),
+            Verdict::Exp => "EXP faster".to_owned(),
+            Verdict::Neither => "neither reaches it".to_owned(),
+            Verdict::Tie => {
+                fn missed<'r>(within: Option<&'r ErrorRow>, near: Option<&'r ErrorRow>) -> Option<&'r ErrorRow> {
+                    near.filter(|n| within.is_none_or(|w| !std::ptr::eq(*n, w)))
+                }
+                match (missed(self.qsa, self.qsa_near), missed(self.exp, self.exp_near)) {
+                    (Some(n), _) => {
+                        format!("tie (QSA's `{}` misses it within the error's uncertainty)", n.config.label())
+                    }
+                    (_, Some(n)) => {
+                        format!("tie (EXP's `{}` misses it within the error's uncertainty)", n.config.label())
+                    }
+                    _ => "tie (within the timing noise)".to_owned(),
+                }
+            }
         }
     }
 }
 
-/// QSA against EXP on `case` at every target of [`TARGETS`], on `signal`.
-pub fn duels<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal) -> Vec<Duel<'a>> {
+/// QSA against EXP on `case` at every target of [`TARGETS`], on `signal`; `check` is the
+/// reference's own error on that signal.
+pub fn duels<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal, check: f64) -> Vec<Duel<'a>> {
     TARGETS
         .iter()
-        .map(|&target| Duel {
-            target,
-            qsa: cheapest(rows, case, signal, target, |c| c.method == Method::Qsa),
-            exp: cheapest(rows, case, signal, target, |c| c.method == Method::Exp),
+        .map(|&target| {
+            let within = |m| cheapest_by(rows, case, signal, m, |_| target);
+            let near = |m| cheapest_by(rows, case, signal, m, |r| target + uncertainty(signal.of(r), check));
+            Duel {
+                target,
+                qsa: within(Method::Qsa),
+                exp: within(Method::Exp),
+                qsa_near: near(Method::Qsa),
+                exp_near: near(Method::Exp),
+                resolved: target_resolved(target, check),
+            }
         })
         .collect()
 }
 
-/// How close to IMP's error a QSA configuration must come to count as "as accurate as IMP" (log10).
-pub const AS_ACCURATE: f64 = 0.05;
+/// QSA matched against IMP at the lowest rate where the comparison means something.
+#[derive(Debug, Clone, Copy)]
+pub enum Match<'a> {
+    /// At `imp`'s rate, `qsa` has the fewest segments whose error is within [`ERROR_TOLERANCE`]
+    /// of IMP's.
+    Found {
+        /// The QSA row.
+        qsa: &'a ErrorRow,
+        /// IMP at the same rate.
+        imp: &'a ErrorRow,
+    },
+    /// At no swept rate is IMP's error both resolved by the reference and below [`USEFUL_ERROR`].
+    Unresolved {
+        /// IMP's most accurate row.
+        best_imp: Option<&'a ErrorRow>,
+    },
+}
 
-/// The QSA configuration with the fewest segments at oversampling `k` whose `signal` error against
-/// the reference is within [`AS_ACCURATE`] of IMP's at the same `k`, with that IMP row.
-pub fn as_accurate_as_imp<'a>(
-    rows: &'a [ErrorRow],
-    case: &str,
-    k: usize,
-    signal: Signal,
-) -> Option<(&'a ErrorRow, &'a ErrorRow)> {
-    let imp = rows.iter().find(|r| r.case == case && r.config.method == Method::Imp && r.config.oversampling == k)?;
-    let qsa = rows
-        .iter()
-        .filter(|r| r.case == case && r.config.method == Method::Qsa && r.config.oversampling == k)
-        .filter(|r| signal.of(r) <= signal.of(imp) + AS_ACCURATE)
-        .min_by_key(|r| r.config.segments)?;
-    Some((qsa, imp))
+/// The lowest oversampling at which IMP's `signal` error is resolved (`check`) and below
+/// [`USEFUL_ERROR`], and there the QSA row with the fewest segments whose error is within
+/// [`ERROR_TOLERANCE`] of IMP's.
+pub fn as_accurate_as_imp<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal, check: f64) -> Match<'a> {
+    let imp_at =
+        |k: usize| rows.iter().find(|r| r.case == case && r.config.method == Method::Imp && r.config.oversampling == k);
+    for &k in &OVERSAMPLING {
+        let Some(imp) = imp_at(k) else { continue };
+        let e = signal.of(imp);
+        if e > USEFUL_ERROR || !resolved(e, check) {
+            continue;
+        }
+        let qsa = rows
+            .iter()
+            .filter(|r| r.case == case && r.config.method == Method::Qsa && r.config.oversampling == k)
+            .filter(|r| signal.of(r) <= e + ERROR_TOLERANCE)
+            .min_by_key(|r| r.config.segments);
+        if let Some(qsa) = qsa {
+            return Match::Found { qsa, imp };
+        }
+    }
+    let best_imp = OVERSAMPLING.iter().filter_map(|&k| imp_at(k)).min_by(|a, b| signal.of(a).total_cmp(&signal.of(b)));
+    Match::Unresolved { best_imp }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(method: Method, segments: usize, k: usize, error: f64, rtf: f64, rtf_min: f64) -> ErrorRow {
+        ErrorRow {
+            case: "c".into(),
+            config: Config { method, segments, oversampling: k },
+            sample_rate: 44_100 * k as u32,
+            samples: 10,
+            error_vs_imp: error,
+            error_vs_reference: error,
+            output_error_vs_imp: error,
+            output_error_vs_reference: error,
+            sensitivity: Some(0.0),
+            rtf: Some(rtf),
+            rtf_min: Some(rtf_min),
+            contact_steps: 1,
+            mean_work: 1.0,
+            max_work: 1,
+        }
+    }
+
+    #[test]
+    fn run_times_closer_than_the_rows_noise_are_a_tie() {
+        // Noise 0.2 each: 1.35 times faster is inside 1 + 0.2 + 0.2, 1.45 times is beyond it.
+        let a = row(Method::Qsa, 6, 1, -1.5, 1.0, 0.8);
+        assert!(!faster(&a, &row(Method::Exp, 0, 1, -1.5, 1.35, 1.08)));
+        assert!(faster(&a, &row(Method::Exp, 0, 1, -1.5, 1.45, 1.16)));
+        // Without noise, the floor NOISE_RATIO still applies.
+        let quiet = row(Method::Qsa, 6, 1, -1.5, 1.0, 1.0);
+        assert!(!faster(&quiet, &row(Method::Exp, 0, 1, -1.5, 1.19, 1.19)));
+        assert!(faster(&quiet, &row(Method::Exp, 0, 1, -1.5, 1.21, 1.21)));
+    }
+
+    #[test]
+    fn a_target_missed_by_less_than_the_uncertainty_does_not_decide() {
+        // QSA reaches −1.5 at run time 1; EXP misses it by 0.02 at run time 0.5 and reaches it at 3.
+        let rows = vec![
+            row(Method::Qsa, 6, 1, -1.52, 1.0, 1.0),
+            row(Method::Exp, 0, 1, -1.48, 0.5, 0.5),
+            row(Method::Exp, 0, 2, -2.0, 3.0, 3.0),
+        ];
+        let duel = &duels(&rows, "c", Signal::Force, -4.0)[1];
+        assert_eq!(duel.target, -1.5);
+        assert_eq!(duel.verdict(), Verdict::Tie, "{}", duel.words());
+        // Missed by 0.1, twice the tolerance: QSA is the faster way to the target.
+        let rows = vec![rows[0].clone(), row(Method::Exp, 0, 1, -1.4, 0.5, 0.5), rows[2].clone()];
+        assert_eq!(duels(&rows, "c", Signal::Force, -4.0)[1].verdict(), Verdict::Qsa);
+    }
+
+    #[test]
+    fn a_target_below_the_references_own_error_is_unresolved() {
+        let rows = vec![row(Method::Exp, 0, 8, -1.76, 1.0, 1.0)];
+        // The reference is only −1.40 from a finer one: −1.5 and −2 cannot be judged, −1 can.
+        let duels = duels(&rows, "c", Signal::Force, -1.40);
+        assert_eq!(duels[0].verdict(), Verdict::Exp);
+        assert_eq!(duels[1].verdict(), Verdict::Unresolved);
+        assert_eq!(duels[2].verdict(), Verdict::Unresolved);
+        assert!(!resolved(-1.76, -1.40));
+        // The uncertainty of an error equal to the reference's own is log10(2).
+        assert!((uncertainty(-1.4, -1.4) - 2f64.log10()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn both_solvers_far_off_is_no_match() {
+        // At 1× both are 34 % off (−0.47): no verdict there; at 2× IMP is within 10 %.
+        let rows = vec![
+            row(Method::Imp, 0, 1, -0.47, 3.0, 3.0),
+            row(Method::Qsa, 2, 1, -0.47, 1.0, 1.0),
+            row(Method::Imp, 0, 2, -1.3, 6.0, 6.0),
+            row(Method::Qsa, 2, 2, -1.1, 2.0, 2.0),
+            row(Method::Qsa, 8, 2, -1.28, 2.0, 2.0),
+        ];
+        match as_accurate_as_imp(&rows, "c", Signal::Force, -4.0) {
+            Match::Found { qsa, imp } => assert_eq!((qsa.config.segments, imp.config.oversampling), (8, 2)),
+            other => panic!("{other:?}"),
+        }
+        assert!(matches!(as_accurate_as_imp(&rows[..2], "c", Signal::Force, -4.0), Match::Unresolved { .. }));
+    }
+
+    #[test]
+    fn the_plugin_default_wins_a_tie() {
+        let d = plugin_default();
+        let rows = vec![
+            row(Method::Qsa, 5, 1, -1.2, 0.99, 0.9),
+            row(d.method, d.segments, 1, -1.2, 1.0, 0.9),
+            row(Method::Exp, 0, 1, -1.2, 3.0, 3.0),
+        ];
+        match reach(&rows, "c", Signal::Output, -1.0, -4.0, |_| true) {
+            Reach::Found(pick) => {
+                assert_eq!(pick.row.config, d);
+                assert_eq!(pick.ties.len(), 1, "N = 5 ties; EXP, three times slower, does not");
+            }
+            other => panic!("{other:?}"),
+        }
+    }
 }

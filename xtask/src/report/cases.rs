@@ -35,6 +35,12 @@ pub const SLIDE_SECONDS: f64 = 0.05;
 /// Contact stiffness of the stiff case (N/m^α).
 pub const STIFF_KAPPA: f64 = 1e12;
 
+/// The name of the Fig. 5 hammer case (the seed's Fig. 5 values are compared on it).
+pub const FIG5_HAMMER: &str = "fig5-hammer";
+
+/// The name of the stiff hammer case (the resolution study runs on it).
+pub const STIFF_HAMMER: &str = "stiff-hammer";
+
 /// One case of the sweep.
 #[derive(Debug, Clone)]
 pub struct Case {
@@ -124,7 +130,7 @@ pub fn cases(scenes: &Path) -> Result<Vec<Case>, ReportError> {
             name: "fig4-mass-barrier", title: "Fig. 4 mass–barrier (κ 1e8, α 1.3)", musical: false, scene: fig4
         },
         Case {
-            name: "fig5-hammer",
+            name: FIG5_HAMMER,
             title: "Fig. 5 hammer–string (C4, 3.5 m/s, α 2.5)",
             musical: true,
             scene: hammer(&fig5, None)?,
@@ -142,7 +148,7 @@ pub fn cases(scenes: &Path) -> Result<Vec<Case>, ReportError> {
             scene: slide(&load(scenes, "slide-phrase.toml")?)?,
         },
         Case {
-            name: "stiff-hammer",
+            name: STIFF_HAMMER,
             title: "stiff hammer (Fig. 5 with κ 1e12)",
             musical: false,
             scene: hammer(&fig5, Some(stiff))?,

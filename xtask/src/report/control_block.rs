@@ -114,6 +114,29 @@ pub fn csv(rows: &[BlockRow]) -> String {
     out
 }
 
+/// Read what [`csv`] wrote (errors to 4 decimals, run times to 5 significant digits, as printed).
+pub fn parse(text: &str) -> Result<Vec<BlockRow>, String> {
+    text.lines()
+        .skip(1)
+        .filter(|l| !l.is_empty())
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            let float = |i: usize| f[i].parse::<f64>().map_err(|e| format!("{l}: {e}"));
+            if f.len() != 7 {
+                return Err(format!("{l}: expected 7 fields"));
+            }
+            Ok(BlockRow {
+                gesture: f[0].to_owned(),
+                method: Method::from_name(f[1]).ok_or_else(|| format!("{l}: method {:?}", f[1]))?,
+                block: f[3].parse().map_err(|e| format!("{l}: {e}"))?,
+                output_error: float(4)?,
+                force_error: float(5)?,
+                rtf: float(6)?,
+            })
+        })
+        .collect()
+}
+
 /// Compare fresh rows (errors only) with the committed CSV `text`: every error, printed as [`csv`]
 /// prints it, must be the committed text exactly (the errors are deterministic; only `rtf`, not
 /// compared, depends on timing). Returns the mismatches, one line each.
@@ -154,6 +177,7 @@ mod tests {
         let rows = vec![row(1, f64::NAN), row(8, -4.2)];
         let text = csv(&rows);
         assert!(compare(&rows, &text).is_empty());
+        assert_eq!(csv(&parse(&text).unwrap()), text, "the CSV reads back as printed");
         let moved = vec![row(1, f64::NAN), row(8, -4.2001)];
         assert_eq!(compare(&moved, &text).len(), 1, "a move by one unit of the last printed place");
         let unprinted = vec![row(1, f64::NAN), row(8, -4.200_04)];

@@ -57,6 +57,10 @@ pub const OVERSAMPLING: [usize; 4] = [1, 2, 4, 8];
 /// Oversampling of the converged reference (IMP).
 pub const REFERENCE_OVERSAMPLING: usize = 16;
 
+/// The seed paper's Fig. 5 (right) values, quoted in docs/physics.md §9.4: `(N, error_vs_imp)` of
+/// QSA on the Fig. 5 hammer at the base rate, to compare with this sweep's.
+pub const SEED_FIG5: [(usize, f64); 3] = [(3, -1.18), (6, -1.62), (50, -4.01)];
+
 /// Timed runs per configuration; the median is reported.
 pub const TIMING_RUNS: usize = 9;
 
@@ -357,6 +361,100 @@ pub fn parse_csv(text: &str) -> Result<Vec<StoredErrors>, String> {
     Ok(out)
 }
 
+/// Read every column of an `error-vs-runtime.csv` written by [`to_csv`] back into rows (errors
+/// to 4 decimals, times to 4 significant digits, as printed). Empty `sensitivity`, `rtf` and
+/// `rtf_min` fields read as `None`.
+pub fn parse_rows(text: &str) -> Result<Vec<ErrorRow>, String> {
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().ok_or("empty file")?.split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).ok_or(format!("no column {name}"));
+    let names = [
+        "case",
+        "method",
+        "segments",
+        "oversampling",
+        "sample_rate",
+        "samples",
+        "error_vs_imp",
+        "error_vs_reference",
+        "output_error_vs_imp",
+        "output_error_vs_reference",
+        "sensitivity",
+        "rtf",
+        "rtf_min",
+        "contact_steps",
+        "mean_work",
+        "max_work",
+    ];
+    let at: Vec<usize> = names.iter().map(|n| column(n)).collect::<Result<_, _>>()?;
+    let mut out = Vec::new();
+    for (i, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let fields: Vec<&str> = line.split(',').collect();
+        let err = |m: String| format!("line {}: {m}", i + 2);
+        let field = |c: usize| fields.get(at[c]).copied().ok_or_else(|| err("too few fields".into()));
+        let float = |c: usize| field(c)?.parse::<f64>().map_err(|e| err(format!("{}: {e}", names[c])));
+        let int = |c: usize| field(c)?.parse::<usize>().map_err(|e| err(format!("{}: {e}", names[c])));
+        let optional = |c: usize| -> Result<Option<f64>, String> {
+            match field(c)? {
+                "" => Ok(None),
+                v => v.parse::<f64>().map(Some).map_err(|e| err(format!("{}: {e}", names[c]))),
+            }
+        };
+        let method = Method::from_name(field(1)?).ok_or_else(|| err(format!("method {:?}", field(1).unwrap_or(""))))?;
+        out.push(ErrorRow {
+            case: field(0)?.to_owned(),
+            config: Config { method, segments: int(2)?, oversampling: int(3)? },
+            sample_rate: field(4)?.parse().map_err(|e| err(format!("sample_rate: {e}")))?,
+            samples: int(5)?,
+            error_vs_imp: float(6)?,
+            error_vs_reference: float(7)?,
+            output_error_vs_imp: float(8)?,
+            output_error_vs_reference: float(9)?,
+            sensitivity: optional(10)?,
+            rtf: optional(11)?,
+            rtf_min: optional(12)?,
+            contact_steps: int(13)?,
+            mean_work: float(14)?,
+            max_work: field(15)?.parse().map_err(|e| err(format!("max_work: {e}")))?,
+        });
+    }
+    Ok(out)
+}
+
+/// Per case, the force and output errors of the 16× reference against 32× ([`reference_check`]).
+pub type ReferenceChecks = Vec<(String, (f64, f64))>;
+
+/// The header of `reference-check.csv`.
+pub const REFERENCE_CSV_HEADER: &str = "case,force_error,output_error";
+
+/// `reference-check.csv`: per case, the force and output errors of the 16× reference against
+/// 32× ([`reference_check`]), to 4 decimals.
+pub fn reference_csv(checks: &[(String, (f64, f64))]) -> String {
+    let mut out = format!("{REFERENCE_CSV_HEADER}\n");
+    for (case, (force, output)) in checks {
+        let _ = writeln!(out, "{case},{force:.4},{output:.4}");
+    }
+    out
+}
+
+/// Read what [`reference_csv`] wrote.
+pub fn parse_reference_csv(text: &str) -> Result<ReferenceChecks, String> {
+    let mut lines = text.lines();
+    if lines.next() != Some(REFERENCE_CSV_HEADER) {
+        return Err(format!("the first line must be {REFERENCE_CSV_HEADER}"));
+    }
+    lines
+        .filter(|l| !l.is_empty())
+        .map(|l| match l.split(',').collect::<Vec<_>>()[..] {
+            [case, force, output] => Ok((
+                case.to_owned(),
+                (force.parse().map_err(|e| format!("{l}: {e}"))?, output.parse().map_err(|e| format!("{l}: {e}"))?),
+            )),
+            _ => Err(format!("{l}: expected 3 fields")),
+        })
+        .collect()
+}
+
 /// The outcome of [`compare`].
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Comparison {
@@ -432,6 +530,9 @@ mod tests {
             mean_work: 4.5,
             max_work: 5,
         };
+        let back = parse_rows(&to_csv(std::slice::from_ref(&row))).unwrap();
+        assert_eq!(to_csv(&back), to_csv(std::slice::from_ref(&row)), "every column reads back as printed");
+        assert_eq!((back[0].rtf_min, back[0].max_work), (None, 5));
         let stored = parse_csv(&to_csv(std::slice::from_ref(&row))).unwrap();
         assert_eq!(stored[0].key, ("c".into(), "imp".into(), 0, 2));
         let same = compare(std::slice::from_ref(&row), &stored, 0.0);

@@ -18,6 +18,11 @@ use qsa_dsp::scene::{Frame, MassBarrier, MassBarrierParams, Scene};
 
 use super::sim::{CaseScene, Setup};
 
+/// The spreads of the effective contact time (samples) that docs/physics.md §4.4 quotes from the
+/// prototype, per scheme, to compare with this study's.
+pub const PHYSICS_DOC_SPREADS: [(&str, f64); 4] =
+    [("IMP", 0.001), ("QSA N=5", 0.008), ("QSA N=20", 0.003), ("EXP", 1.03)];
+
 /// Phases for the spread of the contact time.
 pub const PHASES: usize = 40;
 

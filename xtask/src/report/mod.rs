@@ -13,8 +13,17 @@
 //!   `control-block.csv`.
 //! - **Stability** ([`stability`]): a seeded sweep of random parameter sets per scene and method
 //!   plus hand-picked corners. Files: `stability.csv`, `stability.md`.
-//! - `README.md` ([`readme`]): the tables, the plots, the fitted orders and, in plain words, which
-//!   method to pick for which budget.
+//! - **The stiff hammer's resolution** ([`stiff`]): IMP and EXP against IMP at 16×, 32× and 64×,
+//!   and the force waveform. File: `stiff-hammer.csv`.
+//! - **The machine and the run** ([`machine`]): CPU, kernel level, commit, wall times. File:
+//!   `run.csv`.
+//! - `README.md` ([`readme`], advice in [`guide`]): the tables, the plots, the fitted orders and, in
+//!   plain words, what to choose for which budget.
+//!
+//! The data files (`error-vs-runtime.csv`, `reference-check.csv`, `stiff-hammer.csv`,
+//! `control-block.csv`, `stability.csv`, `run.csv`) determine every text and plot: `--from-data`
+//! rewrites `README.md`, `stability.md`, `convergence.csv` and the plots from the committed data
+//! files without running any sweep.
 //!
 //! A progress bar on stderr shows the long work; it is hidden when stderr is not a terminal.
 //! Every file is written to a temporary file in the report directory and renamed into place when
@@ -22,8 +31,10 @@
 //!
 //! `--quick` (for CI, see [`quick_check`]) recomputes the error figures (not the timings) and a
 //! small stability sweep, writes nothing, and fails if a fresh error, printed as the report prints
-//! it, differs from the committed `error-vs-runtime.csv` or `control-block.csv` in any character
-//! (see [`QUICK_MAX_SENSITIVITY`]) or if the stability sweep finds a failure. `--rerun ID` reruns
+//! it, differs from the committed `error-vs-runtime.csv`, `reference-check.csv`,
+//! `stiff-hammer.csv` or `control-block.csv` in any character (see [`QUICK_MAX_SENSITIVITY`]), if
+//! the texts made from the committed data differ from the committed `README.md`, `stability.md` or
+//! `convergence.csv` in any byte, or if the stability sweep finds a failure. `--rerun ID` reruns
 //! one stability case (the command printed next to each worst case in `stability.md`) and prints
 //! its parameters and measurements as one JSON line.
 
@@ -35,12 +46,15 @@ pub mod fig4;
 pub mod files;
 pub mod fit;
 pub mod gestures;
+pub mod guide;
+pub mod machine;
 pub mod pareto;
 pub mod plot;
 pub mod readme;
 pub mod restrike;
 pub mod sim;
 pub mod stability;
+pub mod stiff;
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -77,6 +91,10 @@ pub struct ReportArgs {
     /// stability sweep, compare with the committed CSV, write nothing.
     #[arg(long)]
     pub quick: bool,
+    /// Rewrite README.md, stability.md, convergence.csv and the plots from the committed data
+    /// files in the report directory, without running any sweep.
+    #[arg(long, conflicts_with = "quick")]
+    pub from_data: bool,
     /// Report directory.
     #[arg(long, default_value = "docs/report")]
     pub out: PathBuf,
@@ -141,15 +159,23 @@ pub fn run(args: &ReportArgs, stdout: &mut dyn Write) -> Result<(), ReportError>
         writeln!(stdout, "{line}").ok();
         return Ok(());
     }
+    if args.from_data {
+        let results = load(&args.scenes, &args.out)?;
+        for path in readme::write_derived(&args.out, &results)? {
+            writeln!(stdout, "wrote {}", path.display()).ok();
+        }
+        return Ok(());
+    }
     if args.quick {
         let outcome = quick_check(&args.scenes, &args.out)?;
         writeln!(
             stdout,
             "report --quick: {} error rows match {} to every printed digit ({} rows too sensitive to rounding to \
-             compare); {} stability runs without failure ({:.1} s)",
+             compare); {} texts match what the committed data give; {} stability runs without failure ({:.1} s)",
             outcome.rows,
             args.out.join(readme::ERROR_CSV).display(),
             outcome.sensitive,
+            outcome.texts,
             outcome.stability_runs,
             outcome.seconds
         )
@@ -170,38 +196,120 @@ pub struct QuickOutcome {
     pub rows: usize,
     /// Rows recomputed but not compared: their stored sensitivity exceeds [`QUICK_MAX_SENSITIVITY`].
     pub sensitive: usize,
+    /// Texts regenerated from the committed data and found identical to the committed files.
+    pub texts: usize,
     /// Stability runs made.
     pub stability_runs: usize,
     /// Wall time (s).
     pub seconds: f64,
 }
 
+/// Read `dir/name`.
+fn read(dir: &Path, name: &str) -> Result<String, ReportError> {
+    let path = dir.join(name);
+    std::fs::read_to_string(&path).map_err(|source| ReportError::Io { path, source })
+}
+
+/// Everything the report shows, from the committed data files in `report_dir` and the scene files
+/// in `scenes` (the Fig. 4 study, deterministic and quick, is recomputed).
+pub fn load(scenes: &Path, report_dir: &Path) -> Result<readme::Results, ReportError> {
+    let bad = |name: &str, e: String| ReportError::Scene(format!("{}: {e}", report_dir.join(name).display()));
+    let cases = cases::cases(scenes)?;
+    let rows = error::parse_rows(&read(report_dir, readme::ERROR_CSV)?).map_err(|e| bad(readme::ERROR_CSV, e))?;
+    let checks = error::parse_reference_csv(&read(report_dir, readme::REFERENCE_CSV)?)
+        .map_err(|e| bad(readme::REFERENCE_CSV, e))?;
+    let reference_checks = cases
+        .iter()
+        .map(|c| {
+            checks
+                .iter()
+                .find(|(name, _)| name == c.name)
+                .map(|(_, check)| *check)
+                .ok_or_else(|| bad(readme::REFERENCE_CSV, format!("no line for {}", c.name)))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let stiff = stiff::parse(&read(report_dir, readme::STIFF_CSV)?).map_err(|e| bad(readme::STIFF_CSV, e))?;
+    let blocks = control_block::parse(&read(report_dir, readme::CONTROL_BLOCK_CSV)?)
+        .map_err(|e| bad(readme::CONTROL_BLOCK_CSV, e))?;
+    let summary = stability::Summary::parse_csv(&read(report_dir, readme::STABILITY_CSV)?)
+        .map_err(|e| bad(readme::STABILITY_CSV, e))?;
+    let run = machine::RunInfo::parse_csv(&read(report_dir, readme::RUN_CSV)?).map_err(|e| bad(readme::RUN_CSV, e))?;
+    let fig4 = fig4::study(&cases[0].scene);
+    Ok(readme::Results { cases, rows, reference_checks, fig4, blocks, summary, stiff, run })
+}
+
+/// The first line where `fresh` and `committed` differ, for a mismatch message.
+fn first_difference(name: &str, fresh: &str, committed: &str) -> String {
+    let (mut a, mut b) = (fresh.lines(), committed.lines());
+    for line in 1.. {
+        match (a.next(), b.next()) {
+            (Some(x), Some(y)) if x == y => continue,
+            (None, None) => break,
+            (x, y) => {
+                return format!(
+                    "{name}: line {line} differs from what the committed data give:\n  now:       {}\n  committed: {}",
+                    x.unwrap_or("(end of file)"),
+                    y.unwrap_or("(end of file)")
+                );
+            }
+        }
+    }
+    format!("{name}: differs only in line endings")
+}
+
 /// The CI check: recompute every error figure (no timing, no plots) and compare it with
-/// `report_dir/error-vs-runtime.csv` and `control-block.csv` as printed, digit for digit (rows
-/// whose stored sensitivity exceeds [`QUICK_MAX_SENSITIVITY`] are recomputed but not compared),
-/// then run [`QUICK_SETS`]
-/// stability sets per scene kind and method, which must show no failure. Writes nothing.
+/// `report_dir/error-vs-runtime.csv`, `reference-check.csv`, `stiff-hammer.csv` and
+/// `control-block.csv` as printed, digit for digit (rows of the error table whose stored
+/// sensitivity exceeds [`QUICK_MAX_SENSITIVITY`] are recomputed but not compared); regenerate
+/// `README.md`, `stability.md` and `convergence.csv` from the committed data files and compare them
+/// byte for byte with the committed ones; then run [`QUICK_SETS`] stability sets per scene kind and
+/// method, which must show no failure. Writes nothing.
 pub fn quick_check(scenes: &Path, report_dir: &Path) -> Result<QuickOutcome, ReportError> {
     let start = Instant::now();
-    let csv_path = report_dir.join(readme::ERROR_CSV);
-    let text =
-        std::fs::read_to_string(&csv_path).map_err(|source| ReportError::Io { path: csv_path.clone(), source })?;
-    let stored = error::parse_csv(&text).map_err(|e| ReportError::Scene(format!("{}: {e}", csv_path.display())))?;
+    let stored = error::parse_csv(&read(report_dir, readme::ERROR_CSV)?)
+        .map_err(|e| ReportError::Scene(format!("{}: {e}", report_dir.join(readme::ERROR_CSV).display())))?;
     let cases = cases::cases(scenes)?;
     let configs = error::configs(&error::SWEPT_SEGMENTS, &error::OVERSAMPLING);
-    let bar = progress(cases.len() * configs.len(), "errors (quick)");
+    let bar = progress(cases.len() * (configs.len() + 1) + 1, "errors (quick)");
     let mut fresh = Vec::new();
+    let mut checks = Vec::new();
     for case in &cases {
         fresh.extend(error::sweep_case(case, &configs, 0, &|| bar.inc(1)));
+        checks.push((case.name.to_owned(), error::reference_check(case)));
+        bar.inc(1);
     }
+    let stiff_rows = cases.iter().find(|c| c.name == cases::STIFF_HAMMER).map(stiff::study);
     bar.finish_and_clear();
     let mut comparison = error::compare(&fresh, &stored, QUICK_MAX_SENSITIVITY);
-    let blocks_path = report_dir.join(readme::CONTROL_BLOCK_CSV);
-    let blocks_text = std::fs::read_to_string(&blocks_path)
-        .map_err(|source| ReportError::Io { path: blocks_path.clone(), source })?;
+    let blocks_text = read(report_dir, readme::CONTROL_BLOCK_CSV)?;
     let blocks = control_block::study(0, &|| {});
     comparison.problems.extend(control_block::compare(&blocks, &blocks_text));
     comparison.compared += blocks.len();
+    let mut recomputed = vec![(readme::REFERENCE_CSV, error::reference_csv(&checks))];
+    if let Some(rows) = &stiff_rows {
+        recomputed.push((readme::STIFF_CSV, stiff::csv(rows)));
+    }
+    for (name, text) in recomputed {
+        let committed = read(report_dir, name)?;
+        if text != committed {
+            comparison.problems.push(first_difference(name, &text, &committed));
+        }
+        comparison.compared += text.lines().count().saturating_sub(1);
+    }
+    let mut texts = 0;
+    match load(scenes, report_dir) {
+        Ok(results) => {
+            for (name, text) in readme::derived_texts(&results) {
+                let committed = read(report_dir, name)?;
+                if text == committed {
+                    texts += 1;
+                } else {
+                    comparison.problems.push(first_difference(name, &text, &committed));
+                }
+            }
+        }
+        Err(e) => comparison.problems.push(format!("the committed data files cannot be read: {e}")),
+    }
     if !comparison.problems.is_empty() {
         return Err(ReportError::Mismatch(comparison.problems.len(), comparison.problems.join("\n")));
     }
@@ -215,6 +323,7 @@ pub fn quick_check(scenes: &Path, report_dir: &Path) -> Result<QuickOutcome, Rep
     Ok(QuickOutcome {
         rows: comparison.compared,
         sensitive: comparison.sensitive,
+        texts,
         stability_runs: sweep.runs(),
         seconds: start.elapsed().as_secs_f64(),
     })
@@ -242,6 +351,7 @@ fn full(args: &ReportArgs) -> Result<Vec<PathBuf>, ReportError> {
         bar.inc(1);
     }
     bar.finish_and_clear();
+    let stiff = cases.iter().find(|c| c.name == cases::STIFF_HAMMER).map(stiff::study).unwrap_or_default();
     let error_seconds = start.elapsed().as_secs_f64();
     let fig4 = fig4::study(&cases[0].scene);
     let bar = progress(2 * control_block::STUDY_METHODS.len() * control_block::BLOCKS.len(), "control block");
@@ -252,14 +362,17 @@ fn full(args: &ReportArgs) -> Result<Vec<PathBuf>, ReportError> {
     let sweep = stability::sweep(args.sets, excerpt(&cases), &|| bar.inc(1));
     bar.finish_and_clear();
     let stability_seconds = stability_start.elapsed().as_secs_f64();
+    let run =
+        machine::RunInfo::this_machine(&args.out, error_seconds, stability_seconds, start.elapsed().as_secs_f64());
     let results = readme::Results {
-        cases: &cases,
-        rows: &rows,
-        reference_checks: &reference_checks,
-        fig4: &fig4,
-        blocks: &blocks,
-        sweep: &sweep,
-        timing: readme::Timing { error_seconds, stability_seconds, total_seconds: 0.0 },
+        cases,
+        rows,
+        reference_checks,
+        fig4,
+        blocks,
+        summary: stability::Summary::from_sweep(&sweep),
+        stiff,
+        run,
     };
-    readme::write_all(&args.out, &results, start)
+    readme::write_all(&args.out, &results)
 }

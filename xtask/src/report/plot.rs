@@ -1,13 +1,17 @@
 //! The report's PNG plots, drawn with plotters.
 //!
 //! - [`pareto`]: error against the converged reference versus real-time factor for one case, for
-//!   the contact force and for the output signal, every configuration as a marker (colour =
-//!   method) and each method's Pareto front as a line (the configurations no other configuration
-//!   of that method beats in both error and run time), labelled `N·k×` (QSA) or `k×`. The dashed
-//!   line is the 1 % goal (−2).
+//!   the contact force and for the output signal (one panel when the two are the same signal, as on
+//!   the mass–barrier), every configuration as a light marker (colour = method) and each method's
+//!   Pareto front as a line with solid markers (the configurations no other configuration of that
+//!   method beats in both error and run time), labelled `N·k×` (QSA: segments · oversampling) or
+//!   `k×` (EXP, IMP: oversampling); a label that would overlap one already drawn is left out. The
+//!   dashed line is the 1 % goal (−2), the dotted line the reference's own error (below it, errors
+//!   are unresolved). The legend explains all of these.
 //! - [`fig5_right`]: the seed's Fig. 5 (right) measure, the force error against IMP at the same
 //!   rate, versus `log10(Δy/y_ref) = −log10 N`, at the base rate, one curve per case.
-//! - [`trajectories`]: the Fig. 4 study ([`super::fig4`]), one panel per scheme.
+//! - [`trajectories`]: the Fig. 4 study ([`super::fig4`]), one panel per scheme, one colour per
+//!   entry phase (the legend in the first panel).
 //!
 //! Each PNG is drawn into a temporary file in the report directory and renamed into place.
 
@@ -92,24 +96,32 @@ fn log_tick(x: &f64) -> String {
 }
 
 /// Error against the reference versus RTF for one case: the contact force (left) and the output
-/// signal (right).
-pub fn pareto(path: &Path, title: &str, rows: &[&ErrorRow]) -> Result<(), ReportError> {
-    draw_png(path, (1500, 640), |root| {
+/// signal (right), or the force alone when every row's output error equals its force error.
+/// `check` is the reference's own `(force, output)` error.
+pub fn pareto(path: &Path, title: &str, rows: &[&ErrorRow], check: (f64, f64)) -> Result<(), ReportError> {
+    let same = rows.iter().all(|r| r.output_error_vs_reference == r.error_vs_reference);
+    let width = if same { 900 } else { 1500 };
+    draw_png(path, (width, 640), |root| {
         let root = root.titled(title, ("sans-serif", 26)).map_err(|e| e.to_string())?;
+        if same {
+            return pareto_panel(&root, rows, Signal::Force, check.0, "force (= output) signal");
+        }
         let (left, right) = root.split_horizontally(750);
-        pareto_panel(&left, rows, Signal::Force)?;
-        pareto_panel(&right, rows, Signal::Output)
+        pareto_panel(&left, rows, Signal::Force, check.0, "force signal")?;
+        pareto_panel(&right, rows, Signal::Output, check.1, "output signal")
     })
 }
 
-fn pareto_panel(area: &Area, rows: &[&ErrorRow], signal: Signal) -> Result<(), String> {
+fn pareto_panel(area: &Area, rows: &[&ErrorRow], signal: Signal, check: f64, caption: &str) -> Result<(), String> {
     let timed: Vec<&ErrorRow> =
         rows.iter().copied().filter(|r| r.rtf.is_some_and(|t| t > 0.0) && signal.of(r).is_finite()).collect();
     let (x0, x1) = range(timed.iter().map(|r| r.rtf.unwrap_or(1.0).log10()), 0.05, 0.5);
     let (y0, y1) = range(timed.iter().map(|r| signal.of(r)).chain([-2.0]), 0.08, 1.0);
+    // Room below the data for the legend (lower left): a third of the height.
+    let y0 = y0 - 0.45 * (y1 - y0);
     let (x0, x1) = (10f64.powf(x0), 10f64.powf(x1));
     let mut chart = ChartBuilder::on(area)
-        .caption(format!("{} signal", signal.name()), ("sans-serif", 20))
+        .caption(caption, ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(48)
         .y_label_area_size(64)
@@ -124,11 +136,30 @@ fn pareto_panel(area: &Area, rows: &[&ErrorRow], signal: Signal) -> Result<(), S
         .axis_desc_style(("sans-serif", 16))
         .draw()
         .map_err(|e| e.to_string())?;
+    let grey = BLACK.mix(0.5).stroke_width(1);
     chart
-        .draw_series(DashedLineSeries::new([(x0, -2.0), (x1, -2.0)], 8, 6, BLACK.mix(0.5).stroke_width(1)))
+        .draw_series(DashedLineSeries::new([(x0, -2.0), (x1, -2.0)], 8, 6, grey))
         .map_err(|e| e.to_string())?
         .label("1 % of the reference (−2)")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.mix(0.5)));
+        .legend(move |(x, y)| {
+            EmptyElement::at((x, y))
+                + PathElement::new(vec![(0, 0), (8, 0)], grey)
+                + PathElement::new(vec![(14, 0), (20, 0)], grey)
+        });
+    if check > y0 && check < y1 {
+        chart
+            .draw_series(DashedLineSeries::new([(x0, check), (x1, check)], 2, 4, BLACK.stroke_width(1)))
+            .map_err(|e| e.to_string())?
+            .label("reference's own error (below: unresolved)")
+            .legend(|(x, y)| {
+                EmptyElement::at((x, y))
+                    + PathElement::new(vec![(0, 0), (2, 0)], BLACK)
+                    + PathElement::new(vec![(6, 0), (8, 0)], BLACK)
+                    + PathElement::new(vec![(12, 0), (14, 0)], BLACK)
+                    + PathElement::new(vec![(18, 0), (20, 0)], BLACK)
+            });
+    }
+    let mut placed: Vec<(i32, i32)> = Vec::new();
     for method in [Method::Qsa, Method::Exp, Method::Imp] {
         let c = colour(method);
         let points: Vec<(f64, f64, String)> = timed
@@ -144,22 +175,43 @@ fn pareto_panel(area: &Area, rows: &[&ErrorRow], signal: Signal) -> Result<(), S
         chart
             .draw_series(LineSeries::new(best.iter().map(|p| (p.0, p.1)), c.stroke_width(2)))
             .map_err(|e| e.to_string())?
-            .label(format!("{} (front)", method.name().to_uppercase()))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+            .label(format!("{}: front (line), every configuration (light dots)", method.name().to_uppercase()))
+            .legend(move |(x, y)| {
+                EmptyElement::at((x, y))
+                    + PathElement::new(vec![(0, 0), (14, 0)], c.stroke_width(2))
+                    + Circle::new((7, 0), 5, c.filled())
+                    + Circle::new((19, 0), 4, marker_style)
+            });
+        chart.draw_series(best.iter().map(|p| Circle::new((p.0, p.1), 5, c.filled()))).map_err(|e| e.to_string())?;
+        let mut labels = Vec::new();
+        for p in &best {
+            let (px, py) = chart.backend_coord(&(p.0, p.1));
+            let (lx, ly) = (px + 6, py - 16);
+            let width = 7 * p.2.chars().count() as i32;
+            if placed.iter().any(|&(x, y)| (lx - x).abs() < width.max(40) && (ly - y).abs() < 14) {
+                continue;
+            }
+            placed.push((lx, ly));
+            labels.push(p.clone());
+        }
         chart
-            .draw_series(best.iter().map(|p| {
+            .draw_series(labels.iter().map(|p| {
                 EmptyElement::at((p.0, p.1))
-                    + Circle::new((0, 0), 5, c.filled())
                     + Text::new(p.2.clone(), (6, -16), ("sans-serif", 13).into_font().color(&c))
             }))
             .map_err(|e| e.to_string())?;
     }
     chart
+        .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+        .map_err(|e| e.to_string())?
+        .label("labels: N·k× = QSA with N segments at k× the base rate; k× = EXP or IMP at k×")
+        .legend(|(x, y)| EmptyElement::at((x, y)));
+    chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(SeriesLabelPosition::LowerLeft)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .label_font(("sans-serif", 15))
+        .label_font(("sans-serif", 13))
         .draw()
         .map_err(|e| e.to_string())?;
     Ok(())
@@ -220,7 +272,7 @@ pub fn trajectories(path: &Path, study: &Fig4Study) -> Result<(), ReportError> {
     let columns = study.schemes.len().div_ceil(2);
     draw_png(path, (560 * columns as u32, 880), |root| {
         let panels = root.split_evenly((2, columns));
-        for (panel, scheme) in panels.iter().zip(&study.schemes) {
+        for (index, (panel, scheme)) in panels.iter().zip(&study.schemes).enumerate() {
             let title = format!(
                 "{}: contact {:.3}–{:.3} samples",
                 scheme.label, scheme.contact_samples.0, scheme.contact_samples.1
@@ -240,13 +292,29 @@ pub fn trajectories(path: &Path, study: &Fig4Study) -> Result<(), ReportError> {
                 .axis_desc_style(("sans-serif", 15))
                 .draw()
                 .map_err(|e| e.to_string())?;
+            let phases = scheme.curves.len();
             for (i, curve) in scheme.curves.iter().enumerate() {
                 let c = Palette99::pick(i).to_rgba();
                 let points: Vec<(f64, f64)> = curve.iter().filter(in_window).copied().collect();
-                chart
+                let series = chart
                     .draw_series(LineSeries::new(points.iter().copied(), c.stroke_width(1)))
                     .map_err(|e| e.to_string())?;
+                if index == 0 {
+                    series
+                        .label(format!("entry phase {i}/{phases} of a sample"))
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+                }
                 chart.draw_series(points.iter().map(|&p| Circle::new(p, 3, c.filled()))).map_err(|e| e.to_string())?;
+            }
+            if index == 0 {
+                chart
+                    .configure_series_labels()
+                    .position(SeriesLabelPosition::UpperRight)
+                    .background_style(WHITE.mix(0.85))
+                    .border_style(BLACK)
+                    .label_font(("sans-serif", 13))
+                    .draw()
+                    .map_err(|e| e.to_string())?;
             }
         }
         Ok(())

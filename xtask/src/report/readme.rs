@@ -12,15 +12,18 @@ use qsa_dsp::contact::Method;
 use qsa_dsp::string::ModalString;
 
 use super::ReportError;
-use super::analysis::{self, Order, Signal, Verdict};
-use super::cases::Case;
+use super::analysis::{self, Order, Signal};
+use super::cases::{Case, FIG5_HAMMER, STIFF_HAMMER};
 use super::control_block::{self, BlockRow};
 use super::error::{self, CHECK_OVERSAMPLING, ErrorRow, REFERENCE_OVERSAMPLING, SWEPT_SEGMENTS, TIMING_RUNS};
 use super::fig4::{self, Fig4Study};
 use super::files::make_readable;
+use super::guide;
+use super::machine::RunInfo;
 use super::plot;
 use super::sim::Setup;
 use super::stability::{self, BUDGET_LIMIT, ENERGY_LIMIT, Summary, Tally};
+use super::stiff::{self, StiffRow};
 
 /// The error table.
 pub const ERROR_CSV: &str = "error-vs-runtime.csv";
@@ -44,34 +47,37 @@ pub fn pareto_png(case: &str) -> String {
     format!("pareto-{case}.png")
 }
 
-/// Wall times of the report's parts (s).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Timing {
-    /// Error sweep (renders and timing).
-    pub error_seconds: f64,
-    /// Stability sweep.
-    pub stability_seconds: f64,
-    /// Everything, including the plots.
-    pub total_seconds: f64,
-}
+/// A change of an error (log10) under the sensitivity perturbation above which the report calls a
+/// row sensitive to rounding (the contact's dynamics amplify a few rounding errors to this).
+pub const SENSITIVE_CHANGE: f64 = 0.01;
 
-/// Everything the report shows.
+/// The machine and run file.
+pub const RUN_CSV: &str = "run.csv";
+/// The reference's own errors.
+pub const REFERENCE_CSV: &str = "reference-check.csv";
+/// The stiff hammer's resolution study.
+pub const STIFF_CSV: &str = "stiff-hammer.csv";
+
+/// Everything the report shows: what the data files hold, and the cases they were made on.
 #[derive(Debug)]
-pub struct Results<'a> {
-    /// The cases.
-    pub cases: &'a [Case],
-    /// The error rows.
-    pub rows: &'a [ErrorRow],
-    /// Per case: force and output error of the 16× reference against 32×.
-    pub reference_checks: &'a [(f64, f64)],
-    /// The Fig. 4 study.
-    pub fig4: &'a Fig4Study,
-    /// The control-block study.
-    pub blocks: &'a [BlockRow],
-    /// The stability sweep.
-    pub sweep: &'a stability::Sweep,
-    /// Wall times.
-    pub timing: Timing,
+pub struct Results {
+    /// The cases (from the scene files).
+    pub cases: Vec<Case>,
+    /// The error rows (`error-vs-runtime.csv`).
+    pub rows: Vec<ErrorRow>,
+    /// Per case, in the order of `cases`: force and output error of the 16× reference against
+    /// 32× (`reference-check.csv`).
+    pub reference_checks: Vec<(f64, f64)>,
+    /// The Fig. 4 study (recomputed: it takes milliseconds and is deterministic).
+    pub fig4: Fig4Study,
+    /// The control-block study (`control-block.csv`).
+    pub blocks: Vec<BlockRow>,
+    /// The stability summary (`stability.csv`).
+    pub summary: Summary,
+    /// The stiff hammer's resolution study (`stiff-hammer.csv`).
+    pub stiff: Vec<StiffRow>,
+    /// The machine and the run (`run.csv`).
+    pub run: RunInfo,
 }
 
 /// Write `content` to `dir/name` through a temporary file.
@@ -85,16 +91,40 @@ pub fn write_text(dir: &Path, name: &str, content: &str) -> Result<PathBuf, Repo
     Ok(path)
 }
 
-/// Write the data files and the plots; the README last. Returns the paths written.
-pub fn write_all(dir: &Path, r: &Results, started: std::time::Instant) -> Result<Vec<PathBuf>, ReportError> {
-    let mut written = vec![write_text(dir, ERROR_CSV, &error::to_csv(r.rows))?];
+/// The data files and their contents: what a run measured, from which every text and plot of
+/// the report is made ([`derived_texts`], [`write_plots`]).
+pub fn data_files(r: &Results) -> Vec<(&'static str, String)> {
+    let checks: Vec<(String, (f64, f64))> =
+        r.cases.iter().zip(&r.reference_checks).map(|(c, check)| (c.name.to_owned(), *check)).collect();
+    vec![
+        (ERROR_CSV, error::to_csv(&r.rows)),
+        (REFERENCE_CSV, error::reference_csv(&checks)),
+        (STIFF_CSV, stiff::csv(&r.stiff)),
+        (CONTROL_BLOCK_CSV, control_block::csv(&r.blocks)),
+        (STABILITY_CSV, stability_csv(&r.summary)),
+        (RUN_CSV, r.run.to_csv()),
+    ]
+}
+
+/// The texts made from the data: `convergence.csv`, `stability.md` and `README.md`. `--quick`
+/// compares them with the committed files.
+pub fn derived_texts(r: &Results) -> Vec<(&'static str, String)> {
     let names: Vec<&str> = r.cases.iter().map(|c| c.name).collect();
-    let orders = analysis::orders(r.rows, &names);
-    written.push(write_text(dir, CONVERGENCE_CSV, &convergence_csv(&orders))?);
-    for case in r.cases {
+    let orders = analysis::orders(&r.rows, &names);
+    vec![
+        (CONVERGENCE_CSV, convergence_csv(&orders)),
+        (STABILITY_MD, stability_md(&r.summary)),
+        (README, readme(r, &orders)),
+    ]
+}
+
+/// Draw the plots from the data. Returns the paths written.
+pub fn write_plots(dir: &Path, r: &Results) -> Result<Vec<PathBuf>, ReportError> {
+    let mut written = Vec::new();
+    for (case, check) in r.cases.iter().zip(&r.reference_checks) {
         let rows: Vec<&ErrorRow> = r.rows.iter().filter(|row| row.case == case.name).collect();
         let path = dir.join(pareto_png(case.name));
-        plot::pareto(&path, &format!("{}: error against run time", case.title), &rows)?;
+        plot::pareto(&path, &format!("{}: error against run time", case.title), &rows, *check)?;
         written.push(path);
     }
     let curves: Vec<(String, Vec<(f64, f64)>)> = r
@@ -120,22 +150,37 @@ pub fn write_all(dir: &Path, r: &Results, started: std::time::Instant) -> Result
     plot::fig5_right(&fig5, &curves)?;
     written.push(fig5);
     let fig4_path = dir.join(FIG4_PNG);
-    plot::trajectories(&fig4_path, r.fig4)?;
+    plot::trajectories(&fig4_path, &r.fig4)?;
     written.push(fig4_path);
-    written.push(write_text(dir, CONTROL_BLOCK_CSV, &control_block::csv(r.blocks))?);
-    let summary = Summary::from_sweep(r.sweep);
-    written.push(write_text(dir, STABILITY_CSV, &stability_csv(&summary))?);
-    written.push(write_text(dir, STABILITY_MD, &stability_md(&summary))?);
-    let timing = Timing { total_seconds: started.elapsed().as_secs_f64(), ..r.timing };
-    written.push(write_text(dir, README, &readme(r, &orders, timing))?);
     Ok(written)
 }
 
-fn e(v: f64) -> String {
+/// Write the data files, the plots and the texts; the README last. Returns the paths written.
+pub fn write_all(dir: &Path, r: &Results) -> Result<Vec<PathBuf>, ReportError> {
+    let mut written = Vec::new();
+    for (name, text) in data_files(r) {
+        written.push(write_text(dir, name, &text)?);
+    }
+    written.extend(write_derived(dir, r)?);
+    Ok(written)
+}
+
+/// Write the plots and the texts made from the data (`--from-data`). Returns the paths written.
+pub fn write_derived(dir: &Path, r: &Results) -> Result<Vec<PathBuf>, ReportError> {
+    let mut written = write_plots(dir, r)?;
+    for (name, text) in derived_texts(r) {
+        written.push(write_text(dir, name, &text)?);
+    }
+    Ok(written)
+}
+
+/// An error as the report prints it (`exact` for −∞).
+pub(crate) fn e(v: f64) -> String {
     if v == f64::NEG_INFINITY { "exact".to_owned() } else { format!("{v:.2}") }
 }
 
-fn t(v: Option<f64>) -> String {
+/// A run time as the report prints it.
+pub(crate) fn t(v: Option<f64>) -> String {
     v.map_or("–".to_owned(), |v| format!("{v:.2e}"))
 }
 
@@ -170,63 +215,57 @@ fn modes(case: &Case) -> Option<usize> {
     }
 }
 
-fn label(row: &ErrorRow) -> String {
+/// A configuration's label in code style.
+pub(crate) fn label(row: &ErrorRow) -> String {
     format!("`{}`", row.config.label())
 }
 
-fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
+fn readme(r: &Results, orders: &[Order]) -> String {
     let mut s = String::new();
     let w = &mut s;
-    let rows = r.rows;
+    let rows = &r.rows;
+    let run = &r.run;
     let _ = writeln!(w, "# Error against run time, and stability\n");
+    let mut noises: Vec<f64> = rows.iter().filter(|row| row.rtf.is_some()).map(analysis::noise).collect();
+    noises.sort_by(f64::total_cmp);
+    let quantile = |q: f64| noises.get(((noises.len() as f64 - 1.0) * q).round() as usize).copied().unwrap_or(f64::NAN);
     let _ = writeln!(
         w,
-        "Generated by `cargo xtask report` (full run: {:.0} s on the project's 2-core machine; error sweep {:.0} s, \
-         stability sweep {:.0} s). `cargo xtask report --quick` recomputes every error figure (not the timings) and \
-         checks it against `{ERROR_CSV}` and `{CONTROL_BLOCK_CSV}`, leaving out the rows marked as sensitive to \
-         rounding (CI runs it through \
-         `cargo test`). Errors are deterministic. Run times are noisy (about ±20 % on a quiet machine, more while other jobs \
-         run): compare configurations within a case, which are timed round-robin so that a slow spell hits them \
-         alike, and read differences under a factor {} as ties.\n",
-        timing.total_seconds,
-        timing.error_seconds,
-        timing.stability_seconds,
+        "Generated by `cargo xtask report` at commit `{}` on {} ({} logical CPUs, string kernels: {}): full run \
+         {:.0} s (error sweep {:.0} s, stability sweep {:.0} s); the run times below are from that run. Every \
+         text of this file is made by the code from the data files; `cargo xtask report --from-data` rewrites \
+         it, `stability.md` and the plots from them, and `cargo xtask report --quick` (run by `cargo test`) \
+         recomputes every error figure, checks it against `{ERROR_CSV}`, `{REFERENCE_CSV}`, `{STIFF_CSV}` and \
+         `{CONTROL_BLOCK_CSV}` (leaving out rows marked as sensitive to rounding), and fails if this file or \
+         `{STABILITY_MD}` differs from what the committed data would give. Errors are deterministic. Run times \
+         are not: each configuration is timed {TIMING_RUNS} times, round-robin over the configurations of a case \
+         so that a slow spell hits them alike, and its noise is how far its median run lies above its fastest, \
+         relative to the median (median over all rows {:.0} %, 90th percentile {:.0} %). Two run times count as \
+         different only when they differ by more than the two rows' noises together and by more than a factor \
+         {}.\n",
+        run.commit,
+        run.cpu,
+        run.cpus,
+        run.kernels,
+        run.total_seconds,
+        run.error_seconds,
+        run.stability_seconds,
+        100.0 * quantile(0.5),
+        100.0 * quantile(0.9),
         analysis::NOISE_RATIO
     );
     let _ = writeln!(
         w,
-        "Files: [`{ERROR_CSV}`]({ERROR_CSV}) (every configuration), [`{CONVERGENCE_CSV}`]({CONVERGENCE_CSV}) (fitted orders), [`{CONTROL_BLOCK_CSV}`]({CONTROL_BLOCK_CSV}) (the control block N_b), [`{STABILITY_MD}`]({STABILITY_MD}) and [`{STABILITY_CSV}`]({STABILITY_CSV}) (the stability sweep), and the plots below. The instrument's loudness per key, [`loudness.png`](loudness.png) and [`loudness.csv`](loudness.csv), comes from `cargo xtask loudness --write`.\n"
+        "Files: [`{ERROR_CSV}`]({ERROR_CSV}) (every configuration), [`{REFERENCE_CSV}`]({REFERENCE_CSV}) (the \
+         reference's own error), [`{STIFF_CSV}`]({STIFF_CSV}) (the stiff hammer's resolution study), \
+         [`{CONVERGENCE_CSV}`]({CONVERGENCE_CSV}) (fitted orders), [`{CONTROL_BLOCK_CSV}`]({CONTROL_BLOCK_CSV}) (the \
+         control block N_b), [`{STABILITY_MD}`]({STABILITY_MD}) and [`{STABILITY_CSV}`]({STABILITY_CSV}) (the \
+         stability sweep), [`{RUN_CSV}`]({RUN_CSV}) (machine, commit, run times) and the plots below. The \
+         instrument's loudness per key, [`loudness.png`](loudness.png) and [`loudness.csv`](loudness.csv), comes \
+         from `cargo xtask loudness --write`.\n"
     );
-
-    // ------------------------------------------------------------------ which method to pick
-    let _ = writeln!(w, "## Which method to pick\n");
-    let _ = writeln!(
-        w,
-        "\"Error\" is the contact-force error against the converged reference, log10 of the normalised L2 \
-         difference (−2 = 1 %, −1 = 10 %). \"RTF\" is wall seconds per simulated second on the real-time path \
-         (median of {TIMING_RUNS} runs). Labels: `qsa N=6 2x` is QSA with 6 segments at twice the base rate.\n"
-    );
-    for (case, check) in r.cases.iter().zip(r.reference_checks) {
-        let _ = writeln!(w, "- **{}** ({}):", case.name, case.title);
-        for (signal, check) in [(Signal::Force, check.0), (Signal::Output, check.1)] {
-            let _ = write!(w, "  - by the {} signal: ", signal.name());
-            pick_sentence(w, rows, case.name, signal);
-            if check > -2.5 {
-                let _ = write!(
-                    w,
-                    " *Caution:* the {REFERENCE_OVERSAMPLING}× reference is itself only {} from {CHECK_OVERSAMPLING}× \
-                     here, so errors below about {} are not resolved.",
-                    e(check),
-                    e(check)
-                );
-            }
-            let _ = writeln!(w);
-        }
-    }
-    let _ = writeln!(w);
-    qsa_against_imp(w, r);
-    budget_guide(w, r);
-    qsa_against_exp(w, r);
+    guide::what_to_choose(w, r);
+    guide::which_method(w, r);
 
     // ------------------------------------------------------------------ cases
     let _ = writeln!(w, "## Cases\n");
@@ -242,7 +281,7 @@ fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
         "| case | what | base rate | length | modes | y_ref | reference vs {CHECK_OVERSAMPLING}×: force / output |"
     );
     let _ = writeln!(w, "|---|---|---|---|---|---|---|");
-    for (case, check) in r.cases.iter().zip(r.reference_checks) {
+    for (case, check) in r.cases.iter().zip(&r.reference_checks) {
         let _ = writeln!(
             w,
             "| `{}` | {} | {} Hz | {} samples ({:.0} ms) | {} | {:.3e} m | {} / {} |",
@@ -260,28 +299,62 @@ fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
     let _ = writeln!(w, "\nDetails of each case are in the docs of `xtask/src/report/cases.rs`.\n");
 
     // ------------------------------------------------------------------ notes
-    let unresolved: Vec<String> = r
+    let unresolved: Vec<(&Case, &(f64, f64))> = r
         .cases
         .iter()
-        .zip(r.reference_checks)
-        .filter(|(_, check)| check.0 > -2.5)
-        .map(|(case, check)| format!("`{}` (force {}, output {})", case.name, e(check.0), e(check.1)))
+        .zip(&r.reference_checks)
+        .filter(|(_, check)| !analysis::target_resolved(guide::ADVICE_TARGETS[1].0, check.0))
         .collect();
     if !unresolved.is_empty() {
         let _ = writeln!(w, "### Cases whose contact force is not resolved\n");
+        let names: Vec<String> = unresolved
+            .iter()
+            .map(|(case, check)| format!("`{}` (force {}, output {})", case.name, e(check.0), e(check.1)))
+            .collect();
+        let chaotic: Vec<String> = unresolved
+            .iter()
+            .filter_map(|(case, _)| {
+                let worst = rows
+                    .iter()
+                    .filter(|row| row.case == case.name)
+                    .filter_map(|row| row.sensitivity)
+                    .fold(0.0, f64::max);
+                (worst >= SENSITIVE_CHANGE).then(|| format!("`{}` (up to {worst:.2})", case.name))
+            })
+            .collect();
         let _ = writeln!(
             w,
-            "In {}, IMP at {REFERENCE_OVERSAMPLING}× still differs from IMP at {CHECK_OVERSAMPLING}× by the amounts \
-             given. A stiff contact pressed against the string's light high modes forms an oscillator above the base \
-             rate's Nyquist frequency: in the renders, the stiff hammer's force oscillates at about 25 kHz (smooth at \
-             16×), and the slide's force rattles at about 33 kHz at 8× (contact lost every ~10 samples) and oscillates \
-             at about 40 kHz at 16×. Below that rate the implicit schemes cannot follow it and warp it to just \
-             below the Nyquist frequency (at 1× the slide's force alternates from one sample to the next), so the \
-             force error falls slowly or not at all with k, and the slide's force is chaotic (see `sensitivity`). \
-             These oscillations are far above hearing: for these cases, choose by the output signal, which does \
-             converge, and read force errors below the reference's own error as unresolved.\n",
-            unresolved.join(" and ")
+            "In {}, IMP at {REFERENCE_OVERSAMPLING}× still differs from IMP at {CHECK_OVERSAMPLING}× by more than \
+             1 % of the force. A stiff contact pressed against the string's light high modes forms an oscillator \
+             above the base rate's Nyquist frequency (the stiff hammer's ripple is measured below). The schemes \
+             cannot follow it below a high enough rate, so the force error falls slowly or not at all with k.{} \
+             These oscillations are above hearing: for these cases choose by the output signal, and read errors \
+             below the reference's own as unresolved (the tables above mark them).\n",
+            names.join(" and "),
+            if chaotic.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    " In {} the force is chaotic: a perturbation of a few rounding errors moves its errors by the \
+                     amounts given (column `sensitivity`).",
+                    chaotic.join(" and ")
+                )
+            }
         );
+    }
+    if let Some((case, check)) = r.cases.iter().zip(&r.reference_checks).find(|(c, _)| c.name == STIFF_HAMMER) {
+        let text = stiff::explanation(&r.stiff, f64::from(case.scene.sample_rate));
+        if !text.is_empty() {
+            let _ = writeln!(w, "### Why EXP looks more accurate than IMP on the stiff hammer\n");
+            let _ = writeln!(
+                w,
+                "The stiff hammer's reference is {} from IMP at {CHECK_OVERSAMPLING}× on the force. Data: \
+                 [`{STIFF_CSV}`]({STIFF_CSV}) (IMP and EXP at {} against IMP at {}).\n\n{text}\n",
+                e(check.0),
+                stiff::OVERSAMPLING.map(|k| format!("{k}×")).join(", "),
+                stiff::REFERENCES.map(|k| format!("{k}×")).join(", "),
+            );
+        }
     }
 
     // ------------------------------------------------------------------ measures
@@ -298,7 +371,7 @@ fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
     );
 
     // ------------------------------------------------------------------ per case
-    for case in r.cases {
+    for case in &r.cases {
         let _ = writeln!(w, "## {}\n", case.title);
         let _ = writeln!(w, "![error against run time]({})\n", pareto_png(case.name));
         let _ = writeln!(
@@ -349,24 +422,30 @@ fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
             })
             .collect();
         let _ = writeln!(w, "IMP Newton iterations per contact step: {}.\n", imp.join("; "));
-        let front = analysis::pareto(rows, case.name, Signal::Force);
+        let check = r
+            .cases
+            .iter()
+            .zip(&r.reference_checks)
+            .find(|(c, _)| c.name == case.name)
+            .map_or(f64::NEG_INFINITY, |(_, c)| c.0);
+        let front = analysis::pareto(rows, case.name, Signal::Force, check);
         let list: Vec<String> =
             front.iter().map(|row| format!("{} ({}, {})", label(row), e(row.error_vs_reference), t(row.rtf))).collect();
         let _ = writeln!(w, "Pareto front over all methods, force (error, RTF): {}.\n", list.join(" → "));
         let sensitive: Vec<String> = rows
             .iter()
-            .filter(|row| row.case == case.name && row.sensitivity.is_some_and(|v| v > 0.01))
+            .filter(|row| row.case == case.name && row.sensitivity.is_some_and(|v| v > SENSITIVE_CHANGE))
             .map(|row| format!("{} ({:.3})", label(row), row.sensitivity.unwrap_or(0.0)))
             .collect();
         if sensitive.is_empty() {
             let _ = writeln!(
                 w,
-                "Every error of this case moves by less than 0.01 under a perturbation of a few rounding errors (column `sensitivity`).\n"
+                "Every error of this case moves by less than {SENSITIVE_CHANGE} under a perturbation of a few rounding errors (column `sensitivity`).\n"
             );
         } else {
             let _ = writeln!(
                 w,
-                "Rows whose errors move by more than 0.01 under a perturbation of a few rounding errors (column \
+                "Rows whose errors move by more than {SENSITIVE_CHANGE} under a perturbation of a few rounding errors (column \
                  `sensitivity`; the contact rattles chaotically): {} of {}, up to {:.3}.\n",
                 sensitive.len(),
                 rows.iter().filter(|row| row.case == case.name).count(),
@@ -380,11 +459,11 @@ fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
     let _ = writeln!(w, "![error against segment spacing]({FIG5_PNG})\n");
     let _ = writeln!(
         w,
-        "Δy/y_ref = 1/N. The seed's Fig. 5 values (docs/physics.md §9.4) were −1.18 at N = 3, −1.62 at N = 6 and \
-         −4.01 at N = 50; measured here: {}.\n",
-        [3, 6, 50]
+        "Δy/y_ref = 1/N. The seed's Fig. 5 values (docs/physics.md §9.4) were {}; measured here: {}.\n",
+        error::SEED_FIG5.iter().map(|(n, v)| format!("{} at N = {n}", e(*v))).collect::<Vec<_>>().join(", "),
+        error::SEED_FIG5
             .iter()
-            .filter_map(|&n| rows.iter().find(|row| row.case == "fig5-hammer"
+            .filter_map(|&(n, _)| rows.iter().find(|row| row.case == FIG5_HAMMER
                 && row.config.method == Method::Qsa
                 && row.config.segments == n
                 && row.config.oversampling == 1))
@@ -472,16 +551,16 @@ fn readme(r: &Results, orders: &[Order], timing: Timing) -> String {
     }
     let _ = writeln!(
         w,
-        "\n(docs/physics.md §4.4 measured spreads of 0.001 (IMP), 0.008 (QSA N=5), 0.003 (QSA N=20) and 1.03 (EXP) \
-         samples.)\n"
+        "\n(docs/physics.md §4.4 measured spreads of {} samples with the prototype.)\n",
+        fig4::PHYSICS_DOC_SPREADS.iter().map(|(label, v)| format!("{v} ({label})")).collect::<Vec<_>>().join(", ")
     );
 
     // ------------------------------------------------------------------ control block
-    control_block_section(w, r.blocks);
+    control_block_section(w, &r.blocks);
 
     // ------------------------------------------------------------------ stability
     let _ = writeln!(w, "## Stability\n");
-    stability_summary(w, &Summary::from_sweep(r.sweep));
+    stability_summary(w, &r.summary);
     let _ =
         writeln!(w, "\nDetails, worst cases and the commands that rerun them: [`{STABILITY_MD}`]({STABILITY_MD}).\n");
     s
@@ -530,181 +609,6 @@ fn control_block_section(w: &mut String, rows: &[BlockRow]) {
         at("glide", 1, |r| r.rtf) / at("glide", 64, |r| r.rtf),
         100.0 * 10f64.powf(at("glide", 64, |r| r.output_error)),
     );
-}
-
-/// The cheapest configurations within 1 %, 10 % and 0.1 % of the reference on `signal`.
-fn pick_sentence(w: &mut String, rows: &[ErrorRow], case: &str, signal: Signal) {
-    let within = |target| analysis::cheapest(rows, case, signal, target, |_| true);
-    match within(-2.0) {
-        Some(row) => {
-            let _ = write!(
-                w,
-                "within 1 % at the lowest run time: {} (error {}, RTF {}).",
-                label(row),
-                e(signal.of(row)),
-                t(row.rtf)
-            );
-        }
-        None => {
-            let _ = write!(w, "**no configuration measured comes within 1 % of the reference**.");
-            if let Some(row) = analysis::most_accurate(rows, case, signal) {
-                let _ = write!(
-                    w,
-                    " The most accurate is {} (error {}, RTF {}).",
-                    label(row),
-                    e(signal.of(row)),
-                    t(row.rtf)
-                );
-            }
-        }
-    }
-    if let Some(row) = within(-1.0) {
-        let _ = write!(w, " Within 10 %: {} (RTF {}).", label(row), t(row.rtf));
-    }
-    if let Some(row) = within(-3.0) {
-        let _ = write!(w, " Within 0.1 %: {} (RTF {}).", label(row), t(row.rtf));
-    }
-}
-
-/// At the base rate: the fewest QSA segments that match IMP's accuracy, and what that saves.
-fn qsa_against_imp(w: &mut String, r: &Results) {
-    let _ = writeln!(w, "### QSA against IMP\n");
-    let _ = writeln!(
-        w,
-        "At each case's base rate, the fewest QSA segments whose force error against the reference is within \
-         {} of IMP's (so the contact solver adds nothing visible to the time-step error), and the run times:\n",
-        analysis::AS_ACCURATE
-    );
-    let _ = writeln!(w, "| case | QSA as accurate as IMP | its error | IMP's error | QSA RTF | IMP RTF | QSA / IMP |");
-    let _ = writeln!(w, "|---|---|---|---|---|---|---|");
-    for case in r.cases {
-        if let Some((qsa, imp)) = analysis::as_accurate_as_imp(r.rows, case.name, 1, Signal::Force) {
-            let ratio = match (qsa.rtf, imp.rtf) {
-                (Some(q), Some(i)) => format!("{:.2}", q / i),
-                _ => "–".to_owned(),
-            };
-            let _ = writeln!(
-                w,
-                "| {} | N = {} | {} | {} | {} | {} | {ratio} |",
-                case.name,
-                qsa.config.segments,
-                e(qsa.error_vs_reference),
-                e(imp.error_vs_reference),
-                t(qsa.rtf),
-                t(imp.rtf)
-            );
-        }
-    }
-    let _ = writeln!(w);
-}
-
-/// A plain-words budget guide: for each case, what the front offers at each order of magnitude of RTF.
-fn budget_guide(w: &mut String, r: &Results) {
-    let _ = writeln!(w, "### By budget\n");
-    let _ = writeln!(
-        w,
-        "The best error each run-time budget buys (Pareto front over all methods; the plots below show every \
-         configuration):\n"
-    );
-    let budgets = [1e-3, 3e-3, 1e-2, 3e-2, 1e-1];
-    let _ = writeln!(w, "| case | signal | RTF ≤ 1e-3 | ≤ 3e-3 | ≤ 1e-2 | ≤ 3e-2 | ≤ 1e-1 |");
-    let _ = writeln!(w, "|---|---|---|---|---|---|---|");
-    for case in r.cases {
-        for signal in [Signal::Force, Signal::Output] {
-            let front = analysis::pareto(r.rows, case.name, signal);
-            let _ = write!(w, "| {} | {} |", case.name, signal.name());
-            for budget in budgets {
-                match front.iter().rev().find(|row| row.rtf.is_some_and(|t| t <= budget)) {
-                    Some(row) => {
-                        let _ = write!(w, " {} {} |", label(row), e(signal.of(row)));
-                    }
-                    None => {
-                        let _ = write!(w, " – |");
-                    }
-                }
-            }
-            let _ = writeln!(w);
-        }
-    }
-    let _ = writeln!(w);
-}
-
-fn qsa_against_exp(w: &mut String, r: &Results) {
-    let _ = writeln!(w, "### QSA against EXP\n");
-    let _ = writeln!(
-        w,
-        "For each error target, the cheapest QSA and the cheapest EXP configuration that reach it (any N and k), \
-         on the contact force and on the output signal. Run times within a factor {} of each other count as a tie \
-         (the machine's noise).\n",
-        analysis::NOISE_RATIO
-    );
-    let musical: Vec<&str> = r.cases.iter().filter(|c| c.musical).map(|c| c.name).collect();
-    for signal in [Signal::Force, Signal::Output] {
-        let _ = writeln!(w, "| case | {} target | QSA | EXP | verdict |", signal.name());
-        let _ = writeln!(w, "|---|---|---|---|---|");
-        let mut tally = [0usize; 4];
-        for case in r.cases {
-            for d in analysis::duels(r.rows, case.name, signal) {
-                let cell = |row: Option<&ErrorRow>| {
-                    row.map_or("–".to_owned(), |row| format!("{} RTF {}", label(row), t(row.rtf)))
-                };
-                let _ = writeln!(
-                    w,
-                    "| {} | {:.1} | {} | {} | {} |",
-                    case.name,
-                    d.target,
-                    cell(d.qsa),
-                    cell(d.exp),
-                    d.words()
-                );
-                if case.musical {
-                    tally[match d.verdict() {
-                        Verdict::Qsa => 0,
-                        Verdict::Exp => 1,
-                        Verdict::Tie => 2,
-                        Verdict::Neither => 3,
-                    }] += 1;
-                }
-            }
-        }
-        let _ = writeln!(
-            w,
-            "\n**{}**: across the musically relevant cases ({}), over {} (case, target) pairs, QSA is the faster way to \
-             the target (or the only one to reach it) in {}, EXP in {}, the two tie within the noise in {}, and \
-             neither reaches the target in {}. {}\n",
-            signal.name(),
-            musical.join(", "),
-            tally.iter().sum::<usize>(),
-            tally[0],
-            tally[1],
-            tally[2],
-            tally[3],
-            duel_conclusion(tally)
-        );
-    }
-}
-
-/// The conclusion of one QSA-against-EXP table, from its tally (QSA, EXP, tie, neither).
-fn duel_conclusion(tally: [usize; 4]) -> &'static str {
-    let [qsa, exp, tie, _] = tally;
-    if qsa == 0 && exp == 0 {
-        "On these numbers neither method is faster to a given error: where both reach it, they cost the same within \
-         the noise."
-    } else if exp == 0 && tie > qsa {
-        "QSA is never slower than EXP to a given error here, but it is clearly faster in fewer comparisons than \
-         the two tie: in the string cases the modal update dominates the cost of a step, so QSA and EXP cost about \
-         the same per sample, and both need the same rate for a given error unless EXP's own error forces it to a \
-         higher rate. The claim that QSA reaches a given error at lower run time than EXP holds here only in that \
-         weak sense."
-    } else if exp == 0 {
-        "On these numbers QSA reaches a given error at lower run time than EXP wherever the two differ."
-    } else if qsa > exp {
-        "QSA wins more often than EXP, but not everywhere: see the rows where EXP is faster."
-    } else if qsa == exp {
-        "On these numbers neither method is generally faster to a given error."
-    } else {
-        "On these numbers EXP, not QSA, is more often the faster way to a given error."
-    }
 }
 
 /// A ratio as the stability texts print it: three decimals up to 100, else two significant digits.
@@ -853,8 +757,8 @@ fn stability_md(summary: &Summary) -> String {
     let _ = writeln!(
         w,
         "- **Seconds of ringing and rattling.** Over the 2–3 s runs the balance held to {:.1e} (QSA), {:.1e} (IMP) \
-         and {:.1e} (EXP) of the largest energy (drift or excess, whichever is larger): rounding does not \
-         accumulate into a trend over 10⁵ steps.",
+         and {:.1e} (EXP) of the largest energy (drift or excess, whichever is larger): over 44,000 to \
+         290,000 steps rounding does not accumulate into a trend.",
         long_drift(Method::Qsa),
         long_drift(Method::Imp),
         long_drift(Method::Exp),
@@ -862,8 +766,9 @@ fn stability_md(summary: &Summary) -> String {
     let _ = writeln!(
         w,
         "- **Energy bounds.** The largest compression reached {} of its energy bound with QSA and {} with IMP; the \
-         exciter's speed reached {} (QSA), {} (IMP) and {} (EXP) of its bound. A ratio near 1 is a contact \
-         holding nearly all the energy in one sample's potential (the factor 2 in V⁻¹(2E)). EXP's compression, \
+         exciter's speed reached {} (QSA), {} (IMP) and {} (EXP) of its bound. A compression ratio near 1 is a \
+         contact holding nearly all the energy in one sample's potential (the factor 2 in V⁻¹(2E)); a speed \
+         ratio of 1.000 is the exciter at the start, holding all the energy. EXP's compression, \
          measured against the law's bound, reached {}: its energy holds ½ψ² in place of the potential and nothing \
          ties ψ to y, so its compression is not bounded by its energy and is not counted as a failure; its energy \
          and its speed are bounded.",
