@@ -89,7 +89,11 @@ pub fn what_to_choose(w: &mut String, r: &Results) {
         }
         let _ = writeln!(w);
     }
-    let _ = writeln!(w);
+    let _ = writeln!(
+        w,
+        "\nFor a run-time budget instead of an error target, [By budget](#by-budget) lists the best error each \
+         budget buys.\n"
+    );
     plugin_default(w, r);
 }
 
