@@ -568,9 +568,10 @@ fn control_block_section(w: &mut String, rows: &[BlockRow]) {
         "The slide's controls are sampled every N_b samples and its contact vectors interpolated linearly in \
          between (docs/physics.md §7.5): like N and the sample rate, N_b trades accuracy for run time. A glide \
          (5 to 7 semitones in 0.1 s, about 0.5 m/s) and a vibrato (±3 mm at 5.5 Hz) on the slide-guitar preset \
-         at 44.1 kHz, QSA N = {} and IMP, each against the same method at N_b = 1 over the samples where the \
+         at {} kHz, QSA N = {} and IMP, each against the same method at N_b = 1 over the samples where the \
          slide moves (log10 of the relative L2 difference; −2 = 1 %). RTF is the whole render's (median of the \
          timing runs). Data: [`{CONTROL_BLOCK_CSV}`]({CONTROL_BLOCK_CSV}).\n",
+        super::gestures::FS / 1e3,
         control_block::STUDY_SEGMENTS
     );
     let _ = writeln!(w, "| gesture | method | N_b | output error | force error | RTF |");
@@ -591,18 +592,24 @@ fn control_block_section(w: &mut String, rows: &[BlockRow]) {
     let at = |gesture: &str, nb: usize, field: fn(&BlockRow) -> f64| {
         rows.iter().find(|r| r.gesture == gesture && r.method == Method::Qsa && r.block == nb).map_or(f64::NAN, field)
     };
-    let order =
-        |gesture: &str| (at(gesture, 64, |r| r.output_error) - at(gesture, 8, |r| r.output_error)) / 8f64.log10();
+    // The plugin's control block, and the finest block studied above a sample.
+    let default = qsa_dsp::instrument::Settings::default().block;
+    let fine = control_block::BLOCKS[1];
+    let order = |gesture: &str| {
+        (at(gesture, default, |r| r.output_error) - at(gesture, fine, |r| r.output_error))
+            / (default as f64 / fine as f64).log10()
+    };
     let _ = writeln!(
         w,
-        "\nWith QSA the output error falls at order {:.1} (glide) and {:.1} (vibrato) in N_b between 8 and 64, as \
-         linear interpolation of the contact vectors should (second order). A per-sample render (N_b = 1) costs \
-         {:.1} times the default N_b = 64 for the glide, which is within {:.2} % of it there: N_b = 64 is the \
-         plugin's default, and N_b = 8 is the choice for a reference-quality render of fast gestures.\n",
+        "\nWith QSA the output error falls at order {:.1} (glide) and {:.1} (vibrato) in N_b between {fine} and \
+         {default}, as linear interpolation of the contact vectors should (second order). A per-sample render \
+         (N_b = 1) costs {:.1} times the default N_b = {default} for the glide, which is within {:.2} % of it \
+         there: N_b = {default} is the plugin's default, and N_b = {fine} is the choice for a reference-quality \
+         render of fast gestures.\n",
         order("glide"),
         order("vibrato"),
-        at("glide", 1, |r| r.rtf) / at("glide", 64, |r| r.rtf),
-        100.0 * 10f64.powf(at("glide", 64, |r| r.output_error)),
+        at("glide", 1, |r| r.rtf) / at("glide", default, |r| r.rtf),
+        100.0 * 10f64.powf(at("glide", default, |r| r.output_error)),
     );
 }
 
