@@ -179,7 +179,7 @@ fn slide_phrase_balance_closes_with_the_work_of_the_controls() {
 fn random_gestures_never_gain_energy_beyond_the_controls_work() {
     let mut worst = [0.0_f64; 3];
     for seed in 0..40 {
-        let mut t = Trajectory::draw(&mut seeded_rng(seed), |_, _| 0.25);
+        let mut t = Trajectory::draw(&mut seeded_rng(seed), 192_000.0, |_, _| 0.25);
         t.params.slide.mass = t.params.slide.mass.clamp(0.005, 0.2);
         let (law, fs, params) = (t.law, f64::from(t.fs), t.params);
         let segments = 1 + (seed as usize * 7) % 64;
