@@ -15,7 +15,7 @@ use qsa_dsp::contact::Method;
 use super::analysis::{self, Match, Reach, Signal, Verdict};
 use super::cases::Case;
 use super::error::{ErrorRow, REFERENCE_OVERSAMPLING};
-use super::readme::{Results, e, label, t};
+use super::results::{Results, e, label, t};
 
 /// The error targets of the advice (log10): 10 %, 1 % and 0.1 %.
 pub const ADVICE_TARGETS: [(f64, &str); 3] = [(-1.0, "10 %"), (-2.0, "1 %"), (-3.0, "0.1 %")];

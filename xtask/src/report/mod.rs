@@ -52,6 +52,7 @@ pub mod pareto;
 pub mod plot;
 pub mod readme;
 pub mod restrike;
+pub mod results;
 pub mod sim;
 pub mod stability;
 pub mod stiff;
@@ -212,7 +213,7 @@ fn read(dir: &Path, name: &str) -> Result<String, ReportError> {
 
 /// Everything the report shows, from the committed data files in `report_dir` and the scene files
 /// in `scenes` (the Fig. 4 study, deterministic and quick, is recomputed).
-pub fn load(scenes: &Path, report_dir: &Path) -> Result<readme::Results, ReportError> {
+pub fn load(scenes: &Path, report_dir: &Path) -> Result<results::Results, ReportError> {
     let bad = |name: &str, e: String| ReportError::Scene(format!("{}: {e}", report_dir.join(name).display()));
     let cases = cases::cases(scenes)?;
     let rows = error::parse_rows(&read(report_dir, readme::ERROR_CSV)?).map_err(|e| bad(readme::ERROR_CSV, e))?;
@@ -235,7 +236,7 @@ pub fn load(scenes: &Path, report_dir: &Path) -> Result<readme::Results, ReportE
         .map_err(|e| bad(readme::STABILITY_CSV, e))?;
     let run = machine::RunInfo::parse_csv(&read(report_dir, readme::RUN_CSV)?).map_err(|e| bad(readme::RUN_CSV, e))?;
     let fig4 = fig4::study(&cases[0].scene);
-    Ok(readme::Results { cases, rows, reference_checks, fig4, blocks, summary, stiff, run })
+    Ok(results::Results { cases, rows, reference_checks, fig4, blocks, summary, stiff, run })
 }
 
 /// The first line where `fresh` and `committed` differ, for a mismatch message.
@@ -364,7 +365,7 @@ fn full(args: &ReportArgs) -> Result<Vec<PathBuf>, ReportError> {
     let stability_seconds = stability_start.elapsed().as_secs_f64();
     let run =
         machine::RunInfo::this_machine(&args.out, error_seconds, stability_seconds, start.elapsed().as_secs_f64());
-    let results = readme::Results {
+    let results = results::Results {
         cases,
         rows,
         reference_checks,

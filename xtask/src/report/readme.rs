@@ -16,14 +16,14 @@ use super::analysis::{self, Order, Signal};
 use super::cases::{Case, FIG5_HAMMER, STIFF_HAMMER};
 use super::control_block::{self, BlockRow};
 use super::error::{self, CHECK_OVERSAMPLING, ErrorRow, REFERENCE_OVERSAMPLING, SWEPT_SEGMENTS, TIMING_RUNS};
-use super::fig4::{self, Fig4Study};
+use super::fig4;
 use super::files::make_readable;
 use super::guide;
-use super::machine::RunInfo;
 use super::plot;
+pub use super::results::{Results, e, label, t};
 use super::sim::Setup;
 use super::stability::{self, BUDGET_LIMIT, ENERGY_LIMIT, Summary, Tally};
-use super::stiff::{self, StiffRow};
+use super::stiff;
 
 /// The error table.
 pub const ERROR_CSV: &str = "error-vs-runtime.csv";
@@ -57,28 +57,6 @@ pub const RUN_CSV: &str = "run.csv";
 pub const REFERENCE_CSV: &str = "reference-check.csv";
 /// The stiff hammer's resolution study.
 pub const STIFF_CSV: &str = "stiff-hammer.csv";
-
-/// Everything the report shows: what the data files hold, and the cases they were made on.
-#[derive(Debug)]
-pub struct Results {
-    /// The cases (from the scene files).
-    pub cases: Vec<Case>,
-    /// The error rows (`error-vs-runtime.csv`).
-    pub rows: Vec<ErrorRow>,
-    /// Per case, in the order of `cases`: force and output error of the 16× reference against
-    /// 32× (`reference-check.csv`).
-    pub reference_checks: Vec<(f64, f64)>,
-    /// The Fig. 4 study (recomputed: it takes milliseconds and is deterministic).
-    pub fig4: Fig4Study,
-    /// The control-block study (`control-block.csv`).
-    pub blocks: Vec<BlockRow>,
-    /// The stability summary (`stability.csv`).
-    pub summary: Summary,
-    /// The stiff hammer's resolution study (`stiff-hammer.csv`).
-    pub stiff: Vec<StiffRow>,
-    /// The machine and the run (`run.csv`).
-    pub run: RunInfo,
-}
 
 /// Write `content` to `dir/name` through a temporary file.
 pub fn write_text(dir: &Path, name: &str, content: &str) -> Result<PathBuf, ReportError> {
@@ -169,16 +147,6 @@ pub fn write_derived(dir: &Path, r: &Results) -> Result<Vec<PathBuf>, ReportErro
     Ok(written)
 }
 
-/// An error as the report prints it (`exact` for −∞).
-pub(crate) fn e(v: f64) -> String {
-    if v == f64::NEG_INFINITY { "exact".to_owned() } else { format!("{v:.2}") }
-}
-
-/// A run time as the report prints it.
-pub(crate) fn t(v: Option<f64>) -> String {
-    v.map_or("–".to_owned(), |v| format!("{v:.2e}"))
-}
-
 fn convergence_csv(orders: &[Order]) -> String {
     let mut out = String::from("case,quantity,method,range,order,slope,intercept,r2,points\n");
     for o in orders {
@@ -208,11 +176,6 @@ fn modes(case: &Case) -> Option<usize> {
         Setup::Hammer(p) => ModalString::new(p.string, fs).ok().map(|s| s.modes()),
         Setup::Slide(p, _) => ModalString::new(p.string, fs).ok().map(|s| s.modes()),
     }
-}
-
-/// A configuration's label in code style.
-pub(crate) fn label(row: &ErrorRow) -> String {
-    format!("`{}`", row.config.label())
 }
 
 fn readme(r: &Results, orders: &[Order]) -> String {
