@@ -27,6 +27,22 @@ pub fn semitone_position(p: f64) -> f64 {
     slide_guitar().string.length * (1.0 - 2f64.powf(-p / 12.0))
 }
 
+/// The glide's first and last slide positions (semitones above the open string).
+pub const GLIDE: (f64, f64) = (5.0, 7.0);
+
+/// The vibrato's depth (m) and rate (Hz), about [`GLIDE`]'s last position.
+pub const VIBRATO: (f64, f64) = (3e-3, 5.5);
+
+/// Grid steps (of 256 samples) at which the gestures start moving, and the glide's length.
+const START: f64 = 86.0;
+const GLIDE_STEPS: f64 = 17.0;
+
+/// The glide's duration (s) and mean speed along the string (m/s).
+pub fn glide_motion() -> (f64, f64) {
+    let seconds = grid(GLIDE_STEPS);
+    (seconds, (semitone_position(GLIDE.1) - semitone_position(GLIDE.0)) / seconds)
+}
+
 /// Time (s) of `blocks` blocks of 256 samples at [`FS`].
 pub fn grid(blocks: f64) -> f64 {
     blocks * 256.0 / FS
@@ -86,22 +102,25 @@ pub struct Gesture {
 }
 
 impl Gesture {
-    /// A glide from 5 to 7 semitones (about 0.5 m/s): the slide pressed at 5, plucked, gliding
-    /// over 17 grid steps (0.1 s) from step 86 (0.5 s).
+    /// A glide over [`GLIDE`] (5 to 7 semitones, about 0.5 m/s): the slide pressed at the first,
+    /// plucked, gliding over 17 grid steps (0.1 s) from step 86 (0.5 s).
     pub fn glide() -> Self {
-        let (a, b) = (semitone_position(5.0), semitone_position(7.0));
+        let (a, b) = (semitone_position(GLIDE.0), semitone_position(GLIDE.1));
+        let end = START + GLIDE_STEPS;
         let lanes =
-            lanes(vec![(grid(86.0), a), (grid(103.0), b)], vec![(0.0, -1.5e-3)], vec![(0.0, 0.3)], 0.58, pluck());
-        Self { name: "glide", lanes, seconds: grid(103.0) + 0.01, moving: grid(86.0)..grid(103.0) }
+            lanes(vec![(grid(START), a), (grid(end), b)], vec![(0.0, -1.5e-3)], vec![(0.0, 0.3)], 0.58, pluck());
+        Self { name: "glide", lanes, seconds: grid(end) + 0.01, moving: grid(START)..grid(end) }
     }
 
-    /// A vibrato at 7 semitones, ±3 mm at 5.5 Hz from 0.5 s, as breakpoints every grid step.
+    /// A [`VIBRATO`] (±3 mm at 5.5 Hz) about 7 semitones from 0.5 s, as breakpoints every grid
+    /// step.
     pub fn vibrato() -> Self {
-        let centre = semitone_position(7.0);
+        let centre = semitone_position(GLIDE.1);
+        let (depth, rate) = VIBRATO;
         let slide = (86..=140)
             .map(|k| {
                 let t = grid(f64::from(k));
-                (t, centre + 3e-3 * (2.0 * std::f64::consts::PI * 5.5 * (t - grid(86.0))).sin())
+                (t, centre + depth * (2.0 * std::f64::consts::PI * rate * (t - grid(START))).sin())
             })
             .collect();
         let lanes = lanes(slide, vec![(0.0, -1.5e-3)], vec![(0.0, 0.3)], 0.58, pluck());

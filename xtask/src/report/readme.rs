@@ -18,6 +18,7 @@ use super::control_block::{self, BlockRow};
 use super::error::{self, CHECK_OVERSAMPLING, ErrorRow, REFERENCE_OVERSAMPLING, SWEPT_SEGMENTS, TIMING_RUNS};
 use super::fig4;
 use super::files::make_readable;
+use super::gestures;
 use super::guide;
 use super::plot;
 pub use super::results::{Results, e, label, t};
@@ -530,11 +531,17 @@ fn control_block_section(w: &mut String, rows: &[BlockRow]) {
         w,
         "The slide's controls are sampled every N_b samples and its contact vectors interpolated linearly in \
          between (docs/physics.md §7.5): like N and the sample rate, N_b trades accuracy for run time. A glide \
-         (5 to 7 semitones in 0.1 s, about 0.5 m/s) and a vibrato (±3 mm at 5.5 Hz) on the slide-guitar preset \
+         ({} to {} semitones in {} s, about {} m/s) and a vibrato (±{} mm at {} Hz) on the slide-guitar preset \
          at {} kHz, QSA N = {} and IMP, each against the same method at N_b = 1 over the samples where the \
          slide moves (log10 of the relative L2 difference; −2 = 1 %). RTF is the whole render's (median of the \
          timing runs). Data: [`{CONTROL_BLOCK_CSV}`]({CONTROL_BLOCK_CSV}).\n",
-        super::gestures::FS / 1e3,
+        gestures::GLIDE.0,
+        gestures::GLIDE.1,
+        (gestures::glide_motion().0 * 10.0).round() / 10.0,
+        (gestures::glide_motion().1 * 10.0).round() / 10.0,
+        gestures::VIBRATO.0 * 1e3,
+        gestures::VIBRATO.1,
+        gestures::FS / 1e3,
         control_block::STUDY_SEGMENTS
     );
     let _ = writeln!(w, "| gesture | method | N_b | output error | force error | RTF |");
@@ -595,8 +602,9 @@ fn stability_summary(w: &mut String, summary: &Summary) {
         "{} random parameter sets per scene kind ({}, whose runs last 2–3 s) plus hand-picked corners, each run \
          with QSA, IMP and EXP: {} runs, {} with a NaN, infinity or panic, {} failures in all (energy error over \
          {ENERGY_LIMIT:.0e}, stored energy above the initial energy and the supplied work by over \
-         {BUDGET_LIMIT:.0e} in the moving kinds, the exciter's speed beyond its energy bound, QSA's or IMP's \
-         compression beyond its energy bound, QSA over its sign-test bound, or non-finite).\n",
+         {BUDGET_LIMIT:.0e} in the moving kinds, the exciter's speed or the string's output beyond its energy \
+         bound, QSA's or IMP's compression beyond its energy bound, QSA over its sign-test bound, or \
+         non-finite).\n",
         summary.sets,
         long.join(", "),
         summary.runs(),
@@ -605,16 +613,16 @@ fn stability_summary(w: &mut String, summary: &Summary) {
     );
     let _ = writeln!(
         w,
-        "| scene | method | runs | non-finite | worst drift (balance closes) | worst increase (lossy) | worst excess over supplied work | max y/y_ref | max y/y_max (energy bound) | max \\|v\\|/v_max (energy bound) | max work/step |"
+        "| scene | method | runs | non-finite | worst drift (balance closes) | worst increase (lossy) | worst excess over supplied work | max y/y_ref | max y/y_max (energy bound) | max \\|v\\|/v_max (energy bound) | max \\|o\\|/o_max (energy bound) | max work/step |"
     );
-    let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|---|---|");
     for tally in &summary.tallies {
         let first =
             |list: &Vec<stability::Worst>| list.first().map_or("–".to_owned(), |x| format!("{:.1e}", x.value));
         let ratio = |list: &Vec<stability::Worst>| list.first().map_or("–".to_owned(), |x| ratio_text(x.value));
         let _ = writeln!(
             w,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             tally.kind.name(),
             tally.method.name(),
             tally.runs(),
@@ -625,6 +633,7 @@ fn stability_summary(w: &mut String, summary: &Summary) {
             ratio(&tally.compression),
             ratio(&tally.compression_bound),
             ratio(&tally.velocity_bound),
+            ratio(&tally.output_bound),
             tally.work.first().map_or("–".to_owned(), |x| format!("{:.0}", x.value)),
         );
     }
@@ -737,13 +746,18 @@ fn stability_md(summary: &Summary) -> String {
          ratio of 1.000 is the exciter at the start, holding all the energy. EXP's compression, \
          measured against the law's bound, reached {}: its energy holds ½ψ² in place of the potential and nothing \
          ties ψ to y, so its compression is not bounded by its energy and is not counted as a failure; its energy \
-         and its speed are bounded.",
+         and its speed are bounded. The string's output (the displacement at the pickup, or the bridge force), \
+         bounded by the string's share of the same energy through its modal stiffnesses (Cauchy–Schwarz, \
+         `Run::output_factor`), reached {} (QSA), {} (IMP) and {} (EXP) of its bound.",
         ratio_text(bound(Method::Qsa, |t| &t.compression_bound)),
         ratio_text(bound(Method::Imp, |t| &t.compression_bound)),
         ratio_text(bound(Method::Qsa, |t| &t.velocity_bound)),
         ratio_text(bound(Method::Imp, |t| &t.velocity_bound)),
         ratio_text(bound(Method::Exp, |t| &t.velocity_bound)),
         ratio_text(bound(Method::Exp, |t| &t.compression_bound)),
+        ratio_text(bound(Method::Qsa, |t| &t.output_bound)),
+        ratio_text(bound(Method::Imp, |t| &t.output_bound)),
+        ratio_text(bound(Method::Exp, |t| &t.output_bound)),
     );
     let _ = writeln!(
         w,
@@ -811,6 +825,9 @@ fn stability_md(summary: &Summary) -> String {
             |v| if v < 100.0 { format!("{v:.4}") } else { format!("{v:.2e}") },
         );
         worst_list(w, tally, "Largest exciter speed / its energy bound v_max", &tally.velocity_bound, |v| {
+            format!("{v:.4}")
+        });
+        worst_list(w, tally, "Largest string output / its energy bound o_max", &tally.output_bound, |v| {
             format!("{v:.4}")
         });
         let bound = if tally.method == Method::Qsa { " (QSA bound 2⌈log2(N+1)⌉ + 1)" } else { "" };

@@ -88,6 +88,9 @@ pub struct Restrike {
 }
 
 impl Restrike {
+    /// What a run listens to: the bridge force.
+    pub const PICKUP: Pickup = Pickup { kind: OutputKind::BridgeForce, position: 0.5 };
+
     /// The prepared string (every mode below [`MAX_FREQUENCY`] and Nyquist).
     pub fn modal_string(&self) -> ModalString {
         let fs = f64::from(self.sample_rate);
@@ -114,7 +117,7 @@ impl Restrike {
         let params = HammerStringParams {
             string: self.string,
             hammer: HammerParams { mass: self.hammer_mass, velocity: 0.0, position: self.position, gap: 1.0 },
-            pickup: Pickup { kind: OutputKind::BridgeForce, position: 0.5 },
+            pickup: Self::PICKUP,
         };
         let mut core = HammerCore::new(string, &params);
         let mut solvers = Solvers::new(self.law);

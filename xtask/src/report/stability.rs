@@ -89,15 +89,18 @@
 //! - energy bounds (see [`energy_bounds`]): `max_n y^n / y_max^n` with `y_max^n` the compression
 //!   at which the method's potential (QSA: the fit in force, its last quadratic extended beyond
 //!   the last knot; IMP and EXP: the law) stores twice the energy available,
-//!   `H^{−1/2} + W^n + ENERGY_LIMIT·scale`, and `max_n |v^{n+1/2}| / √(2·that/M)` for the
-//!   exciter of mass M;
+//!   `H^{−1/2} + W^n + ENERGY_LIMIT·scale`, `max_n |v^{n+1/2}| / √(2·that/M)` for the
+//!   exciter of mass M, and `max_n |o^n| / (C·√(2·that))` for the string's output `o` (the
+//!   displacement at the pickup or the bridge force) with `C` from its modal stiffnesses
+//!   ([`Run::output_factor`]);
 //! - work: the largest number of QSA sign tests (bound `2⌈log2(N+1)⌉ + 1`) or IMP Newton
 //!   iterations (cap 100) in one step.
 //!
 //! A run **fails** if it is non-finite or panics, if QSA exceeds its sign-test bound, if the
 //! energy error exceeds [`ENERGY_LIMIT`], if the stored energy of a moving kind exceeds the
-//! supplied work by [`BUDGET_LIMIT`], if the exciter's speed exceeds its energy bound (any
-//! method: EXP's energy holds the kinetic energy as the others' do), or if QSA's or IMP's
+//! supplied work by [`BUDGET_LIMIT`], if the exciter's speed or the string's output exceeds its
+//! energy bound (any method: EXP's energy holds the kinetic energy and the string's as the
+//! others' do), or if QSA's or IMP's
 //! compression exceeds its energy bound. EXP's compression is reported against the law's bound
 //! but not counted: EXP's energy holds `½ψ²` in place of the potential, and nothing ties ψ to
 //! the compression, so its compression is not bounded by the energy (at stiff contacts sampled
@@ -147,7 +150,7 @@ const KEEP: usize = 5;
 const COUNTS: usize = 5;
 
 /// Lists of worst cases and failures per tally in `stability.csv` ([`Tally::LIST_NAMES`]).
-const LISTS: usize = 13;
+const LISTS: usize = 14;
 
 /// The three scene kinds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -286,6 +289,36 @@ impl Run {
             },
             Run::Restrike(r) => r.hammer_mass,
         }
+    }
+
+    /// The factor `C` of the output's energy bound `|o^n| ≤ C·√(2E^n)`, for a run whose output is
+    /// a linear functional `pᵀũ^n` of its string's state (the displacement at a pickup, or the
+    /// bridge force); `None` for the mass–barrier and for a velocity output.
+    ///
+    /// The string's stored energy `H = ½m̃‖d/Δt‖² + ½Σ K̂_i a_i²`, with `a = (ũ^{n+1} + ũ^n)/2` and
+    /// `d = ũ^{n+1} − ũ^n`, is part of a total whose other terms are not negative, so `H ≤ E`.
+    /// With `ũ^n = a − d/2` and Cauchy–Schwarz, `|pᵀũ^n| ≤ √(Σ p_i²/K̂_i)·√(2H) + ½‖p‖Δt·√(2H/m̃)`.
+    /// The sums run over every mode below Nyquist, a superset of the run's modes; K̂ is the
+    /// string's own (a damper raises it, which only tightens the true bound).
+    pub fn output_factor(&self) -> Option<f64> {
+        let (string, fs, pickup) = match self {
+            Run::Scene(scene) => match &scene.setup {
+                Setup::MassBarrier(_) => return None,
+                Setup::Hammer(p) => (p.string, scene.sample_rate, p.pickup),
+                Setup::Slide(p, _) => (p.string, scene.sample_rate, p.pickup),
+            },
+            Run::Restrike(r) => (r.string, r.sample_rate, Restrike::PICKUP),
+        };
+        if pickup.kind == OutputKind::Velocity {
+            return None;
+        }
+        let string = ModalString::new(string, f64::from(fs)).ok()?;
+        let mut p = string.vector();
+        pickup.weights(&string, &mut p);
+        let modes = string.modes();
+        let spread: f64 = p[..modes].iter().zip(string.stiffness()).map(|(p, k)| p * p / k).sum();
+        let norm = p[..modes].iter().map(|p| p * p).sum::<f64>().sqrt();
+        Some(spread.sqrt() + 0.5 * norm / (f64::from(fs) * string.modal_mass().sqrt()))
     }
 
     /// The compression the QSA fit spans (m).
@@ -877,6 +910,8 @@ pub struct Measure {
     pub compression_bound: f64,
     /// Largest exciter speed over its energy bound, `max_n |v^{n+1/2}| / v_max^n`.
     pub velocity_bound: f64,
+    /// Largest string output over its energy bound, `max_n |o^n| / o_max^n` (zero without one).
+    pub output_bound: f64,
     /// Largest solver work in one step.
     pub max_work: u32,
     /// Samples rendered.
@@ -913,7 +948,8 @@ pub fn spline_compression_at(spline: &QuadSpline, energy: f64) -> f64 {
 }
 
 /// The energy bounds of one run, frame by frame, as ratios (≤ 1 when the bound holds):
-/// `(max_n y^n / y_max^n, max_n |v^{n+1/2}| / v_max^n)`.
+/// `(max_n y^n / y_max^n, max_n |v^{n+1/2}| / v_max^n, max_n |o^n| / o_max^n)`, the last for a
+/// string's output ([`Run::output_factor`], zero where there is none).
 ///
 /// The numerical energy of QSA and IMP is a sum of non-negative terms, the exciter's
 /// `½M(v^{n+1/2})²` and the contact's `½(V(y^{n+1}) + V(y^n))` among them (V̂ of the fit in force
@@ -923,11 +959,13 @@ pub fn spline_compression_at(spline: &QuadSpline, energy: f64) -> f64 {
 /// `|v^{n+1/2}| ≤ v_max^n = √(2E^n/M)`. The factor 2 is real: a sample whose neighbour is out of
 /// contact holds the whole contact energy in half the discrete potential. EXP's energy holds
 /// `½ψ²` in place of the potential and its compression is not bound to it; its `y_max` is taken
-/// from the law, as IMP's, and reported only. A run with no allowance left (`E^n ≤ 0`) has bounds
-/// of zero and ratios of infinity.
-fn energy_bounds(set: &ParamSet, method: Method, record: &Record, scale: f64) -> (f64, f64) {
+/// from the law, as IMP's, and reported only. The string's output is bounded by its share of the
+/// same energy, `o_max^n = C√(2E^n)`, for every method (EXP's `½ψ²` is not negative either). A run
+/// with no allowance left (`E^n ≤ 0`) has bounds of zero and ratios of infinity.
+fn energy_bounds(set: &ParamSet, method: Method, record: &Record, scale: f64) -> (f64, f64, f64) {
     let (law, mass) = (set.run.law(), set.run.exciter_mass());
-    let (mut compression, mut velocity) = (0.0f64, 0.0f64);
+    let output_factor = set.run.output_factor();
+    let (mut compression, mut velocity, mut output) = (0.0f64, 0.0f64, 0.0f64);
     let mut fit = 0;
     for (n, f) in record.frames.iter().enumerate() {
         while record.fits.get(fit + 1).is_some_and(|&(from, _)| from <= n) {
@@ -936,6 +974,9 @@ fn energy_bounds(set: &ParamSet, method: Method, record: &Record, scale: f64) ->
         let allowed = record.initial_energy + f.control_work + ENERGY_LIMIT * scale;
         let ratio = |value: f64, bound: f64| if value <= 0.0 { 0.0 } else { value / bound.max(0.0) };
         velocity = velocity.max(ratio(f.velocity.abs(), (2.0 * allowed / mass).sqrt()));
+        if let Some(c) = output_factor {
+            output = output.max(ratio(f.output.abs(), c * (2.0 * allowed.max(0.0)).sqrt()));
+        }
         if f.compression > 0.0 {
             let y_max = match (method, record.fits.get(fit)) {
                 (Method::Qsa, Some((_, spline))) => spline_compression_at(spline, 2.0 * allowed),
@@ -944,7 +985,7 @@ fn energy_bounds(set: &ParamSet, method: Method, record: &Record, scale: f64) ->
             compression = compression.max(ratio(f.compression, y_max));
         }
     }
-    (compression, velocity)
+    (compression, velocity, output)
 }
 
 /// Run `set` with `method`.
@@ -968,6 +1009,7 @@ pub fn measure(set: &ParamSet, method: Method) -> Measure {
                 compression_ratio: f64::NAN,
                 compression_bound: f64::NAN,
                 velocity_bound: f64::NAN,
+                output_bound: f64::NAN,
                 max_work: 0,
                 samples: 0,
                 contact_samples: 0,
@@ -978,7 +1020,7 @@ pub fn measure(set: &ParamSet, method: Method) -> Measure {
     let scale = frames.iter().map(|f| f.energy.abs()).fold(e0.abs(), f64::max);
     let scale = if scale > 0.0 { scale } else { 1.0 };
     let deviation = |f: &Frame| (f.balance() - e0) / scale;
-    let (compression_bound, velocity_bound) = energy_bounds(set, method, &record, scale);
+    let (compression_bound, velocity_bound, output_bound) = energy_bounds(set, method, &record, scale);
     Measure {
         non_finite: !e0.is_finite() || !frames.iter().all(finite),
         panic: None,
@@ -988,6 +1030,7 @@ pub fn measure(set: &ParamSet, method: Method) -> Measure {
         compression_ratio: frames.iter().map(|f| f.compression).fold(f64::NEG_INFINITY, f64::max) / set.run.y_ref(),
         compression_bound,
         velocity_bound,
+        output_bound,
         max_work: frames.iter().map(|f| f.work).max().unwrap_or(0),
         samples: frames.len(),
         contact_samples: frames.iter().filter(|f| f.force != 0.0).count(),
@@ -1061,8 +1104,10 @@ pub struct Tally {
     pub compression_bound: Vec<Worst>,
     /// Largest exciter speed over its energy bound (`|v|/v_max`).
     pub velocity_bound: Vec<Worst>,
-    /// Runs beyond an energy bound: the speed for every method, the compression for QSA and IMP
-    /// (value: the larger ratio counted).
+    /// Largest string output over its energy bound (`|o|/o_max`).
+    pub output_bound: Vec<Worst>,
+    /// Runs beyond an energy bound: the speed and the string's output for every method, the
+    /// compression for QSA and IMP (value: the largest ratio counted).
     pub bound_failures: Vec<Worst>,
 }
 
@@ -1088,6 +1133,7 @@ impl Tally {
             budget_failures: Vec::new(),
             compression_bound: Vec::new(),
             velocity_bound: Vec::new(),
+            output_bound: Vec::new(),
             bound_failures: Vec::new(),
         }
     }
@@ -1133,6 +1179,7 @@ impl Tally {
         "budget_failures",
         "worst_compression_bound",
         "worst_velocity_bound",
+        "worst_output_bound",
         "bound_failures",
     ];
 
@@ -1151,6 +1198,7 @@ impl Tally {
             &self.budget_failures,
             &self.compression_bound,
             &self.velocity_bound,
+            &self.output_bound,
             &self.bound_failures,
         ];
         std::array::from_fn(|i| (Self::LIST_NAMES[i], lists[i]))
@@ -1170,6 +1218,7 @@ impl Tally {
             &mut self.budget_failures,
             &mut self.compression_bound,
             &mut self.velocity_bound,
+            &mut self.output_bound,
             &mut self.bound_failures,
         ]
     }
@@ -1219,8 +1268,11 @@ impl Tally {
         keep(&mut self.compression, m.compression_ratio, set);
         keep(&mut self.compression_bound, m.compression_bound, set);
         keep(&mut self.velocity_bound, m.velocity_bound, set);
-        let counted =
-            if self.method == Method::Exp { m.velocity_bound } else { m.velocity_bound.max(m.compression_bound) };
+        if m.output_bound > 0.0 {
+            keep(&mut self.output_bound, m.output_bound, set);
+        }
+        let always = m.velocity_bound.max(m.output_bound);
+        let counted = if self.method == Method::Exp { always } else { always.max(m.compression_bound) };
         if counted > 1.0 {
             record(&mut self.bound_failures, counted);
         }
@@ -1507,6 +1559,7 @@ pub fn rerun(id: &str, excerpt_scene: Option<&CaseScene>) -> Result<String, Repo
         "compression_ratio": m.compression_ratio,
         "compression_over_energy_bound": m.compression_bound,
         "speed_over_energy_bound": m.velocity_bound,
+        "output_over_energy_bound": m.output_bound,
         "y_ref": param_set.run.y_ref(),
         "max_work": m.max_work,
         "sign_test_bound": (method == Method::Qsa).then(|| sign_test_bound(param_set.segments)),
@@ -1658,6 +1711,27 @@ mod tests {
             }
             assert!(closest >= 0.99, "{method:?}: the bound is approached only to {closest}");
         }
+    }
+
+    /// The string's output stays within the bound its energy sets (`Run::output_factor`) for
+    /// every method, on random slide and hammer sets and on re-strikes, and the bound is not
+    /// vacuous: some set comes within a factor two of it.
+    #[test]
+    fn the_string_output_stays_within_its_energy_bound() {
+        let mut closest = 0.0f64;
+        for kind in [Kind::SlideString, Kind::HammerString, Kind::HammerRestrike] {
+            for index in 0..12 {
+                let set = random_set(kind, index);
+                assert!(set.run.output_factor().is_some(), "{}: a string output", set.id);
+                for method in SWEPT_METHODS {
+                    let m = measure(&set, method);
+                    assert!(m.output_bound <= 1.0, "{} {method:?}: |o|/o_max {}", set.id, m.output_bound);
+                    closest = closest.max(m.output_bound);
+                }
+            }
+        }
+        println!("largest |o|/o_max: {closest:.3}");
+        assert!(closest >= 0.5, "the bound is approached only to {closest}");
     }
 
     #[test]
