@@ -40,8 +40,9 @@ pub fn cpu_model() -> Option<String> {
         .map(str::to_owned)
 }
 
-/// The commit of the repository at `root` (short hash), with `+changes` if tracked files differ
-/// from it; `unknown` without git.
+/// The commit of the repository at `root` (short hash), with `+changes` if tracked files outside
+/// `root` differ from it (the report directory `root` holds the files this run rewrites);
+/// `unknown` without git.
 pub fn commit(root: &Path) -> String {
     let git = |args: &[&str]| {
         Command::new("git")
@@ -54,7 +55,7 @@ pub fn commit(root: &Path) -> String {
             .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
     };
     match git(&["rev-parse", "--short=12", "HEAD"]) {
-        Some(hash) => match git(&["status", "--porcelain", "--untracked-files=no"]) {
+        Some(hash) => match git(&["status", "--porcelain", "--untracked-files=no", "--", ":/", ":(exclude)."]) {
             Some(changes) if !changes.is_empty() => format!("{hash}+changes"),
             _ => hash,
         },
