@@ -614,6 +614,11 @@ impl SlideCore {
         let glides = glide > 0 && self.kind == pickup.kind && self.pickup_from.len() == self.pickup.len();
         self.kind = pickup.kind;
         self.out_now = s.project_state(&self.pickup).1;
+        if !glides {
+            // Within the capacity both vectors were made with: no allocation.
+            self.pickup_from.clear();
+            self.pickup_from.extend_from_slice(&self.pickup);
+        }
         self.out_from = s.project_state(&self.pickup_from).1;
         self.glide = if glides { (0, glide) } else { (0, 0) };
     }
