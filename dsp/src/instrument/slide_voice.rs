@@ -477,6 +477,9 @@ impl SlideVoice {
 
 #[cfg(test)]
 mod tests {
+    use rand::{RngExt, SeedableRng};
+    use rand_pcg::Pcg64;
+
     use super::*;
 
     const FS: f64 = 44100.0;
@@ -489,13 +492,7 @@ mod tests {
     fn the_hand_approaches_its_target_with_bounded_speed_and_acceleration() {
         let span = 64.0 / 48_000.0;
         let dv = HAND_ACCELERATION * span;
-        let mut rng = 0x2545_f491_4f6c_dd1du64;
-        let mut random = || {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            (rng >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = Pcg64::seed_from_u64(73);
         let (mut x, mut v) = (-2e-3, 0.0);
         for (target, blocks) in [(2e-3, 15), (-2e-3, 15)] {
             let start = x;
@@ -509,7 +506,7 @@ mod tests {
             assert!(v.abs() <= dv, "arrived at {v} m/s");
         }
         for _ in 0..10_000 {
-            let target = -3e-3 + 6e-3 * random();
+            let target = rng.random_range(-3e-3..3e-3);
             let (x1, v1) = approach(x, v, target, span);
             assert!(v1.abs() <= HAND_SPEED + 1e-12 && (v1 - v).abs() <= dv + 1e-12, "v {v} → {v1}");
             (x, v) = (x1, v1);
