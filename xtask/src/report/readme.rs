@@ -21,7 +21,7 @@ use super::files::make_readable;
 use super::gestures;
 use super::guide;
 use super::plot;
-pub use super::results::{Results, e, label, t};
+use super::results::{Results, e, label, t};
 use super::sim::Setup;
 use super::stability::{self, BUDGET_LIMIT, ENERGY_LIMIT, Summary, Tally};
 use super::stiff;
