@@ -8,6 +8,7 @@
 //! - [`contact`]: the power law, its spline fit and the three solvers of the common scalar
 //!   problem `s + z − q F = 0` (seed eq. 18).
 //! - [`string`]: the modal stiff string with exact per-mode coefficients.
+//! - [`bridge`]: the bridge and soundboard at the bridge point, a modal bank the strings drive.
 //! - [`exciter`]: the hammer (and the slide and fingers).
 //! - [`scene`]: physical set-ups built from a solver and bodies; each holds only what it needs.
 //! - [`instrument`]: the playable engine: a voice pool driven by note and controller events.
@@ -37,6 +38,7 @@
 
 #[doc(hidden)]
 pub mod bench_support;
+pub mod bridge;
 pub mod contact;
 pub mod control;
 pub mod exciter;

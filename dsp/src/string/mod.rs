@@ -68,6 +68,7 @@ mod vectors;
 
 pub use energy::StringEnergy;
 pub use kernel::GramVector;
+pub(crate) use modes::{Coefficients, Mode};
 pub use params::{Damping, StringError, StringParams};
 pub use simd::{Isa, LANES};
 

@@ -13,7 +13,7 @@ use super::{MAX_MODES, StringParams};
 
 /// One mode of a string.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct Mode {
+pub(crate) struct Mode {
     /// Wavenumber β (1/m).
     pub(super) beta: f64,
     /// Undamped angular frequency ω0 (rad/s).
@@ -26,10 +26,18 @@ pub(super) struct Mode {
 }
 
 impl Mode {
+    /// A single damped oscillator (not a string mode) with undamped angular frequency `omega0`
+    /// (rad/s) and decay rate `sigma` (1/s): what another modal body (the bridge) steps with.
+    pub(crate) fn oscillator(omega0: f64, sigma: f64) -> Self {
+        let underdamped = sigma < omega0;
+        let omega = if underdamped { (omega0 * omega0 - sigma * sigma).sqrt() } else { 0.0 };
+        Self { beta: 0.0, omega0, omega, sigma, underdamped }
+    }
+
     /// `(P, Q)` of the mode's homogeneous recursion `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}` at time step
     /// `dt` (s): `P = e^{−σΔt} cos(ωΔt)` (overdamped: `e^{−σΔt} cosh(γΔt)`, `γ = √(σ² − ω0²)`),
     /// `Q = e^{−2σΔt}`.
-    pub(super) fn recursion(&self, dt: f64) -> (f64, f64) {
+    pub(crate) fn recursion(&self, dt: f64) -> (f64, f64) {
         let decay = (-self.sigma * dt).exp();
         let p = if self.underdamped {
             decay * (self.omega * dt).cos()
@@ -89,22 +97,22 @@ impl Iterator for ModeCounter<'_> {
 
 /// The scheme's per-mode coefficients for a mode whose homogeneous recursion is
 /// `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}` (module docs), with time step `dt` (s) and modal mass `m̃` (kg).
-pub(super) struct Coefficients {
+pub(crate) struct Coefficients {
     /// `A = 2P`.
-    pub(super) a: f64,
+    pub(crate) a: f64,
     /// `B = 1 + Q`.
-    pub(super) b: f64,
+    pub(crate) b: f64,
     /// `C = Δt²(1 + 2P + Q)/(4m̃)` (m/N).
-    pub(super) c: f64,
+    pub(crate) c: f64,
     /// `K̂` (N/m).
-    pub(super) stiffness: f64,
+    pub(crate) stiffness: f64,
     /// `R̂` (kg/s).
-    pub(super) resistance: f64,
+    pub(crate) resistance: f64,
 }
 
 impl Coefficients {
     #[inline]
-    pub(super) fn new(p: f64, q: f64, dt: f64, modal_mass: f64) -> Self {
+    pub(crate) fn new(p: f64, q: f64, dt: f64, modal_mass: f64) -> Self {
         let den = 1.0 + 2.0 * p + q;
         Self {
             a: 2.0 * p,
