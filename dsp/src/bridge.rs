@@ -78,8 +78,10 @@ pub const SOUNDBOARD_CONDUCTANCE: f64 = 4e-4;
 /// Boutillon measured on a piano soundboard in playing condition.
 pub const SOUNDBOARD_LOSS_FACTOR: f64 = 0.02;
 
-/// Lowest and highest soundboard mode (Hz), and the ratio between neighbours.
-pub const SOUNDBOARD_BAND: (f64, f64, f64) = (45.0, 16_000.0, 1.2);
+/// Lowest and highest soundboard mode (Hz), and the ratio between neighbours. Below about
+/// 100 Hz a piano's soundboard assembly is stiffness-controlled (impedance phase near −90°,
+/// Wogram), so the bank starts just below it; a modal bank is spring-like below its lowest mode.
+pub const SOUNDBOARD_BAND: (f64, f64, f64) = (90.0, 16_000.0, 1.2);
 
 impl BridgeParams {
     /// The piano's soundboard (module docs): modes from [`SOUNDBOARD_BAND`]'s lowest frequency up
@@ -153,6 +155,10 @@ pub struct Bridge {
     free: Vec<f64>,
     /// `C_Σ = Σ_j C_j` (m/N).
     compliance: f64,
+    /// `b^{n−1}`, `b^n` (m), kept as the sums of `q^{n−1}`, `q^n`.
+    b: (f64, f64),
+    /// `b_free` of the coming step (m).
+    b_free: f64,
     sample_rate: f64,
 }
 
@@ -185,6 +191,8 @@ impl Bridge {
             q_now: Vec::new(),
             free: Vec::new(),
             compliance: 0.0,
+            b: (0.0, 0.0),
+            b_free: 0.0,
             sample_rate,
         };
         let kept = params.modes.iter().filter(|m| m.frequency < 0.49 * sample_rate);
@@ -216,37 +224,42 @@ impl Bridge {
     pub fn reset(&mut self) {
         self.q_prev.fill(0.0);
         self.q_now.fill(0.0);
+        self.b = (0.0, 0.0);
     }
 
     /// `(b^{n−1}, b^n)` (m).
+    #[inline]
     pub fn displacement(&self) -> (f64, f64) {
-        (self.q_prev.iter().sum(), self.q_now.iter().sum())
+        self.b
     }
 
     /// First half of a step: `(b_free, C_Σ)` (m, m/N), where the bridge would be at `n+1`
     /// with no force, and how far a force moves it (module docs).
     #[inline]
     pub fn predict(&mut self) -> (f64, f64) {
-        let mut sum = 0.0;
-        for j in 0..self.free.len() {
-            let free = self.q_prev[j] - (self.coef_b[j] * self.q_prev[j] - self.coef_a[j] * self.q_now[j]);
-            self.free[j] = free;
-            sum += free;
+        // Four partial sums, so that the additions do not wait on each other.
+        let mut sums = [0.0; 4];
+        let modes = self.free.len();
+        let (a, b, prev, now, free) = (&self.coef_a, &self.coef_b, &self.q_prev, &self.q_now, &mut self.free);
+        for j in 0..modes {
+            let f = prev[j] - (b[j] * prev[j] - a[j] * now[j]);
+            free[j] = f;
+            sums[j % 4] += f;
         }
-        (sum, self.compliance)
+        self.b_free = (sums[0] + sums[1]) + (sums[2] + sums[3]);
+        (self.b_free, self.compliance)
     }
 
     /// Second half: apply the force `f` (N) and step on. Returns `b^{n+1}` (m).
     #[inline]
     pub fn advance(&mut self, f: f64) -> f64 {
-        let mut sum = 0.0;
-        for j in 0..self.free.len() {
-            let next = self.free[j] + self.coef_c[j] * f;
-            self.q_prev[j] = next;
-            sum += next;
+        for ((q, &free), &c) in self.q_prev.iter_mut().zip(&self.free).zip(&self.coef_c) {
+            *q = free + c * f;
         }
         std::mem::swap(&mut self.q_prev, &mut self.q_now);
-        sum
+        let next = self.b_free + self.compliance * f;
+        self.b = (self.b.1, next);
+        next
     }
 
     /// [`advance`](Self::advance), also returning the energy terms of the step.
@@ -263,7 +276,9 @@ impl Bridge {
             self.q_prev[j] = next;
         }
         std::mem::swap(&mut self.q_prev, &mut self.q_now);
-        (self.q_now.iter().sum(), energy)
+        let next = self.b_free + self.compliance * f;
+        self.b = (self.b.1, next);
+        (next, energy)
     }
 
     /// The bridge's own energy `H^{n−1/2}` between `q^{n−1}` and `q^n` (J).
@@ -308,6 +323,7 @@ mod tests {
         let exact = |n: f64| (-sigma * n / fs).exp() * (w * n / fs).cos();
         bridge.q_prev[0] = exact(-1.0);
         bridge.q_now[0] = exact(0.0);
+        bridge.b = (exact(-1.0), exact(0.0));
         for n in 1..=4800 {
             bridge.predict();
             let b = bridge.advance(0.0);

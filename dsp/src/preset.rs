@@ -27,19 +27,33 @@
 //!   through 2.3, 2.5, 3.0, clamped to [2, 3.5]; striking position linear through 0.12, 0.12,
 //!   0.0625 of L, clamped to [0.04, 0.2].
 //!
+//!
+//! Each key has one to three strings ([`unison_strings`]), all the same string retensioned to a
+//! small detuning ([`unison_detune`]); the hammer values above are one string's share.
+//!
 //! The C2 and C7 hammer values are guesses in the source tables (docs/physics.md §8.2); the rule is meant
 //! to be plausible and smooth across the keyboard, not a measured piano.
 
 use crate::string::{Damping, StringParams};
 
 /// A string and the hammer that strikes it.
+///
+/// The hammer is one string's share: a key with `strings` strings has a hammer `strings` times
+/// as heavy, whose felt is `strings` times as stiff (it presses every string of the unison
+/// alike; see [`crate::scene::UnisonCore`]), as Chaigne and Askenfelt's C4 hammer is one
+/// string's share of a trichord's.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PianoNote {
     /// The string.
     pub string: StringParams,
-    /// Hammer mass (kg).
+    /// Strings in the key's unison, 1 to 3.
+    pub strings: usize,
+    /// Each string's share of the unison's detuning (multiples of the spread between the lowest
+    /// and highest string; entries past `strings` are zero).
+    pub detune: [f64; 3],
+    /// Hammer mass per string (kg).
     pub hammer_mass: f64,
-    /// Felt stiffness κ (N/m^α).
+    /// Felt stiffness κ per string (N/m^α).
     pub kappa: f64,
     /// Felt exponent α.
     pub alpha: f64,
@@ -59,6 +73,8 @@ pub fn chaigne_askenfelt_c4() -> PianoNote {
             bending_stiffness: epsilon * tension * length * length,
             damping: Damping::Viscous { eta0: b1, eta2: b3 * tension / linear_density },
         },
+        strings: 1,
+        detune: [0.0; 3],
         hammer_mass: 2.97e-3,
         kappa: 4.5e9,
         alpha: 2.5,
@@ -69,6 +85,28 @@ pub fn chaigne_askenfelt_c4() -> PianoNote {
 /// Equal-tempered frequency of MIDI key `key` (Hz), A4 = 440 Hz.
 pub fn key_frequency(key: u8) -> f64 {
     440.0 * 2f64.powf((f64::from(key) - 69.0) / 12.0)
+}
+
+/// The unison of key `k`: a single string from A0 to E1 (keys below 29), two from F1 to A♯2
+/// (below 47), three above, as on a modern concert grand (the exact breaks vary between makers).
+pub fn unison_strings(key: u8) -> usize {
+    match key {
+        0..29 => 1,
+        29..47 => 2,
+        _ => 3,
+    }
+}
+
+/// How the strings of key `key`'s unison share a detuning spread of 1 (module docs): two strings
+/// at ∓½, three at −½, +0.1, +0.4, scaled per key by a fixed factor in [0.7, 1.3) (a tuner does
+/// not leave every unison alike).
+pub fn unison_detune(key: u8) -> [f64; 3] {
+    let scale = 0.7 + 0.6 * (f64::from(key) * 0.618_033_988_749_895).fract();
+    match unison_strings(key) {
+        1 => [0.0; 3],
+        2 => [-0.5 * scale, 0.5 * scale, 0.0],
+        _ => [-0.5 * scale, 0.1 * scale, 0.4 * scale],
+    }
 }
 
 /// Anchor keys of the per-note rule: C2, C4, C7.
@@ -100,6 +138,8 @@ pub fn piano_note(key: u8) -> PianoNote {
     let flexible = f0 / (1.0 + b).sqrt();
     let linear_density = tension / (2.0 * length * flexible).powi(2);
     PianoNote {
+        strings: unison_strings(key.min(127)),
+        detune: unison_detune(key.min(127)),
         string: StringParams {
             length,
             tension,

@@ -182,7 +182,9 @@ fn restrike_adds_to_the_vibration_of_the_same_string() {
     let mut r2 = l2.clone();
     p.process(&mut l2, &mut r2);
     let after = p.monitor().energy;
-    let hammer = 0.5 * qsa_dsp::preset::piano_note(60).hammer_mass * qsa_dsp::instrument::hammer_speed(0.6).powi(2);
+    let c4 = qsa_dsp::preset::piano_note(60);
+    let mass = c4.hammer_mass * c4.strings as f64;
+    let hammer = 0.5 * mass * qsa_dsp::instrument::hammer_speed(0.6).powi(2);
     let rise = after - before;
     println!(
         "string and hammer energy before {before:e} J, 20 ms after the re-strike {after:e} J: rise {:.3} of the \

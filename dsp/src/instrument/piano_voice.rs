@@ -36,12 +36,13 @@
 //!   rendered with it are zero). Both are counted ([`PianoVoice::guard_trips`]): a last line of
 //!   defence that the tests check never fires.
 
+use crate::bridge::{BridgeParams, SOUNDBOARD_CONDUCTANCE};
 use crate::contact::{Method, PowerLaw};
 use crate::exciter::HammerParams;
 use crate::instrument::settings::{Settings, hammer_speed};
 use crate::instrument::solvers::Solvers;
 use crate::preset::piano_note;
-use crate::scene::{HammerCore, HammerStringParams, OutputKind, Pickup};
+use crate::scene::{UnisonCore, UnisonParams};
 use crate::string::{Damping, ModalString, StringParams};
 
 /// Energy below which a voice that is not touching its hammer is released, relative to the
@@ -128,7 +129,7 @@ pub fn damper_shares(string: &ModalString, position: f64, out: &mut Vec<f64>) {
 /// One piano voice.
 #[derive(Debug, Clone)]
 pub struct PianoVoice {
-    core: HammerCore,
+    core: UnisonCore,
     solvers: Solvers,
     /// The note it plays (valid while sounding).
     pub strike: Strike,
@@ -174,19 +175,16 @@ impl PianoVoice {
     /// A silent voice with room for `modes` modes, at `sample_rate` (Hz).
     pub fn new(modes: usize, sample_rate: f64) -> Self {
         let law = PowerLaw::new(1e9, 2.5).expect("a valid law");
-        let mut string = ModalString::with_capacity(modes);
+        let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
+        let mut core = UnisonCore::new(modes, &board, sample_rate).expect("the soundboard is a valid bridge");
         let note = piano_note(60);
-        string.retune(note.string, sample_rate, 20_000.0).expect("the C4 rule is a valid string");
-        let params = HammerStringParams {
-            string: note.string,
-            hammer: HammerParams { mass: note.hammer_mass, velocity: 0.0, position: note.strike_position, gap: 1e-3 },
-            pickup: Pickup { kind: OutputKind::BridgeForce, position: 0.5 },
-        };
-        let per_mode = || Vec::with_capacity(string.capacity());
+        let unison = UnisonParams { string: note.string, strings: note.strings, detune: [0.0; 3] };
+        core.retune(&unison, 20_000.0, note.strike_position).expect("the C4 rule is a valid string");
+        let per_mode = || Vec::with_capacity(modes + crate::string::LANES);
         Self {
             damper_shape: per_mode(),
             extra: per_mode(),
-            core: HammerCore::new(string, &params),
+            core,
             solvers: Solvers::new(law),
             strike: Strike { channel: 0, key: 60, velocity: 0.0 },
             sounding: false,
@@ -228,14 +226,18 @@ impl PianoVoice {
         let position = (note.strike_position * settings.strike_position).clamp(0.02, 0.5);
         let restrike = self.sounding && self.strike.key == strike.key && self.pending.is_none();
         self.voicing = super::voicing_gain(strike.key, strike.velocity);
+        let strings = note.strings as f64;
         if !restrike {
             self.voiced = self.voicing;
             let fs = self.core.string().sample_rate();
-            let string = Self::string_for(strike.key, settings);
+            let unison = UnisonParams {
+                string: Self::string_for(strike.key, settings),
+                strings: note.strings,
+                detune: note.detune.map(|d| d * settings.unison_detune),
+            };
             let max_frequency = settings.max_frequency.min(0.5 * fs);
-            let pickup = Pickup { kind: OutputKind::BridgeForce, position: 0.5 };
-            // The per-note rule and the clamped settings always give a valid string.
-            if self.core.retune(string, max_frequency, position, pickup).is_err() {
+            // The per-note rule and the clamped settings always give a valid unison.
+            if self.core.retune(&unison, max_frequency, position).is_err() {
                 return;
             }
             self.shape_damper(position);
@@ -245,13 +247,14 @@ impl PianoVoice {
         }
         let fs = self.core.string().sample_rate();
         let velocity = hammer_speed(strike.velocity);
-        let mass = note.hammer_mass * settings.hammer_mass;
+        // The rule's hammer is one string's share (see `PianoNote`).
+        let mass = note.hammer_mass * settings.hammer_mass * strings;
         // The felt starts two samples of travel beyond the string, so the hammer lands almost at once.
         let hammer = HammerParams { mass, velocity, position, gap: 2.0 * velocity / fs };
-        let string_energy = self.core.string().own_energy();
+        let string_energy = self.core.own_energy();
         self.core.strike(&hammer);
         self.position = position;
-        let Ok(law) = PowerLaw::new(note.kappa * settings.hardness, note.alpha) else { return };
+        let Ok(law) = PowerLaw::new(note.kappa * settings.hardness * strings, note.alpha) else { return };
         // All the energy there is: the hammer's and the string's (a re-strike meets a moving string).
         self.reference_energy = (hammer.kinetic_energy() + string_energy).max(f64::MIN_POSITIVE);
         let y_ref = law.compression_at_energy(self.reference_energy);
@@ -267,6 +270,10 @@ impl PianoVoice {
     /// The damper's share of each mode for a pad from the striking point `position`.
     fn shape_damper(&mut self, position: f64) {
         damper_shares(self.core.string(), position, &mut self.damper_shape);
+        // A detuned string of the unison may keep a mode more than the first: it gets the
+        // highest share.
+        let last = self.damper_shape.last().copied().unwrap_or(1.0);
+        self.damper_shape.resize(self.core.modes(), last);
     }
 
     /// Fade out over [`STEAL_TIME`], then play `strike` (a stolen voice).
@@ -277,9 +284,8 @@ impl PianoVoice {
         self.key_down = false;
         self.started = now;
         self.extra.clear();
-        self.extra.resize(self.core.string().modes(), STEAL_RATE);
-        self.core.string_mut().set_extra_decay(&self.extra);
-        self.core.refresh_coupling();
+        self.extra.resize(self.core.modes(), STEAL_RATE);
+        self.core.set_extra_decay(&self.extra);
         self.applied = f64::NAN;
     }
 
@@ -320,7 +326,7 @@ impl PianoVoice {
 
     /// Stop at once: the string at rest, no pending note.
     pub fn silence(&mut self) {
-        self.core.string_mut().reset();
+        self.core.reset();
         self.sounding = false;
         self.key_down = false;
         self.pending = None;
@@ -385,23 +391,23 @@ impl PianoVoice {
             self.applied = self.damper;
             self.extra.clear();
             self.extra.extend(self.damper_shape.iter().map(|g| self.damper * g));
-            self.core.string_mut().set_extra_decay(&self.extra);
-            self.core.refresh_coupling();
+            self.core.set_extra_decay(&self.extra);
         }
-        let string_energy = self.core.string().own_energy();
+        let string_energy = self.core.own_energy();
         // The guard: with no source but the hammer, the string never holds more than the strike's
         // energy (the hammer's and what the string had); far more, or a non-finite state, is a
         // fault to silence, not to play.
         if !(string_energy <= GUARD_FACTOR * self.reference_energy) {
             self.guard_fade.start(len);
         }
-        // Once the hammer is out of the string's reach for good, the string alone sounds.
-        if self.core.retired() && string_energy < RELEASE_ENERGY * self.reference_energy {
+        // A silent unison cannot reach a hammer flying away from it.
+        let silent = self.core.strings_energy() < RELEASE_ENERGY * self.reference_energy;
+        if self.core.hammer_leaving() && silent {
             self.sounding = false;
         }
     }
 
-    /// The string, for monitoring.
+    /// The first string of the unison, for monitoring.
     pub fn string(&self) -> &ModalString {
         self.core.string()
     }
@@ -455,7 +461,7 @@ mod tests {
     #[test]
     fn a_struck_voice_stays_inside_its_energy_bound() {
         let (voice, _) = struck(50);
-        let ratio = voice.core.string().energy() / voice.reference_energy;
+        let ratio = voice.core.own_energy() / voice.reference_energy;
         println!("string energy / strike energy: {ratio}");
         assert!(ratio <= 1.0);
         assert_eq!(voice.guard_trips(), 0);
@@ -480,7 +486,7 @@ mod tests {
         voice.begin_block(&settings, false, 64, 0);
         assert!(!voice.sounding);
         assert_eq!(voice.guard_trips(), 1);
-        assert_eq!(voice.core.string().energy(), 0.0);
+        assert_eq!(voice.core.own_energy(), 0.0);
     }
 
     /// A non-finite state silences the voice in the same call: zeros, not NaN, and a trip.

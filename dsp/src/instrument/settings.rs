@@ -62,6 +62,9 @@ pub struct Settings {
     pub damping: f64,
     /// Inharmonicity B relative to the per-note value, 0..=4 (0 is a flexible string).
     pub brightness: f64,
+    /// Spread of each unison's tuning, lowest to highest string (cents), 0..=20: every key
+    /// detunes its strings by its own pattern of this ([`crate::preset::unison_detune`]).
+    pub unison_detune: f64,
     /// Extra decay rate a damper adds when it rests on the string (1/s), 1..=500.
     pub damper_rate: f64,
     /// Time for a damper to settle on or lift off the string (s), 0.001..=0.1.
@@ -113,6 +116,7 @@ impl Default for Settings {
             strike_position: 1.0,
             damping: 1.0,
             brightness: 1.0,
+            unison_detune: 2.5,
             damper_rate: 60.0,
             damper_time: 0.01,
             gain: 1.0,
@@ -155,6 +159,7 @@ impl Settings {
             strike_position: clamp(self.strike_position, 0.25, 2.5, d.strike_position),
             damping: clamp(self.damping, 0.1, 10.0, d.damping),
             brightness: clamp(self.brightness, 0.0, 4.0, d.brightness),
+            unison_detune: clamp(self.unison_detune, 0.0, 20.0, d.unison_detune),
             damper_rate: clamp(self.damper_rate, 1.0, 500.0, d.damper_rate),
             damper_time: clamp(self.damper_time, 0.001, 0.1, d.damper_time),
             gain: clamp(self.gain, 0.0, 10.0, d.gain),
