@@ -116,6 +116,13 @@ impl BridgeParams {
         })
     }
 
+    /// The mean real part of the driving-point mobility over 100 Hz – 10 kHz (s/kg), averaged on
+    /// a logarithmic grid of 400 frequencies: the conductance a string sees on average.
+    pub fn mean_conductance(&self) -> f64 {
+        let n = 400;
+        (0..n).map(|k| self.mobility(100.0 * 100f64.powf((k as f64 + 0.5) / n as f64)).0).sum::<f64>() / n as f64
+    }
+
     /// Check every mode.
     pub fn validate(&self) -> Result<(), BridgeError> {
         if self.modes.len() > MAX_BRIDGE_MODES {
@@ -123,7 +130,7 @@ impl BridgeParams {
         }
         for (j, m) in self.modes.iter().enumerate() {
             let ok = m.frequency > 0.0 && m.frequency.is_finite() && m.mass > 0.0 && m.mass.is_finite();
-            if !ok || !(m.loss_factor >= 0.0 && m.loss_factor.is_finite()) {
+            if !(ok && m.loss_factor >= 0.0 && m.loss_factor.is_finite()) {
                 return Err(BridgeError(format!(
                     "bridge mode {j}: frequency and mass must be positive and finite, the loss factor ≥ 0"
                 )));

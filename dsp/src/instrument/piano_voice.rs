@@ -285,7 +285,7 @@ impl PianoVoice {
         self.started = now;
         self.extra.clear();
         self.extra.resize(self.core.modes(), STEAL_RATE);
-        self.core.set_extra_decay(&self.extra);
+        self.core.set_extra_decay(&self.extra, STEAL_RATE);
         self.applied = f64::NAN;
     }
 
@@ -391,7 +391,7 @@ impl PianoVoice {
             self.applied = self.damper;
             self.extra.clear();
             self.extra.extend(self.damper_shape.iter().map(|g| self.damper * g));
-            self.core.set_extra_decay(&self.extra);
+            self.core.set_extra_decay(&self.extra, 0.0);
         }
         let string_energy = self.core.own_energy();
         // The guard: with no source but the hammer, the string never holds more than the strike's
@@ -493,9 +493,7 @@ mod tests {
     #[test]
     fn a_non_finite_piano_state_is_silenced_at_once() {
         let (mut voice, _) = struck(20);
-        let m = voice.core.string().modes();
-        let bad = vec![f64::NAN; m];
-        voice.core.string_mut().set_state(&bad, &bad);
+        voice.core.fill_state(f64::NAN);
         let mut out = [1.0; 64];
         voice.render(&mut out);
         assert!(out.iter().all(|&x| x == 0.0));

@@ -71,11 +71,13 @@
 //! derivatives: `δ_t−(δ_t+x δ_t+y) = δ_tt x δ_t·y + δ_t·x δ_tt y`). The kinetic part is positive:
 //! `m_L − Σ_i g_i²/m̃ = ρAL(1/3 − (2/π²)Σ_{i≤M} 1/i²) > 0` for any number of modes `M`.
 
-use crate::bridge::{Bridge, BridgeEnergy, BridgeError, BridgeParams};
+use std::ops::Range;
+
+use crate::bridge::{BridgeMode, BridgeParams};
 use crate::contact::{ContactProblem, ContactSolver};
 use crate::exciter::{Hammer, HammerParams};
 use crate::scene::Frame;
-use crate::string::{ModalString, StringError, StringParams};
+use crate::string::{ModalBank, ModalString, StringError, StringParams};
 
 /// Most strings a unison has.
 pub const MAX_UNISON: usize = 3;
@@ -107,133 +109,124 @@ pub enum UnisonError {
     /// A string is invalid.
     String(StringError),
     /// The bridge is invalid.
-    Bridge(BridgeError),
+    Bridge(crate::bridge::BridgeError),
     /// The number of strings is outside 1 to [`MAX_UNISON`].
     Strings(usize),
 }
 
-/// One string of the unison with its vectors and the projections the step keeps.
+/// How much faster than the bridge drains it a mode's own decay must be for the mode to be left
+/// off the bridge (module docs).
+pub const COUPLING_RATIO: f64 = 10.0;
+
+/// Steps between checks whether the hammer is out of the unison's reach for good.
+pub const RETIRE_CHECK: u32 = 64;
+
+/// The vectors over one bank of modes (module docs), each padded to the bank's length.
 #[derive(Debug, Clone)]
-struct UnisonString {
-    string: ModalString,
-    /// `h_i = sin(β_i x_h)`.
+struct Part {
+    /// `h_s/S` on each string's modes: `hᵀu` is the strings' mean displacement at `x_h`.
     shape: Vec<f64>,
-    /// `g_i = ρA(−1)^{i+1}/β_i` (kg).
+    /// `g_s` (kg) on each string's modes (zero in the free part).
     lift: Vec<f64>,
-    /// `C∘h` (m/N).
+    /// 1 on the bridge's modes, `eᵀu = b` (zero in the free part).
+    sole: Vec<f64>,
+    /// `C∘h`, `C∘g`, `C∘e`.
     shape_gain: Vec<f64>,
-    /// `C∘g` (m·s²/m = kg·m/N).
     lift_gain: Vec<f64>,
-    /// The bridge force weights over `S` (N/m).
+    sole_gain: Vec<f64>,
+    /// Each string's bridge force weights over `S` (N/m): the output is the mean bridge force.
     pickup: Vec<f64>,
-    /// `θ_hh`, `θ_gh`, `θ_gg`.
-    theta: [f64; 3],
-    /// `m_L = ρAL/3` (kg) and `k_L = T/L` (N/m).
+}
+
+impl Part {
+    fn new(bank: &ModalBank) -> Self {
+        let v = || Vec::with_capacity(bank.capacity() + crate::string::LANES);
+        Self { shape: v(), lift: v(), sole: v(), shape_gain: v(), lift_gain: v(), sole_gain: v(), pickup: v() }
+    }
+
+    /// Zero every vector at `b`'s length.
+    fn clear_vectors(&mut self, b: &ModalBank) {
+        for x in [&mut self.shape, &mut self.lift, &mut self.sole, &mut self.shape_gain, &mut self.lift_gain] {
+            b.fit_vector(x);
+        }
+        b.fit_vector(&mut self.sole_gain);
+        b.fit_vector(&mut self.pickup);
+    }
+
+    /// The gains `C∘v` from `bank`'s current coefficients.
+    fn refresh(&mut self, bank: &ModalBank) {
+        let c = bank.input_gains();
+        for i in 0..c.len() {
+            self.shape_gain[i] = self.shape[i] * c[i];
+            self.lift_gain[i] = self.lift[i] * c[i];
+            self.sole_gain[i] = self.sole[i] * c[i];
+        }
+    }
+}
+
+/// The scalars of the coupling that change only with the coefficients (module docs).
+#[derive(Debug, Clone, Copy, Default)]
+struct Coupling {
+    /// `θ_hh = hᵀ(C∘h)` over both parts (m/N, with `h` over `S`: `Σ_s θ_hh,s/S²`).
+    hh: f64,
+    /// `θ_gh = Σ_s θ_gh,s/S`.
+    gh: f64,
+    /// `θ_gg = Σ_s θ_gg,s`.
+    gg: f64,
+    /// `C_Σ = eᵀ(C∘e)` (m/N).
+    compliance: f64,
+    /// `Σ_s m_L,s` (kg) and `Σ_s k_L,s` (N/m).
     lift_mass: f64,
     lift_stiffness: f64,
-    /// `(hᵀṽ^{n−1}, hᵀṽ^n)` (m) and `(gᵀṽ^{n−1}, gᵀṽ^n)` (kg·m).
-    hv: (f64, f64),
-    gv: (f64, f64),
-    /// `(hᵀz̃, gᵀz̃)` of the coming step when the last pass already projected it.
-    next: Option<[f64; 2]>,
-}
-
-impl UnisonString {
-    fn new(modes: usize) -> Self {
-        let string = ModalString::with_capacity(modes);
-        let v = || Vec::with_capacity(string.capacity());
-        Self {
-            shape: v(),
-            lift: v(),
-            shape_gain: v(),
-            lift_gain: v(),
-            pickup: v(),
-            string,
-            theta: [0.0; 3],
-            lift_mass: 0.0,
-            lift_stiffness: 0.0,
-            hv: (0.0, 0.0),
-            gv: (0.0, 0.0),
-            next: None,
-        }
-    }
-
-    /// Make the vectors for striking point `position` (fraction of the length) in a unison of
-    /// `count` strings.
-    fn place(&mut self, position: f64, count: usize) {
-        let s = &self.string;
-        for v in [&mut self.shape, &mut self.lift, &mut self.shape_gain, &mut self.lift_gain, &mut self.pickup] {
-            s.fit_vector(v);
-        }
-        let p = *s.params();
-        s.mode_shapes(position * p.length, &mut self.shape);
-        for (i, (g, &beta)) in self.lift.iter_mut().zip(s.wavenumbers()).enumerate() {
-            let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
-            *g = sign * p.linear_density / beta;
-        }
-        s.bridge_weights(true, &mut self.pickup);
-        self.pickup.iter_mut().for_each(|w| *w /= count as f64);
-        self.lift_mass = p.linear_density * p.length / 3.0;
-        self.lift_stiffness = p.tension / p.length;
-        self.refresh();
-    }
-
-    /// The gains and `θ` from the string's current coefficients.
-    fn refresh(&mut self) {
-        let s = &self.string;
-        for (((hg, gg), (h, g)), c) in self
-            .shape_gain
-            .iter_mut()
-            .zip(self.lift_gain.iter_mut())
-            .zip(self.shape.iter().zip(&self.lift))
-            .zip(s.input_gains())
-        {
-            *hg = h * c;
-            *gg = g * c;
-        }
-        self.theta = [
-            s.project(&self.shape, &self.shape_gain),
-            s.project(&self.lift, &self.shape_gain),
-            s.project(&self.lift, &self.lift_gain),
-        ];
-        self.next = None;
-    }
-
-    /// Recompute the projections of the state.
-    fn measure(&mut self) {
-        self.hv = self.string.project_state(&self.shape);
-        self.gv = self.string.project_state(&self.lift);
-        self.next = None;
-    }
-}
-
-/// The sums over the unison's strings that a step needs (module docs).
-#[derive(Debug, Clone, Copy, Default)]
-struct Sums {
-    /// `Σ θ_hh/S²` (m/N).
-    hh: f64,
-    /// `Σ θ_gh/S`.
-    gh: f64,
-    /// `Σ θ_gg`.
-    gg: f64,
-    /// `Σ m_L` (kg).
-    mass: f64,
-    /// `Σ k_L` (N/m).
-    stiffness: f64,
+    /// `ρ = ρ_V + ½Δt ρ_T` (m/√J): how far the striking point can be from rest per `√(2H)`.
+    reach: f64,
 }
 
 /// A hammer, a unison of strings and their bridge: everything of a piano key except the solver.
+/// The modes that feel the bridge and the bridge's own modes live in one [`ModalBank`] (the
+/// coupled part), stepped in one pass; the strings' higher modes in another (the free part).
 /// Prepared once with room for the most modes a string may need, then retuned and struck note
 /// after note without allocating.
 #[derive(Debug, Clone)]
 pub struct UnisonCore {
-    strings: Vec<UnisonString>,
+    /// Each string prepared on its own (where the banks' coefficients come from); the first
+    /// also holds a copy of its state after every call, for monitors.
+    strings: Vec<ModalString>,
+    /// How many of each string's modes (a prefix) are on the bridge.
+    split: [usize; MAX_UNISON],
+    /// Each string's modes in the coupled and in the free part.
+    coupled_ranges: [Range<usize>; MAX_UNISON],
+    free_ranges: [Range<usize>; MAX_UNISON],
     count: usize,
-    bridge: Bridge,
+    /// The coupled part: the strings' modes on the bridge, then the bridge's.
+    coupled_bank: ModalBank,
+    coupled: Part,
+    /// The free part: the strings' higher modes.
+    free_bank: ModalBank,
+    free: Part,
+    /// The bridge's modes in the coupled part.
+    bridge_range: Range<usize>,
+    bridge: Vec<BridgeMode>,
+    /// The bridge's mean driving-point conductance (s/kg), what decides which modes it couples.
+    conductance: f64,
+    coupling: Coupling,
     hammer: Hammer,
     /// `ℓ = x_h/L`.
     ell: f64,
-    sums: Sums,
+    /// `(hᵀu^{n−1}, hᵀu^n)` (m), `(gᵀu^{n−1}, gᵀu^n)` (kg·m), `(b^{n−1}, b^n)` (m).
+    hv: (f64, f64),
+    gv: (f64, f64),
+    b: (f64, f64),
+    /// `(hᵀz̃, gᵀz̃, eᵀz̃)` of the coupled part's coming step and `hᵀz̃` of the free part's, when
+    /// the last pass already projected them.
+    next_coupled: Option<[f64; 3]>,
+    next_free: Option<[f64; 1]>,
+    /// `(gᵀz̃, eᵀz̃)` of the coming step once the hammer is retired.
+    next_retired: Option<[f64; 2]>,
+    /// Whether the hammer is out of the strings' reach for good (module docs).
+    retired: bool,
+    /// Steps since the strike, modulo [`RETIRE_CHECK`].
+    since_check: u32,
     /// `y^{n−1}`, `y^n` (m).
     y_prev: f64,
     y_now: f64,
@@ -249,15 +242,37 @@ pub struct UnisonCore {
 impl UnisonCore {
     /// A silent key with room for `modes` modes per string and `bridge` at `sample_rate` (Hz).
     pub fn new(modes: usize, bridge: &BridgeParams, sample_rate: f64) -> Result<Self, UnisonError> {
-        let bridge = Bridge::new(bridge, sample_rate).map_err(UnisonError::Bridge)?;
+        bridge.validate().map_err(UnisonError::Bridge)?;
+        if !(sample_rate > 0.0 && sample_rate.is_finite()) {
+            return Err(UnisonError::Bridge(crate::bridge::BridgeError("the sample rate must be positive".into())));
+        }
         let hammer = Hammer::new(&HammerParams { mass: 1e-2, velocity: 0.0, position: 0.1, gap: 1e-3 }, sample_rate);
+        let coupled_bank = ModalBank::with_capacity(MAX_UNISON * modes + bridge.modes.len(), sample_rate);
+        let free_bank = ModalBank::with_capacity(MAX_UNISON * modes, sample_rate);
         Ok(Self {
-            strings: (0..MAX_UNISON).map(|_| UnisonString::new(modes)).collect(),
+            strings: (0..MAX_UNISON).map(|_| ModalString::with_capacity(modes)).collect(),
+            split: [0; MAX_UNISON],
+            coupled_ranges: [0..0, 0..0, 0..0],
+            free_ranges: [0..0, 0..0, 0..0],
             count: 0,
-            bridge,
+            coupled: Part::new(&coupled_bank),
+            free: Part::new(&free_bank),
+            coupled_bank,
+            free_bank,
+            bridge_range: 0..0,
+            bridge: bridge.modes.clone(),
+            conductance: bridge.mean_conductance(),
+            coupling: Coupling::default(),
             hammer,
             ell: 0.1,
-            sums: Sums::default(),
+            hv: (0.0, 0.0),
+            gv: (0.0, 0.0),
+            b: (0.0, 0.0),
+            next_coupled: None,
+            next_free: None,
+            next_retired: None,
+            retired: false,
+            since_check: 0,
             y_prev: 0.0,
             y_now: 0.0,
             out_now: 0.0,
@@ -275,92 +290,216 @@ impl UnisonCore {
         }
         let fs = 1.0 / self.dt;
         for s in 0..params.strings {
-            self.strings[s].string.retune(params.string(s), fs, max_frequency).map_err(UnisonError::String)?;
+            self.strings[s].retune(params.string(s), fs, max_frequency).map_err(UnisonError::String)?;
         }
         self.count = params.strings;
         self.ell = position;
-        for s in &mut self.strings[..self.count] {
-            s.place(position, params.strings);
+        self.coupled_bank.clear();
+        self.free_bank.clear();
+        for s in 0..self.count {
+            let string = &self.strings[s];
+            let p = string.params();
+            // The rate at which the bridge drains the unison's in-phase motion (Weinreich):
+            // `σ_b = 2·S·f0·Z0·G`, with the string's wave impedance `Z0 = √(Tρ)`.
+            let drain =
+                2.0 * self.count as f64 * p.fundamental() * (p.tension * p.linear_density).sqrt() * self.conductance;
+            let split = string.decay_rates().iter().take_while(|&&sigma| sigma <= COUPLING_RATIO * drain).count();
+            self.split[s] = split;
+            self.coupled_ranges[s] = self.coupled_bank.push_modes(string, 0..split);
+            self.free_ranges[s] = self.free_bank.push_modes(string, split..string.modes());
         }
-        self.bridge.reset();
-        self.sum_up();
+        let start = self.coupled_bank.modes();
+        for m in self.bridge.iter().filter(|m| m.frequency < 0.49 * fs) {
+            let omega0 = std::f64::consts::TAU * m.frequency;
+            self.coupled_bank.push_oscillator(omega0, 0.5 * m.loss_factor * omega0, m.mass);
+        }
+        self.bridge_range = start..self.coupled_bank.modes();
+        self.coupled_bank.finish();
+        self.free_bank.finish();
+        self.place();
         self.losses = 0.0;
         self.measure();
         Ok(())
     }
 
-    fn sum_up(&mut self) {
+    /// Make the vectors over both parts for the current strings and striking point.
+    fn place(&mut self) {
         let n = self.count as f64;
-        let mut sums = Sums::default();
-        for s in &self.strings[..self.count] {
-            sums.hh += s.theta[0] / (n * n);
-            sums.gh += s.theta[1] / n;
-            sums.gg += s.theta[2];
-            sums.mass += s.lift_mass;
-            sums.stiffness += s.lift_stiffness;
+        self.coupled.clear_vectors(&self.coupled_bank);
+        self.free.clear_vectors(&self.free_bank);
+        let (mut lift_mass, mut lift_stiffness) = (0.0, 0.0);
+        for s in 0..self.count {
+            let string = &self.strings[s];
+            let p = *string.params();
+            let modes = string.modes();
+            // Shapes and weights of every mode of the string (in two of the free part's gain
+            // vectors, refreshed below), then shared out between the parts.
+            let mut shape = std::mem::take(&mut self.free.shape_gain);
+            let mut weights = std::mem::take(&mut self.free.sole_gain);
+            shape.resize(string.padded_len().max(shape.len()), 0.0);
+            weights.resize(string.padded_len().max(weights.len()), 0.0);
+            string.mode_shapes(self.ell * p.length, &mut shape[..string.padded_len()]);
+            string.bridge_weights(true, &mut weights[..string.padded_len()]);
+            for k in 0..modes {
+                let (part, i, len) = if k < self.split[s] {
+                    (&mut self.coupled, self.coupled_ranges[s].start + k, self.coupled_bank.modes())
+                } else {
+                    (&mut self.free, self.free_ranges[s].start + k - self.split[s], self.free_bank.modes())
+                };
+                if i >= len {
+                    continue;
+                }
+                let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+                part.shape[i] = shape[k] / n;
+                part.pickup[i] = weights[k] / n;
+                if k < self.split[s] {
+                    part.lift[i] = sign * p.linear_density / string.wavenumbers()[k];
+                }
+            }
+            self.free.shape_gain = shape;
+            self.free.sole_gain = weights;
+            lift_mass += p.linear_density * p.length / 3.0;
+            lift_stiffness += p.tension / p.length;
         }
-        self.sums = sums;
+        self.free_bank.fit_vector(&mut self.free.shape_gain);
+        self.free_bank.fit_vector(&mut self.free.sole_gain);
+        self.coupled.sole[self.bridge_range.clone()].fill(1.0);
+        self.coupling.lift_mass = lift_mass;
+        self.coupling.lift_stiffness = lift_stiffness;
+        self.refresh_coupling();
+    }
+
+    /// After the banks' coefficients changed (a damper): the gains, the coupling and the reach
+    /// follow, and the hammer is judged again.
+    fn refresh_coupling(&mut self) {
+        self.coupled.refresh(&self.coupled_bank);
+        self.free.refresh(&self.free_bank);
+        let (c, f, cb, fb) = (&self.coupled, &self.free, &self.coupled_bank, &self.free_bank);
+        self.coupling.hh = cb.project(&c.shape, &c.shape_gain) + fb.project(&f.shape, &f.shape_gain);
+        self.coupling.gh = cb.project(&c.lift, &c.shape_gain);
+        self.coupling.gg = cb.project(&c.lift, &c.lift_gain);
+        self.coupling.compliance = cb.project(&c.sole, &c.sole_gain);
+        self.coupling.reach = self.reach();
+        self.next_coupled = None;
+        self.next_free = None;
+        self.next_retired = None;
+    }
+
+    /// `ρ_V + ½Δt ρ_T` (module docs).
+    fn reach(&self) -> f64 {
+        let ell = self.ell;
+        let parts = [(&self.coupled, &self.coupled_bank), (&self.free, &self.free_bank)];
+        let mut potential = 0.0;
+        for (part, bank) in parts {
+            for ((h, k), e) in part.shape.iter().zip(bank.stiffness()).zip(&part.sole) {
+                let weight = h + ell * e;
+                if *k > 0.0 {
+                    potential += weight * weight / k;
+                }
+            }
+        }
+        // cᵀM⁻¹c for the coupled mass matrix, in closed form.
+        let (mut cc, mut gc, mut gg, mut bridge) = (0.0, 0.0, 0.0, 0.0);
+        for (part, bank) in parts {
+            for (((h, g), e), m) in part.shape.iter().zip(&part.lift).zip(&part.sole).zip(bank.masses()) {
+                if *e > 0.0 {
+                    bridge += 1.0 / m;
+                } else {
+                    cc += h * h / m;
+                    gc += g * h / m;
+                    gg += g * g / m;
+                }
+            }
+        }
+        let (r, mu) = (ell - gc, self.coupling.lift_mass - gg);
+        let beta = r * bridge / (1.0 + mu * bridge);
+        let kinetic = (cc - beta * gc + ell * beta).max(0.0);
+        let reach = potential.sqrt() + 0.5 * self.dt * kinetic.sqrt();
+        if reach.is_finite() { reach } else { f64::INFINITY }
     }
 
     /// The strings' mean displacement at the striking point plus the bridge's share,
     /// `(u_h^{n−1}, u_h^n)` (m).
     fn under_hammer(&self) -> (f64, f64) {
-        let n = self.count as f64;
-        let (b_prev, b_now) = self.bridge.displacement();
-        let (mut prev, mut now) = (self.ell * b_prev, self.ell * b_now);
-        for s in &self.strings[..self.count] {
-            prev += s.hv.0 / n;
-            now += s.hv.1 / n;
-        }
-        (prev, now)
+        (self.hv.0 + self.ell * self.b.0, self.hv.1 + self.ell * self.b.1)
+    }
+
+    /// Recompute every projection of the state (the hammer is judged again).
+    fn project(&mut self) {
+        let (c, f, cb, fb) = (&self.coupled, &self.free, &self.coupled_bank, &self.free_bank);
+        let (hc, hf) = (cb.project_state(&c.shape), fb.project_state(&f.shape));
+        self.hv = (hc.0 + hf.0, hc.1 + hf.1);
+        self.gv = cb.project_state(&c.lift);
+        self.b = cb.project_state(&c.sole);
+        self.next_coupled = None;
+        self.next_free = None;
+        self.next_retired = None;
+        self.retired = false;
     }
 
     /// Recompute every projection, the compressions and the output from the state.
     fn measure(&mut self) {
-        let mut out = 0.0;
-        for s in &mut self.strings[..self.count] {
-            s.measure();
-            out += s.string.project_state(&s.pickup).1;
-        }
+        self.project();
+        self.out_now =
+            self.coupled_bank.project_state(&self.coupled.pickup).1 + self.free_bank.project_state(&self.free.pickup).1;
         let (prev, now) = self.under_hammer();
         self.y_prev = prev - self.hammer.previous();
         self.y_now = now - self.hammer.position();
-        self.out_now = out;
+        self.since_check = 0;
+        self.mirror();
+    }
+
+    /// Copy the first string's state from the banks into it (what [`string`](Self::string) shows).
+    fn mirror(&mut self) {
+        let (cp, cn) = self.coupled_bank.state(self.coupled_ranges[0].clone());
+        let (fp, fn_) = self.free_bank.state(self.free_ranges[0].clone());
+        let string = &mut self.strings[0];
+        if string.modes() != cp.len() + fp.len() || cp.len() + fp.len() > MIRROR_MODES {
+            return;
+        }
+        let (mut prev, mut now) = ([0.0; MIRROR_MODES], [0.0; MIRROR_MODES]);
+        let m = cp.len();
+        prev[..m].copy_from_slice(cp);
+        now[..m].copy_from_slice(cn);
+        prev[m..m + fp.len()].copy_from_slice(fp);
+        now[m..m + fp.len()].copy_from_slice(fn_);
+        string.set_state(&prev[..string.modes()], &now[..string.modes()]);
     }
 
     /// Throw the hammer (its whole mass) again, `gap` beyond the string under it: see
     /// [`HammerCore::strike`](super::HammerCore::strike). Restart the solver with
     /// [`compressions`](Self::compressions) afterwards.
     pub fn strike(&mut self, hammer: &HammerParams) {
+        self.project();
         let (before, now) = self.under_hammer();
         let under = now.max(before - hammer.velocity * self.dt);
         self.hammer = Hammer::above(under, hammer, 1.0 / self.dt);
         self.measure();
     }
 
-    /// After the strings' coefficients changed (a damper): the gains and sums follow.
-    pub fn refresh_coupling(&mut self) {
-        for s in &mut self.strings[..self.count] {
-            s.refresh();
+    /// Add the decay rates `extra` (1/s, one per mode of a string, the same for every string of
+    /// the unison) to the strings' own, and `bridge` (1/s) to every bridge mode's (see
+    /// [`ModalBank::set_extra_decay`]): a damper, or a stolen voice's fade. The state is
+    /// untouched; the coupling follows the new coefficients.
+    pub fn set_extra_decay(&mut self, extra: &[f64], bridge: f64) {
+        for s in 0..self.count {
+            let split = self.split[s].min(extra.len());
+            self.coupled_bank.set_extra_decay(self.coupled_ranges[s].clone(), &extra[..split]);
+            self.free_bank.set_extra_decay(self.free_ranges[s].clone(), &extra[split..]);
         }
-        self.sum_up();
-    }
-
-    /// Add the decay rates `extra` (1/s per mode) to every string (see
-    /// [`ModalString::set_extra_decay`]) and refresh the coupling.
-    pub fn set_extra_decay(&mut self, extra: &[f64]) {
-        for s in &mut self.strings[..self.count] {
-            s.string.set_extra_decay(extra);
-        }
+        let rates = [bridge; crate::bridge::MAX_BRIDGE_MODES];
+        self.coupled_bank.set_extra_decay(self.bridge_range.clone(), &rates[..self.bridge_range.len()]);
         self.refresh_coupling();
+        if self.retired {
+            // The energy's weights changed: judge the hammer again from here.
+            self.measure();
+        }
     }
 
     /// Bring strings and bridge to rest.
     pub fn reset(&mut self) {
-        for s in &mut self.strings[..self.count] {
-            s.string.reset();
-        }
-        self.bridge.reset();
+        self.coupled_bank.reset();
+        self.free_bank.reset();
         self.measure();
     }
 
@@ -369,56 +508,67 @@ impl UnisonCore {
         (self.y_prev, self.y_now)
     }
 
-    /// The strings of the unison.
-    pub fn strings(&self) -> impl Iterator<Item = &ModalString> {
-        self.strings[..self.count].iter().map(|s| &s.string)
-    }
-
-    /// The first string (what a monitor draws).
+    /// The first string, with its state as of the latest call (what a monitor draws).
     pub fn string(&self) -> &ModalString {
-        &self.strings[0].string
+        &self.strings[0]
     }
 
-    /// The first string, to set its state directly (tests of what follows a corrupt state). The
-    /// projections the step keeps are stale until the next [`retune`](Self::retune) or strike.
-    pub fn string_mut(&mut self) -> &mut ModalString {
-        self.strings[0].next = None;
-        &mut self.strings[0].string
+    /// How many modes are in the coupled part and in the free part.
+    pub fn parts(&self) -> (usize, usize) {
+        (self.coupled_bank.modes(), self.free_bank.modes())
+    }
+
+    /// Set every mode's state (tests of what follows a corrupt state): `value` (m) everywhere.
+    pub fn fill_state(&mut self, value: f64) {
+        self.coupled_bank.fill(value);
+        self.free_bank.fill(value);
+        self.measure();
+    }
+
+    /// Whether the hammer is out of the strings' reach for good (module docs).
+    pub fn retired(&self) -> bool {
+        self.retired
     }
 
     /// The most modes any string of the unison has.
     pub fn modes(&self) -> usize {
-        self.strings().map(ModalString::modes).max().unwrap_or(0)
-    }
-
-    /// The bridge.
-    pub fn bridge(&self) -> &Bridge {
-        &self.bridge
-    }
-
-    /// The strings' energy weighed with their own stiffnesses plus the bridge's own energy (J):
-    /// what a voice's guard and release read (the coupling's cross terms left out; see
-    /// [`ModalString::own_energy`]).
-    pub fn own_energy(&self) -> f64 {
-        self.strings().map(ModalString::own_energy).sum::<f64>() + self.bridge.energy()
+        self.strings[..self.count].iter().map(ModalString::modes).max().unwrap_or(0)
     }
 
     /// The strings' energy weighed with their own stiffnesses (J), without the bridge: what
     /// decides that a voice is silent (the strings are what sounds; the bridge's slowest modes
-    /// ring on at its own rate).
+    /// ring on at their own rate).
     pub fn strings_energy(&self) -> f64 {
-        self.strings().map(ModalString::own_energy).sum()
+        (0..self.count)
+            .map(|s| {
+                self.coupled_bank.own_energy(self.coupled_ranges[s].clone())
+                    + self.free_bank.own_energy(self.free_ranges[s].clone())
+            })
+            .sum()
     }
 
-    /// The strings' and bridge's energy and the hammer's (J), without the coupling's cross terms
-    /// and the contact term.
+    /// The strings' and the bridge's energy weighed with their own stiffnesses (J), the
+    /// coupling's cross terms left out: what a voice's guard reads.
+    pub fn own_energy(&self) -> f64 {
+        self.strings_energy() + self.coupled_bank.own_energy(self.bridge_range.clone())
+    }
+
+    /// The strings' and bridge's numerical energy and the hammer's (J), without the coupling's
+    /// cross terms and the contact term.
     pub fn energy(&self) -> f64 {
-        self.strings().map(ModalString::energy).sum::<f64>() + self.bridge.energy() + self.hammer.energy()
+        self.coupled_bank.energy() + self.free_bank.energy() + self.hammer.energy()
     }
 
-    /// The hammer's energy (J).
-    pub fn hammer_energy(&self) -> f64 {
-        self.hammer.energy()
+    /// The numerical energy `H^{n−1/2}` of strings and bridge with the coupling's terms (J).
+    fn system_energy(&self) -> f64 {
+        let c = self.coupling;
+        let (db, mean) = ((self.b.1 - self.b.0) / self.dt, 0.5 * (self.b.1 + self.b.0));
+        let cross = (self.gv.1 - self.gv.0) / self.dt * db;
+        self.coupled_bank.energy()
+            + self.free_bank.energy()
+            + cross
+            + 0.5 * c.lift_mass * db * db
+            + 0.5 * c.lift_stiffness * mean * mean
     }
 
     /// `(compression y^n (m), latest contact force (N))`.
@@ -428,112 +578,109 @@ impl UnisonCore {
 
     /// Whether the felt is touching or about to.
     pub fn in_contact(&self) -> bool {
-        self.y_now > 0.0 || self.y_prev > 0.0
+        !self.retired && (self.y_now > 0.0 || self.y_prev > 0.0)
     }
 
-    /// Whether the hammer flies away from the strings, clear of them: what a voice needs before
-    /// it releases a string that has fallen silent (a silent string cannot reach a hammer
-    /// moving away; the contact is still solved at every step).
+    /// Whether the hammer flies away from the strings, clear of them.
     pub fn hammer_leaving(&self) -> bool {
-        self.hammer.velocity() > 0.0 && self.y_now < 0.0 && self.y_prev < 0.0
+        self.retired || (self.hammer.velocity() > 0.0 && self.y_now < 0.0 && self.y_prev < 0.0)
+    }
+
+    /// Whether the hammer moves away and is beyond what the strings' and bridge's energy can
+    /// reach (module docs).
+    fn out_of_reach(&self) -> bool {
+        self.hammer.velocity() > 0.0
+            && self.y_now < 0.0
+            && self.y_prev < 0.0
+            && self.hammer.position() > self.coupling.reach * (2.0 * self.system_energy().max(0.0)).sqrt()
     }
 
     /// One step with `solver`; with `MONITOR` the frame also carries the energy terms.
     #[inline]
     pub fn step<S: ContactSolver, const MONITOR: bool>(&mut self, solver: &mut S) -> Frame {
-        let (dt, n, ell) = (self.dt, self.count as f64, self.ell);
+        let (dt, ell) = (self.dt, self.ell);
         let dt2 = dt * dt;
-        let sums = self.sums;
-        // Projections of z̃ and the known part of the bridge force.
-        let (mut hz, mut g0) = (0.0, 0.0);
-        let mut zs = [[0.0; 2]; MAX_UNISON];
-        for (s, z) in self.strings[..self.count].iter_mut().zip(&mut zs) {
-            *z = match s.next.take() {
-                Some(z) => z,
-                None => s.string.history([&s.shape, &s.lift]),
-            };
-            hz += z[0] / n;
-            g0 += 2.0 * s.gv.0 - z[1] - 2.0 * s.gv.1;
-        }
-        let (b_prev, b_now) = self.bridge.displacement();
-        g0 = g0 / dt2 + sums.stiffness * b_now;
-        let (b_free, compliance) = self.bridge.predict();
-        let gamma = sums.gh / dt2;
-        let theta = sums.gg / dt2;
-        let inertia = sums.mass + 0.25 * sums.stiffness * dt2;
-        let den = dt2 + compliance * (inertia - theta);
-        let a0 = (b_free - 2.0 * b_now + b_prev - compliance * g0) / den;
-        let a1 = compliance * (ell - gamma) / den;
+        let c = self.coupling;
+        let (cp, fp) = (&self.coupled, &self.free);
+        let [hz_c, gz, ez] = match self.next_coupled.take() {
+            Some(z) => z,
+            None => self.coupled_bank.history([&cp.shape, &cp.lift, &cp.sole]),
+        };
+        let [hz_f] = match self.next_free.take() {
+            Some(z) => z,
+            None => self.free_bank.history([&fp.shape]),
+        };
+        let hz = hz_c + hz_f;
+        let (b_prev, b_now) = self.b;
+        // The known part of the force on the bridge, and where the bridge would go without it.
+        let g0 = (2.0 * self.gv.0 - gz - 2.0 * self.gv.1) / dt2 + c.lift_stiffness * b_now;
+        let b_free = b_prev - ez;
+        let gamma = c.gh / dt2;
+        let theta = c.gg / dt2;
+        let inertia = c.lift_mass + 0.25 * c.lift_stiffness * dt2;
+        let den = dt2 + c.compliance * (inertia - theta);
+        let a0 = (b_free - 2.0 * b_now + b_prev - c.compliance * g0) / den;
+        let a1 = c.compliance * (ell - gamma) / den;
         let lever = dt2 * (ell - gamma);
-        let z_h = self.hammer.history();
         let problem = ContactProblem {
             y_prev: self.y_prev,
             y_now: self.y_now,
-            z: hz - z_h - lever * a0 - 2.0 * ell * (b_now - b_prev),
-            q: sums.hh + self.hammer.coupling() + lever * a1,
+            z: hz - self.hammer.history() - lever * a0 - 2.0 * ell * (b_now - b_prev),
+            q: c.hh + self.hammer.coupling() + lever * a1,
         };
         let solution = solver.solve(&problem);
         let force = solution.force;
         let a = a0 + a1 * force;
         let f = (ell - gamma) * force - g0 + (theta - inertia) * a;
-        let mut energy = 0.0;
-        let b_next = if MONITOR {
-            let (b_next, BridgeEnergy { stored, dissipated }) = self.bridge.advance_monitored(f);
-            energy += stored;
-            self.losses += dissipated;
-            b_next
+        let forces = [(&cp.shape_gain[..], force), (&cp.lift_gain[..], -a), (&cp.sole_gain[..], f)];
+        let hv_next = self.hv.0 - hz + c.hh * force - c.gh * a;
+        let gv_next = self.gv.0 - gz + c.gh * force - c.gg * a;
+        let b_next = b_free + c.compliance * f;
+        let mut frame = Frame { force, ..Frame::default() };
+        let fresh;
+        let out_next = if MONITOR {
+            let (out_c, stored_c, lost_c) = self.coupled_bank.advance_monitored(forces, &cp.pickup);
+            let (out_f, stored_f, lost_f) = self.free_bank.advance_monitored([(&fp.shape_gain[..], force)], &fp.pickup);
+            self.losses += lost_c + lost_f;
+            let db = (b_next - b_now) / dt;
+            let mean = 0.5 * (b_next + b_now);
+            let cross = (gv_next - self.gv.1) / dt * db;
+            frame.energy =
+                stored_c + stored_f + cross + 0.5 * c.lift_mass * db * db + 0.5 * c.lift_stiffness * mean * mean;
+            fresh = true;
+            out_c + out_f
         } else {
-            self.bridge.advance(f)
+            let (out_c, next_c) =
+                self.coupled_bank.advance_projecting(forces, &cp.pickup, [&cp.shape, &cp.lift, &cp.sole]);
+            let (out_f, next_f) =
+                self.free_bank.advance_projecting([(&fp.shape_gain[..], force)], &fp.pickup, [&fp.shape]);
+            self.next_coupled = next_c;
+            self.next_free = next_f;
+            fresh = next_c.is_some() && next_f.is_some();
+            out_c + out_f
         };
-        let mut out_next = 0.0;
-        let mut cross = 0.0;
-        for (s, z) in self.strings[..self.count].iter_mut().zip(&zs) {
-            let forces = [(&s.shape_gain[..], force / n), (&s.lift_gain[..], -a)];
-            let [th_hh, th_gh, th_gg] = s.theta;
-            let hv_next = s.hv.0 - z[0] + th_hh * force / n - th_gh * a;
-            let gv_next = s.gv.0 - z[1] + th_gh * force / n - th_gg * a;
-            if MONITOR {
-                let (out, e) = s.string.advance_monitored(forces, &s.pickup);
-                out_next += out;
-                energy += e.stored;
-                self.losses += e.dissipated;
-                cross += (gv_next - s.gv.1) / dt;
-                s.hv = (s.hv.1, hv_next);
-                s.gv = (s.gv.1, gv_next);
-                s.next = None;
-            } else {
-                let (out, next) = s.string.advance_projecting(forces, &s.pickup, [&s.shape, &s.lift]);
-                out_next += out;
-                s.next = next;
-                if next.is_some() {
-                    s.hv = (s.hv.1, hv_next);
-                    s.gv = (s.gv.1, gv_next);
-                } else {
-                    // The string flushed tiny amplitudes: project the state afresh.
-                    s.measure();
-                }
-            }
+        if fresh {
+            self.hv = (self.hv.1, hv_next);
+            self.gv = (self.gv.1, gv_next);
+            self.b = (self.b.1, b_next);
+        } else {
+            // A bank flushed tiny amplitudes: project the state afresh.
+            let (c, f, cb, fb) = (&self.coupled, &self.free, &self.coupled_bank, &self.free_bank);
+            let (hc, hf) = (cb.project_state(&c.shape), fb.project_state(&f.shape));
+            self.hv = (hc.0 + hf.0, hc.1 + hf.1);
+            self.gv = cb.project_state(&c.lift);
+            self.b = cb.project_state(&c.sole);
         }
         let w_now = self.hammer.position();
         self.hammer.advance(force);
         let y_next = self.y_prev + solution.s;
-        let output = self.out_now;
-        let mut frame = Frame {
-            output,
-            displacement: w_now,
-            velocity: self.hammer.velocity(),
-            compression: self.y_now,
-            force,
-            energy: 0.0,
-            losses: 0.0,
-            control_work: 0.0,
-            work: solver.last_work(),
-        };
+        frame.output = self.out_now;
+        frame.displacement = w_now;
+        frame.velocity = self.hammer.velocity();
+        frame.compression = self.y_now;
+        frame.work = solver.last_work();
         if MONITOR {
-            let db = (b_next - b_now) / dt;
-            let mean = 0.5 * (b_next + b_now);
-            energy += cross * db + 0.5 * sums.mass * db * db + 0.5 * sums.stiffness * mean * mean;
-            frame.energy = energy + self.hammer.energy() + solver.stored_energy(y_next, self.y_now);
+            frame.energy += self.hammer.energy() + solver.stored_energy(y_next, self.y_now);
             frame.losses = self.losses;
         }
         self.last_force = force;
@@ -543,14 +690,72 @@ impl UnisonCore {
         frame
     }
 
-    /// Advance `out.len()` samples with `solver`, writing the output (the mean bridge force per
-    /// string, N).
-    pub fn process_output<S: ContactSolver>(&mut self, solver: &mut S, out: &mut [f64]) {
-        for o in out {
-            *o = self.step::<S, false>(solver).output;
+    /// One step of the coupled part once the hammer is retired: no force, no striking point.
+    /// Returns the coupled part's output at `n+1`.
+    #[inline]
+    fn retired_step(&mut self) -> f64 {
+        let dt2 = self.dt * self.dt;
+        let c = self.coupling;
+        let cp = &self.coupled;
+        let [gz, ez] = match self.next_retired.take() {
+            Some(z) => z,
+            None => self.coupled_bank.history([&cp.lift, &cp.sole]),
+        };
+        let (b_prev, b_now) = self.b;
+        let g0 = (2.0 * self.gv.0 - gz - 2.0 * self.gv.1) / dt2 + c.lift_stiffness * b_now;
+        let b_free = b_prev - ez;
+        let theta = c.gg / dt2;
+        let inertia = c.lift_mass + 0.25 * c.lift_stiffness * dt2;
+        let a = (b_free - 2.0 * b_now + b_prev - c.compliance * g0) / (dt2 + c.compliance * (inertia - theta));
+        let f = -g0 + (theta - inertia) * a;
+        let forces = [(&cp.lift_gain[..], -a), (&cp.sole_gain[..], f)];
+        let (out, next) = self.coupled_bank.advance_projecting(forces, &cp.pickup, [&cp.lift, &cp.sole]);
+        self.next_retired = next;
+        if next.is_some() {
+            self.gv = (self.gv.1, self.gv.0 - gz - c.gg * a);
+            self.b = (self.b.1, b_free + c.compliance * f);
+        } else {
+            self.gv = self.coupled_bank.project_state(&self.coupled.lift);
+            self.b = self.coupled_bank.project_state(&self.coupled.sole);
         }
+        out
+    }
+
+    /// Advance `out.len()` samples with `solver`, writing the output (the mean bridge force per
+    /// string, N); once the hammer is out of reach for good, the free part runs on its own and
+    /// the coupled part without the contact (module docs).
+    pub fn process_output<S: ContactSolver>(&mut self, solver: &mut S, out: &mut [f64]) {
+        let mut done = 0;
+        while done < out.len() && !self.retired {
+            out[done] = self.step::<S, false>(solver).output;
+            done += 1;
+            self.since_check += 1;
+            if self.since_check == RETIRE_CHECK {
+                self.since_check = 0;
+                if self.out_of_reach() {
+                    self.retired = true;
+                    self.last_force = 0.0;
+                    self.next_retired = None;
+                }
+            }
+        }
+        let rest = &mut out[done..];
+        if !rest.is_empty() {
+            // The free part's outputs at n+1, n+2, …; the coupled part's added step by step.
+            self.free_bank.free_steps(&self.free.pickup, rest);
+            for o in rest.iter_mut() {
+                let next = *o + self.retired_step();
+                *o = self.out_now;
+                self.out_now = next;
+                self.hammer.advance(0.0);
+            }
+        }
+        self.mirror();
     }
 }
+
+/// Most modes the monitor's copy of the first string may have (more are not mirrored).
+const MIRROR_MODES: usize = 4096;
 
 /// A hammer striking a unison on a bridge, as a scene (for renders and tests).
 #[derive(Debug, Clone)]
@@ -716,6 +921,7 @@ mod decay_probe {
             let n = (6.0 * fs) as usize;
             let mut out = vec![0.0; n];
             scene.process_output(&mut out);
+            println!("parts {:?} retired {}", scene.core().parts(), scene.core().retired());
             let f1 = note.string.partial(1);
             for partial in [1usize, 2] {
                 let f = note.string.partial(partial);

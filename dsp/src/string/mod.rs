@@ -51,11 +51,13 @@
 //! - `modes`: which modes a string keeps and each mode's coefficients;
 //! - `setup`: making and retuning a [`ModalString`], and what it is made of;
 //! - `step`: the state and the per-sample update;
+//! - `bank`: the modes of several bodies in one set of arrays, stepped together;
 //! - `decay`: extra decay rates (dampers, fades);
 //! - `energy`: the numerical energy and the losses;
 //! - `vectors`: mode shapes, output weights, projections and contact vectors;
 //! - `kernel` and `simd`: the loops over the modes, one code for every vector unit.
 
+mod bank;
 mod decay;
 mod energy;
 mod kernel;
@@ -66,6 +68,7 @@ pub(crate) mod simd;
 mod step;
 mod vectors;
 
+pub use bank::ModalBank;
 pub use energy::StringEnergy;
 pub use kernel::GramVector;
 pub(crate) use modes::{Coefficients, Mode};

@@ -14,7 +14,7 @@ use super::{FLUSH_BELOW, FLUSH_INTERVAL, ModalString, kernel};
 /// Set the amplitudes below [`FLUSH_BELOW`] (m) to zero. Written as a select, not a branch, so
 /// it compiles to a few vector instructions per chunk instead of a mispredicted branch per mode.
 #[inline]
-fn flush_tiny(u: &mut [f64]) {
+pub(super) fn flush_tiny(u: &mut [f64]) {
     for u in u {
         *u = if u.abs() < FLUSH_BELOW { 0.0 } else { *u };
     }

@@ -1,0 +1,364 @@
+//! A bank of independent modes stepped together: the modes of several strings and of other
+//! modal bodies (a bridge) in one set of arrays, so that one pass over the modes advances them
+//! all (docs/physics.md §6.2 and §11).
+//!
+//! Every mode has the exact per-mode scheme of the modal string,
+//! `m_i δ_tt u_i + R̂_i δ_t· u_i + K̂_i μ_t² u_i = f_i`, that is
+//! `u_i^{n+1} = u_i^{n−1} − z̃_i + C_i f_i` with `z̃ = B∘u^{n−1} − A∘u^n`, with its own modal mass
+//! `m_i`. The bank does not know what its modes belong to: the owner keeps the ranges
+//! ([`push_string`](ModalBank::push_string) returns one) and makes the contact, coupling and
+//! output vectors over the whole bank.
+
+use std::ops::Range;
+
+use super::modes::{Coefficients, Mode};
+use super::{FLUSH_INTERVAL, Isa, LANES, ModalString, kernel, step};
+
+/// Modes of several bodies, stepped together.
+#[derive(Debug, Clone)]
+pub struct ModalBank {
+    /// `A_i = 2P_i`, `B_i = 1 + Q_i`, `C_i` (m/N) of the scheme, with any extra decay.
+    coef_a: Vec<f64>,
+    coef_b: Vec<f64>,
+    coef_c: Vec<f64>,
+    /// `K̂_i` (N/m) and `R̂_i` (kg/s), with any extra decay.
+    stiffness: Vec<f64>,
+    resistance: Vec<f64>,
+    /// The modes' own `P_i`, `Q_i` and `K̂_i`, before any extra decay.
+    own_p: Vec<f64>,
+    own_q: Vec<f64>,
+    own_stiffness: Vec<f64>,
+    /// Modal masses `m_i` (kg).
+    mass: Vec<f64>,
+    /// `u^{n−1}`, `u^n` (m) and `z̃` of the current step.
+    u_prev: Vec<f64>,
+    u_now: Vec<f64>,
+    history: Vec<f64>,
+    history_ready: bool,
+    modes: usize,
+    since_flush: u32,
+    sample_rate: f64,
+    isa: Isa,
+}
+
+impl ModalBank {
+    /// An empty bank at `sample_rate` (Hz) with room for `modes` modes.
+    pub fn with_capacity(modes: usize, sample_rate: f64) -> Self {
+        let v = || Vec::with_capacity(modes.div_ceil(LANES) * LANES);
+        Self {
+            coef_a: v(),
+            coef_b: v(),
+            coef_c: v(),
+            stiffness: v(),
+            resistance: v(),
+            own_p: v(),
+            own_q: v(),
+            own_stiffness: v(),
+            mass: v(),
+            u_prev: v(),
+            u_now: v(),
+            history: v(),
+            history_ready: false,
+            modes: 0,
+            since_flush: 0,
+            sample_rate,
+            isa: Isa::detect(),
+        }
+    }
+
+    /// Remove every mode. Never allocates.
+    pub fn clear(&mut self) {
+        for v in self.arrays_mut() {
+            v.clear();
+        }
+        self.modes = 0;
+        self.history_ready = false;
+    }
+
+    fn arrays_mut(&mut self) -> [&mut Vec<f64>; 12] {
+        [
+            &mut self.coef_a,
+            &mut self.coef_b,
+            &mut self.coef_c,
+            &mut self.stiffness,
+            &mut self.resistance,
+            &mut self.own_p,
+            &mut self.own_q,
+            &mut self.own_stiffness,
+            &mut self.mass,
+            &mut self.u_prev,
+            &mut self.u_now,
+            &mut self.history,
+        ]
+    }
+
+    /// Most modes the bank holds without allocating.
+    pub fn capacity(&self) -> usize {
+        self.coef_a.capacity()
+    }
+
+    /// Append one mode from its recursion `(P, Q)` and modal mass (kg), at rest; modes beyond
+    /// the capacity are dropped (returns whether it was added).
+    fn push(&mut self, p: f64, q: f64, mass: f64) -> bool {
+        self.unpad();
+        if self.modes == self.capacity() {
+            return false;
+        }
+        let c = Coefficients::new(p, q, 1.0 / self.sample_rate, mass);
+        self.coef_a.push(c.a);
+        self.coef_b.push(c.b);
+        self.coef_c.push(c.c);
+        self.stiffness.push(c.stiffness);
+        self.resistance.push(c.resistance);
+        self.own_p.push(p);
+        self.own_q.push(q);
+        self.own_stiffness.push(c.stiffness);
+        self.mass.push(mass);
+        self.u_prev.push(0.0);
+        self.u_now.push(0.0);
+        self.history.push(0.0);
+        self.modes += 1;
+        true
+    }
+
+    /// Drop the padding so that modes can be appended.
+    fn unpad(&mut self) {
+        let m = self.modes;
+        for v in self.arrays_mut() {
+            v.truncate(m);
+        }
+    }
+
+    /// Pad every array with inert zero modes to a whole number of chunks: call after the last
+    /// push, before stepping. Never allocates within the capacity.
+    pub fn finish(&mut self) {
+        let padded = self.modes.div_ceil(LANES) * LANES;
+        for v in self.arrays_mut() {
+            v.resize(padded, 0.0);
+        }
+        self.history_ready = false;
+        self.since_flush = 0;
+    }
+
+    /// Append the modes of `string` (prepared at the bank's sample rate), at rest. Returns their
+    /// indices in the bank (fewer than the string's if the capacity runs out).
+    pub fn push_string(&mut self, string: &ModalString) -> Range<usize> {
+        self.push_modes(string, 0..string.modes())
+    }
+
+    /// Append the modes `modes` (indices into the string's, mode `i + 1` at `i`) of `string`, at
+    /// rest. Returns their indices in the bank (fewer if the capacity runs out).
+    pub fn push_modes(&mut self, string: &ModalString, modes: Range<usize>) -> Range<usize> {
+        let start = self.modes;
+        for i in modes.start..modes.end.min(string.modes()) {
+            if !self.push(string.own_p[i], string.own_q[i], string.modal_mass) {
+                break;
+            }
+        }
+        start..self.modes
+    }
+
+    /// Append a damped oscillator of undamped angular frequency `omega0` (rad/s), decay rate
+    /// `sigma` (1/s) and modal mass `mass` (kg), at rest. Returns its index.
+    pub fn push_oscillator(&mut self, omega0: f64, sigma: f64, mass: f64) -> Option<usize> {
+        let (p, q) = Mode::oscillator(omega0, sigma).recursion(1.0 / self.sample_rate);
+        self.push(p, q, mass).then_some(self.modes - 1)
+    }
+
+    /// Number of modes.
+    pub fn modes(&self) -> usize {
+        self.modes
+    }
+
+    /// Length of the per-mode arrays (a whole number of chunks).
+    pub fn padded_len(&self) -> usize {
+        self.u_now.len()
+    }
+
+    /// Sample rate (Hz).
+    pub fn sample_rate(&self) -> f64 {
+        self.sample_rate
+    }
+
+    /// Resize `v` to [`padded_len`](Self::padded_len), zeroed.
+    pub fn fit_vector(&self, v: &mut Vec<f64>) {
+        v.clear();
+        v.resize(self.padded_len(), 0.0);
+    }
+
+    /// Per-mode `C_i` (m/N), padded.
+    pub fn input_gains(&self) -> &[f64] {
+        &self.coef_c
+    }
+
+    /// Per-mode `K̂_i` (N/m) with any extra decay, [`modes`](Self::modes) entries.
+    pub fn stiffness(&self) -> &[f64] {
+        &self.stiffness[..self.modes]
+    }
+
+    /// Per-mode modal masses `m_i` (kg), [`modes`](Self::modes) entries.
+    pub fn masses(&self) -> &[f64] {
+        &self.mass[..self.modes]
+    }
+
+    /// `xᵀy` over the padded arrays.
+    pub fn project(&self, x: &[f64], y: &[f64]) -> f64 {
+        kernel::dot(self.isa, x, y)
+    }
+
+    /// `(vᵀu^{n−1}, vᵀu^n)`.
+    pub fn project_state(&self, v: &[f64]) -> (f64, f64) {
+        (kernel::dot(self.isa, &self.u_prev, v), kernel::dot(self.isa, &self.u_now, v))
+    }
+
+    /// `u^{n−1}` and `u^n` (m) of the modes in `range`.
+    pub fn state(&self, range: Range<usize>) -> (&[f64], &[f64]) {
+        (&self.u_prev[range.clone()], &self.u_now[range])
+    }
+
+    /// Set the whole state (slices of [`modes`](Self::modes) entries).
+    pub fn set_state(&mut self, previous: &[f64], now: &[f64]) {
+        let m = self.modes;
+        self.u_prev[..m].copy_from_slice(previous);
+        self.u_now[..m].copy_from_slice(now);
+        self.history_ready = false;
+    }
+
+    /// Every mode at `value` (m) at both steps (tests of what follows a corrupt state).
+    pub fn fill(&mut self, value: f64) {
+        let m = self.modes;
+        self.u_prev[..m].fill(value);
+        self.u_now[..m].fill(value);
+        self.history_ready = false;
+    }
+
+    /// Every mode at rest.
+    pub fn reset(&mut self) {
+        self.u_prev.fill(0.0);
+        self.u_now.fill(0.0);
+        self.history_ready = false;
+        self.since_flush = 0;
+    }
+
+    /// Add the decay rates `extra` (1/s, one per mode of `range`; missing entries count as 0) to
+    /// the own rates of the modes in `range`, as [`ModalString::set_extra_decay`] does: each
+    /// mode decays faster and rings at its own frequency; the state is untouched.
+    pub fn set_extra_decay(&mut self, range: Range<usize>, extra: &[f64]) {
+        let dt = 1.0 / self.sample_rate;
+        for (k, i) in range.enumerate() {
+            let d = (-extra.get(k).copied().unwrap_or(0.0) * dt).exp();
+            let c = Coefficients::new(self.own_p[i] * d, self.own_q[i] * (d * d), dt, self.mass[i]);
+            self.coef_a[i] = c.a;
+            self.coef_b[i] = c.b;
+            self.coef_c[i] = c.c;
+            self.stiffness[i] = c.stiffness;
+            self.resistance[i] = c.resistance;
+        }
+        self.history_ready = false;
+    }
+
+    /// First pass of a step: `z̃` and its projections on `vectors` (see
+    /// [`ModalString::history`]).
+    #[inline]
+    pub fn history<const K: usize>(&mut self, vectors: [&[f64]; K]) -> [f64; K] {
+        if self.history_ready {
+            return kernel::projections(self.isa, &self.history, vectors);
+        }
+        self.history_ready = true;
+        kernel::history(self.isa, &self.coef_a, &self.coef_b, &self.u_prev, &self.u_now, &mut self.history, vectors)
+    }
+
+    /// Second pass: apply the forces and step on, returning `outputᵀu^{n+1}` and the next step's
+    /// projections of `z̃` on `next` (`None` after a flush of tiny amplitudes); see
+    /// [`ModalString::advance_projecting`].
+    #[inline]
+    pub fn advance_projecting<const K: usize, const J: usize>(
+        &mut self,
+        forces: [(&[f64], f64); K],
+        output: &[f64],
+        next: [&[f64]; J],
+    ) -> (f64, Option<[f64; J]>) {
+        debug_assert!(self.history_ready, "advance follows history");
+        let (a, b) = (&self.coef_a, &self.coef_b);
+        let (projection, next) =
+            kernel::advance(self.isa, a, b, &mut self.u_prev, &self.u_now, &mut self.history, forces, output, next);
+        self.finish_step();
+        (projection, self.history_ready.then_some(next))
+    }
+
+    /// `outputs.len()` steps with no force, by the homogeneous recursion (see
+    /// [`ModalString::free_steps`]), writing each step's `outputᵀu^{n+1}`.
+    pub fn free_steps(&mut self, output: &[f64], outputs: &mut [f64]) {
+        let mut done = 0;
+        while done < outputs.len() {
+            let until_flush = (FLUSH_INTERVAL - self.since_flush) as usize;
+            let n = (outputs.len() - done).min(until_flush).min(kernel::RUN);
+            let (a, b) = (&self.coef_a, &self.coef_b);
+            kernel::free_run(self.isa, a, b, &mut self.u_prev, &mut self.u_now, output, &mut outputs[done..done + n]);
+            // `free_run` leaves the last state in `u_now`; `finish_step` swaps, so undo that.
+            std::mem::swap(&mut self.u_prev, &mut self.u_now);
+            self.since_flush += n as u32 - 1;
+            self.finish_step();
+            done += n;
+        }
+        self.history_ready = false;
+    }
+
+    /// [`advance_projecting`](Self::advance_projecting) without the projections, returning the
+    /// step's energy terms too: `(outputᵀu^{n+1}, stored H^{n+1/2} (J), dissipated (J))`.
+    pub fn advance_monitored<const K: usize>(&mut self, forces: [(&[f64], f64); K], output: &[f64]) -> (f64, f64, f64) {
+        debug_assert!(self.history_ready, "advance follows history");
+        let fs = self.sample_rate;
+        let (mut stored, mut dissipated) = (0.0, 0.0);
+        for i in 0..self.modes {
+            let mut next = self.u_prev[i] - self.history[i];
+            for (g, f) in &forces {
+                next += g[i] * f;
+            }
+            let (v, mean, centred) =
+                ((next - self.u_now[i]) * fs, 0.5 * (next + self.u_now[i]), 0.5 * (next - self.u_prev[i]) * fs);
+            stored += 0.5 * self.mass[i] * v * v + 0.5 * self.stiffness[i] * mean * mean;
+            dissipated += self.resistance[i] * centred * centred / fs;
+            self.u_prev[i] = next;
+        }
+        let out = kernel::dot(self.isa, output, &self.u_prev);
+        self.finish_step();
+        self.history_ready = false;
+        (out, stored, dissipated)
+    }
+
+    /// The energy `H^{n−1/2}` of the modes in `range` weighed with their own stiffnesses (J):
+    /// as [`ModalString::own_energy`].
+    pub fn own_energy(&self, range: Range<usize>) -> f64 {
+        let fs = self.sample_rate;
+        range
+            .map(|i| {
+                let (v, mean) = ((self.u_now[i] - self.u_prev[i]) * fs, 0.5 * (self.u_now[i] + self.u_prev[i]));
+                0.5 * self.mass[i] * v * v + 0.5 * self.own_stiffness[i] * mean * mean
+            })
+            .sum()
+    }
+
+    /// The numerical energy `H^{n−1/2}` of every mode, with the current stiffnesses (J).
+    pub fn energy(&self) -> f64 {
+        let fs = self.sample_rate;
+        (0..self.modes)
+            .map(|i| {
+                let (v, mean) = ((self.u_now[i] - self.u_prev[i]) * fs, 0.5 * (self.u_now[i] + self.u_prev[i]));
+                0.5 * self.mass[i] * v * v + 0.5 * self.stiffness[i] * mean * mean
+            })
+            .sum()
+    }
+
+    #[inline]
+    fn finish_step(&mut self) {
+        std::mem::swap(&mut self.u_prev, &mut self.u_now);
+        self.since_flush += 1;
+        if self.since_flush == FLUSH_INTERVAL {
+            self.since_flush = 0;
+            self.history_ready = false;
+            step::flush_tiny(&mut self.u_prev);
+            step::flush_tiny(&mut self.u_now);
+        }
+    }
+}
