@@ -1,5 +1,5 @@
 //! The bridge and soundboard as the strings see them: a bank of damped modes at the bridge point
-//! (docs/physics.md §11).
+//! (docs/physics.md §12).
 //!
 //! # Model
 //!
@@ -31,7 +31,7 @@
 //! (`1/(8√(Bm''))` for an infinite plate of bending stiffness `B` and surface mass `m''`). Each
 //! mode's effective mass is therefore `M_j = n_j/(4 G)` for a chosen mean conductance `G`,
 //! where `n_j` is the bank's own modal density at mode `j`. The loss factor is the ~2 % that Ege
-//! and Boutillon measured on a piano soundboard (docs/physics.md §11 has the sources).
+//! and Boutillon measured on a piano soundboard (docs/physics.md §12 has the sources).
 
 use crate::string::{Coefficients, Mode};
 
@@ -71,7 +71,7 @@ impl std::error::Error for BridgeError {}
 /// The soundboard's mean driving-point conductance, `Re Y` averaged over modes (s/kg): an
 /// impedance of 2,500 kg/s, within the range measured at piano bridges (about 1,000 kg/s at
 /// 100 Hz falling to 10 kg/s at 10 kHz in magnitude on an upright, Wogram; the real part lies
-/// below the magnitude between resonances). See docs/physics.md §11 for what it sets.
+/// below the magnitude between resonances). See docs/physics.md §12 for what it sets.
 pub const SOUNDBOARD_CONDUCTANCE: f64 = 4e-4;
 
 /// The soundboard's loss factor (dimensionless): the ~2 % mean modal loss factor Ege and

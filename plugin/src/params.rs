@@ -4,7 +4,7 @@
 //! mapped to the engine's [`Settings`] by [`ParamValues::settings`].
 //!
 //! Hosts see them in four groups, the editor's sections (VST3 units, CLAP modules): Engine
-//! (`mode` to `voices`), Piano (`hard` to `damper`), Slide (`slide` to `pickup`) and Output
+//! (`mode` to `voices`), Piano (`hard` to `detune`), Slide (`slide` to `pickup`) and Output
 //! (`gain`, `limit`), in the order of the table. `slide` and `hand` take CLAP polyphonic
 //! modulation: a per-note offset, in the parameter's units, added to the value for that note
 //! alone (the sum clamped to the range), where the parameter acts (`slide` when the slide does not
@@ -25,6 +25,7 @@
 //! | `damp` | String damping | 0.1..=10× | 1× | [`Settings::damping`] |
 //! | `bright` | Brightness | 0..=4× | 1× | [`Settings::brightness`] (inharmonicity) |
 //! | `damper` | Damper | 1..=500 1/s | 60 1/s | [`Settings::damper_rate`] |
+//! | `detune` | Unison detune | 0..=20 ct | 2.5 ct | [`Settings::unison_detune`] (spread of each unison, cents) |
 //! | `slide` | Slide position | 0..=24 st | 5 st | [`Settings::slide_position`] |
 //! | `follow` | Slide follows key | on/off | on | [`Settings::follow_key`] |
 //! | `glide` | Glide time | 1..=2000 ms | 50 ms | [`Settings::glide_time`] |
@@ -304,6 +305,8 @@ param_group! {
         brightness: FloatParam = "bright",
         /// Damper decay rate (1/s).
         damper: FloatParam = "damper",
+        /// Spread of each unison's tuning (cents).
+        unison_detune: FloatParam = "detune",
     }
 }
 
@@ -478,7 +481,7 @@ mod tests {
             QsaParams::default().param_map().into_iter().map(|(id, _, group)| (id, group)).collect();
         let expected = |id: &str| match id {
             "mode" | "solver" | "segs" | "nb" | "voices" => "Engine",
-            "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" => "Piano",
+            "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" | "detune" => "Piano",
             "gain" | "limit" => "Output",
             _ => "Slide",
         };

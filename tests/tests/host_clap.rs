@@ -946,7 +946,7 @@ fn parameters_are_grouped_and_slide_and_hand_are_polyphonic() {
     }
     let expected_group = |id: &str| match id {
         "mode" | "solver" | "segs" | "nb" | "voices" => "Engine",
-        "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" => "Piano",
+        "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" | "detune" => "Piano",
         "gain" | "limit" => "Output",
         _ => "Slide",
     };

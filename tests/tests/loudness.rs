@@ -47,16 +47,16 @@ fn loudness_is_even_across_the_keyboard_at_every_dynamic_level() {
     }
 }
 
-/// Highest key whose brightness rises at every step of velocity. Above it (A5 and up) the hammer
+/// Highest key whose brightness rises at every step of velocity. Above it (F♯5 and up) the hammer
 /// stays on the string for about a period or longer, as on measured grands, and in the top octave
 /// for two to three periods at the quietest velocities: the zeros of the contact pulse's spectrum
 /// sweep across the few partials as the hammer speeds up, and the RMS frequency of neighbouring
 /// velocities wanders (by up to 22 % at velocities 7–15 in C7–C8, under 1 % between mezzo-forte
 /// velocities), though fortissimo is still brighter than piano there (docs/physics.md §8.4).
-const BRIGHTNESS_EVERY_STEP_UP_TO: u8 = 80;
+const BRIGHTNESS_EVERY_STEP_UP_TO: u8 = 77;
 
 /// On every third key, each velocity step of 8 makes the note louder (integrated loudness); up to
-/// G#5 each step also makes it brighter (RMS frequency), and on every key fortissimo (120) is
+/// F5 each step also makes it brighter (RMS frequency), and on every key fortissimo (120) is
 /// brighter than piano (40): the dynamic levels are ordered as a pianist expects.
 #[test]
 fn velocity_makes_every_key_louder_and_brighter() {

@@ -177,7 +177,7 @@ const fn float(min: f32, max: f32, default: f32, unit: &'static str, scale: Scal
 }
 
 /// Every parameter, in display order (the groups in the order Engine, Piano, Slide, Output).
-pub const PARAMETERS: [ParamSpec; 27] = [
+pub const PARAMETERS: [ParamSpec; 28] = [
     ParamSpec {
         id: "mode",
         name: "Mode",
@@ -279,6 +279,15 @@ pub const PARAMETERS: [ParamSpec; 27] = [
         maps_to: "[`Settings::damper_rate`]",
         get: |v| v.damper,
         put: |v, x| v.damper = x,
+    },
+    ParamSpec {
+        id: "detune",
+        name: "Unison detune",
+        group: Group::Piano,
+        kind: float(0.0, 20.0, 2.5, " ct", Scale::Skewed(-1.0), ValueDisplay::Rounded(2)),
+        maps_to: "[`Settings::unison_detune`] (spread of each unison, cents)",
+        get: |v| v.unison_detune,
+        put: |v, x| v.unison_detune = x,
     },
     ParamSpec {
         id: "slide",
@@ -462,8 +471,8 @@ pub const PARAMETERS: [ParamSpec; 27] = [
 ];
 
 /// The parameter ids, in display order.
-pub const PARAM_IDS: [&str; 27] = {
-    let mut ids = [""; 27];
+pub const PARAM_IDS: [&str; PARAMETERS.len()] = {
+    let mut ids = [""; PARAMETERS.len()];
     let mut i = 0;
     while i < ids.len() {
         ids[i] = PARAMETERS[i].id;
@@ -634,6 +643,8 @@ pub struct ParamValues {
     pub brightness: f32,
     /// `damper` (1/s).
     pub damper: f32,
+    /// `detune` (cents).
+    pub unison_detune: f32,
     /// `slide` (semitones).
     pub slide_position: f32,
     /// `follow`.
@@ -683,6 +694,7 @@ impl Default for ParamValues {
             damping: 0.0,
             brightness: 0.0,
             damper: 0.0,
+            unison_detune: 0.0,
             slide_position: 0.0,
             follow_key: false,
             glide_ms: 0.0,
@@ -740,6 +752,7 @@ impl ParamValues {
             damping: f(self.damping),
             brightness: f(self.brightness),
             damper_rate: f(self.damper),
+            unison_detune: f(self.unison_detune),
             slide_position: f(self.slide_position),
             follow_key: self.follow_key,
             glide_time: f(self.glide_ms) * 1e-3,
@@ -815,9 +828,9 @@ mod tests {
     #[test]
     fn ids_are_the_released_ones() {
         let released = [
-            "mode", "solver", "segs", "nb", "voices", "hard", "hmass", "strike", "damp", "bright", "damper", "slide",
-            "follow", "glide", "bend", "hand", "handsrc", "smass", "hstiff", "hdamp", "fdamp", "kappa", "alpha",
-            "pluck", "pickup", "gain", "limit",
+            "mode", "solver", "segs", "nb", "voices", "hard", "hmass", "strike", "damp", "bright", "damper", "detune",
+            "slide", "follow", "glide", "bend", "hand", "handsrc", "smass", "hstiff", "hdamp", "fdamp", "kappa",
+            "alpha", "pluck", "pickup", "gain", "limit",
         ];
         assert_eq!(PARAM_IDS, released);
     }
@@ -836,6 +849,7 @@ mod tests {
             (s.damping, d.damping),
             (s.brightness, d.brightness),
             (s.damper_rate, d.damper_rate),
+            (s.unison_detune, d.unison_detune),
             (s.slide_position, d.slide_position),
             (s.glide_time, d.glide_time),
             (s.bend_range, d.bend_range),
@@ -864,6 +878,7 @@ mod tests {
         let fields = |s: &Settings| {
             [s.hardness, s.hammer_mass, s.strike_position, s.damping, s.brightness, s.damper_rate, s.slide_position]
                 .into_iter()
+                .chain([s.unison_detune])
                 .chain([s.glide_time, s.bend_range, s.hand_height, s.slide_mass, s.hand_stiffness, s.hand_damping])
                 .chain([s.finger_damping, s.slide_kappa, s.slide_alpha, s.pluck_position, s.pickup_position])
                 .collect::<Vec<f64>>()

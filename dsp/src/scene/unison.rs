@@ -1,5 +1,5 @@
 //! One piano key: a hammer striking a unison of one to three strings that end on a moving bridge
-//! (docs/physics.md §11).
+//! (docs/physics.md §12).
 //!
 //! # Strings on a moving bridge
 //!
@@ -70,6 +70,25 @@
 //! changes only by the strings' and the bridge's damping (the cross terms are exact discrete
 //! derivatives: `δ_t−(δ_t+x δ_t+y) = δ_tt x δ_t·y + δ_t·x δ_tt y`). The kinetic part is positive:
 //! `m_L − Σ_i g_i²/m̃ = ρAL(1/3 − (2/π²)Σ_{i≤M} 1/i²) > 0` for any number of modes `M`.
+//!
+//! # Which modes feel the bridge
+//!
+//! The bridge drains a unison moving in phase at `σ_b = 2·S·f0·Z0·G` (Weinreich; `Z0 = √(Tρ)`, `G`
+//! the bridge's mean conductance). A mode whose own decay rate exceeds [`COUPLING_RATIO`]`·σ_b`
+//! loses its energy to its own damping ten times faster than to the bridge, so it ends on a still
+//! bridge (`g_i = 0`). The modes on the bridge and the bridge's own form one [`ModalBank`] (the
+//! coupled part), the others a second (the free part).
+//!
+//! # Retiring the hammer
+//!
+//! As for a single string ([`HammerCore`](super::HammerCore)): with `H` the energy of strings and
+//! bridge, which only decreases while no force acts and the coefficients stay,
+//! `|u_h^n| ≤ √(2H)(ρ_V + ½Δt ρ_T)` with `ρ_V² = Σ c_i²/K̂_i` and `ρ_T² = cᵀM⁻¹c` for the contact
+//! vector `c` (`h` on string modes, `ℓ` on bridge modes) and the coupled mass matrix `M`, whose
+//! inverse has a closed form (docs/physics.md §12.6). Checked every [`RETIRE_CHECK`] steps; once
+//! the hammer moves away beyond that reach, the contact is not solved any more, the free part runs
+//! by its homogeneous recursion in register-resident runs and the coupled part steps without the
+//! striking point. A change of coefficients (a damper) has the hammer judged again.
 
 use std::ops::Range;
 
@@ -853,6 +872,40 @@ mod tests {
             assert!(drift < 1e-9, "{name}: {drift:e}");
             assert!(losses > 0.05, "{name}: the strings and bridge dissipate ({losses})");
         }
+    }
+
+    /// The real-time path (the hammer retired once out of reach, the free part run on its own)
+    /// gives the monitored path's output to rounding (1e-9 of the peak over 1 s, which the
+    /// hammer leaves within 0.1 s), for a detuned trichord on the soundboard; and a damper landing
+    /// on the retired voice brings the hammer back into judgement without changing the sound.
+    #[test]
+    fn the_real_time_path_retires_the_hammer_and_matches_the_monitored_path() {
+        let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
+        let y_ref = law(3).compression_at_energy(0.5 * 3.0 * 2.97e-3 * 3.5 * 3.5);
+        let solver = || QsaSolver::new(QuadSpline::new(law(3), y_ref, 6).unwrap());
+        let mut fast = HammerUnison::new(c4_unison(3, [-1.0, 0.2, 0.8], &board), solver());
+        let mut slow = HammerUnison::new(c4_unison(3, [-1.0, 0.2, 0.8], &board), solver());
+        let n = 48_000;
+        let (mut a, mut frames) = (vec![0.0; n], vec![Frame::default(); n]);
+        for (k, block) in a.chunks_mut(64).enumerate() {
+            if k == 400 {
+                // A damper on every mode of both at the same step.
+                let extra = [40.0; 200];
+                fast.core.set_extra_decay(&extra, 0.0);
+                slow.core.set_extra_decay(&extra, 0.0);
+                assert!(!fast.core.retired(), "a change of coefficients has the hammer judged again");
+            }
+            fast.process_output(block);
+            slow.process(&mut frames[k * 64..(k + 1) * 64]);
+            if k == 100 {
+                assert!(fast.core.retired(), "the hammer is retired 0.13 s after the strike");
+            }
+        }
+        let peak = frames.iter().fold(0.0f64, |m, f| m.max(f.output.abs()));
+        let worst = a.iter().zip(&frames).map(|(x, f)| (x - f.output).abs()).fold(0.0, f64::max);
+        println!("peak {peak:.3} N, worst difference {worst:.2e} N, retired at the end: {}", fast.core.retired());
+        assert!(worst < 1e-9 * peak, "{worst:e} of {peak}");
+        assert!(fast.core.retired());
     }
 
     /// With a bridge that does not move (one mode of 10¹² kg) and three identical strings, the
