@@ -77,7 +77,10 @@ fn stages(key: u8, partial: usize, detune: f64) -> (f64, f64) {
 fn a_mistuned_unison_decays_in_two_stages() {
     for key in [55u8, 60, 67, 72] {
         let (prompt, after) = stages(key, 2, 2.5);
-        println!("key {key}, partial 2: prompt sound {prompt:.1} dB/s, aftersound {after:.1} dB/s, ratio {:.2}", prompt / after);
+        println!(
+            "key {key}, partial 2: prompt sound {prompt:.1} dB/s, aftersound {after:.1} dB/s, ratio {:.2}",
+            prompt / after
+        );
         assert!(prompt < 0.0 && after < 0.0, "key {key}: both stages decay");
         assert!(prompt / after >= 2.0, "key {key}: {prompt:.1} dB/s then {after:.1} dB/s");
     }
