@@ -384,8 +384,8 @@ pub fn push_event(buffer: &mut EventBuffer, time: u32, ev: Ev) {
 /// The plugin's parameters (the engine's table, `qsa_dsp::instrument::PARAMETERS`): string id,
 /// name, and the step count of the stepped ones (CLAP value range 0..=steps; continuous ones span
 /// 0..=1).
-pub const PARAMETERS: [(&str, &str, Option<u32>); 27] = {
-    let mut list = [("", "", None); 27];
+pub const PARAMETERS: [(&str, &str, Option<u32>); qsa_dsp::instrument::PARAMETERS.len()] = {
+    let mut list = [("", "", None); qsa_dsp::instrument::PARAMETERS.len()];
     let mut i = 0;
     while i < list.len() {
         let spec = &qsa_dsp::instrument::PARAMETERS[i];
