@@ -6,69 +6,10 @@
 //!
 //! A partial's level is measured by heterodyning the output at the partial's frequency over
 //! 50 ms windows; a stage's decay rate (dB/s) is the least-squares slope of the level over its
-//! span.
+//! span: the prompt sound over 0.05–0.6 s, the aftersound over 2–4.5 s, struck at velocity 0.6
+//! with the pedal down (`xtask::realism::two_stages`, which also makes the report's pictures).
 
-use qsa_dsp::instrument::{Event, Instrument, Settings};
-use qsa_dsp::preset::piano_note;
-
-const FS: f64 = 48_000.0;
-const WINDOW: f64 = 0.05;
-
-/// Key `key` struck at `velocity` with the sustain pedal down, `seconds` long, with a unison
-/// spread of `detune` cents: the left channel.
-fn render(key: u8, velocity: f32, detune: f64, seconds: f64) -> Vec<f64> {
-    let settings = Settings { unison_detune: detune, ..Settings::default() };
-    let mut piano = Instrument::new(FS, 4, settings);
-    piano.handle(Event::Sustain { channel: 0, down: true });
-    piano.handle(Event::NoteOn { channel: 0, key, velocity });
-    let n = (seconds * FS) as usize;
-    let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
-    for (l, r) in left.chunks_mut(256).zip(right.chunks_mut(256)) {
-        piano.process(l, r);
-    }
-    left.into_iter().map(f64::from).collect()
-}
-
-/// The level (dB) of the component at `frequency` (Hz) in each 50 ms window.
-fn levels(signal: &[f64], frequency: f64) -> Vec<f64> {
-    let w = (WINDOW * FS) as usize;
-    signal
-        .chunks_exact(w)
-        .enumerate()
-        .map(|(k, chunk)| {
-            let (mut re, mut im) = (0.0, 0.0);
-            for (i, x) in chunk.iter().enumerate() {
-                let phase = std::f64::consts::TAU * frequency * (k * w + i) as f64 / FS;
-                re += x * phase.cos();
-                im += x * phase.sin();
-            }
-            10.0 * ((re * re + im * im) / (w * w) as f64).log10()
-        })
-        .collect()
-}
-
-/// Least-squares slope (dB/s) of `levels` over the windows from `from` to `to` (s).
-fn slope(levels: &[f64], from: f64, to: f64) -> f64 {
-    let points: Vec<(f64, f64)> = levels
-        .iter()
-        .enumerate()
-        .map(|(k, &l)| ((k as f64 + 0.5) * WINDOW, l))
-        .filter(|&(t, _)| t >= from && t <= to)
-        .collect();
-    let n = points.len() as f64;
-    let (mt, ml) = (points.iter().map(|p| p.0).sum::<f64>() / n, points.iter().map(|p| p.1).sum::<f64>() / n);
-    let cov: f64 = points.iter().map(|p| (p.0 - mt) * (p.1 - ml)).sum();
-    let var: f64 = points.iter().map(|p| (p.0 - mt).powi(2)).sum();
-    cov / var
-}
-
-/// Decay rates (dB/s) of partial `partial` of `key` struck mezzo-forte with a unison spread of
-/// `detune` cents: the prompt sound over 0.05–0.6 s and the aftersound over 2–4.5 s.
-fn stages(key: u8, partial: usize, detune: f64) -> (f64, f64) {
-    let out = render(key, 0.6, detune, 5.0);
-    let l = levels(&out, piano_note(key).string.partial(partial));
-    (slope(&l, 0.05, 0.6), slope(&l, 2.0, 4.5))
-}
+use xtask::realism::two_stages as stages;
 
 /// Mid-range keys (G3, C4, G4, C5) with the default unison spread: the second partial's prompt
 /// sound decays at least twice as fast as its aftersound (measured 2.3–2.7 times; the prompt

@@ -8,37 +8,14 @@
 //! mezzo-forte 2.5 m/s, forte 5 m/s (Askenfelt & Jansson 1990 give about 5 m/s for forte;
 //! Chaigne & Askenfelt 1994 simulate mezzo-forte at 2.5 m/s).
 
-use qsa_dsp::instrument::{Event, Instrument, Settings, hammer_speed};
 use qsa_dsp::preset::key_frequency;
+use xtask::realism::{FORTE, FS, MEZZO_FORTE, PIANO};
 
-const FS: f64 = 48_000.0;
-/// Hammer speeds of piano, mezzo-forte and forte (m/s).
-const PIANO: f64 = 1.0;
-const MEZZO_FORTE: f64 = 2.5;
-const FORTE: f64 = 5.0;
-
-/// The MIDI velocity (0–1) at which the instrument's hammer leaves at `speed` (m/s).
-fn velocity_for(speed: f64) -> f32 {
-    let v = (speed / hammer_speed(0.0)).ln() / (hammer_speed(1.0) / hammer_speed(0.0)).ln();
-    assert!((hammer_speed(v) - speed).abs() < 1e-9 * speed, "{speed} m/s is outside the velocity curve");
-    v as f32
-}
-
-/// Duration of the hammer's first contact with its string (s) when `key` is struck at `speed`.
+/// Duration of the hammer's first contact with its strings (s) when `key` is struck at `speed`
+/// (`xtask::realism::contact_duration`, also what the report's picture shows).
 fn contact_duration(key: u8, speed: f64) -> f64 {
-    let mut piano = Instrument::new(FS, 1, Settings { limiter: false, ..Settings::default() });
-    piano.handle(Event::NoteOn { channel: 0, key, velocity: velocity_for(speed) });
-    let (mut l, mut r) = ([0.0f32; 1], [0.0f32; 1]);
-    let mut first = None;
-    for n in 0..(0.02 * FS) as usize {
-        piano.process(&mut l, &mut r);
-        match (piano.in_contact() > 0, first) {
-            (true, None) => first = Some(n),
-            (false, Some(start)) => return (n - start) as f64 / FS,
-            _ => {}
-        }
-    }
-    panic!("key {key} at {speed} m/s: no contact that ends within 20 ms");
+    xtask::realism::contact_duration(key, speed)
+        .unwrap_or_else(|| panic!("key {key} at {speed} m/s: no contact that ends within 20 ms"))
 }
 
 fn period(key: u8) -> f64 {

@@ -243,7 +243,7 @@ fn persist(temp: tempfile::NamedTempFile, path: &Path) -> Result<(), ExamplesErr
     Ok(())
 }
 
-fn write_atomically(
+pub(crate) fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
 ) -> Result<(), ExamplesError> {
@@ -253,7 +253,7 @@ fn write_atomically(
 }
 
 /// `signal` as a mono 16-bit WAV at [`RATE`].
-fn write_wav(file: &mut std::fs::File, signal: &[f64]) -> std::io::Result<()> {
+pub(crate) fn write_wav(file: &mut std::fs::File, signal: &[f64]) -> std::io::Result<()> {
     let spec =
         hound::WavSpec { channels: 1, sample_rate: RATE, bits_per_sample: 16, sample_format: hound::SampleFormat::Int };
     let mut buffer = std::io::Cursor::new(Vec::with_capacity(44 + 2 * signal.len()));

@@ -22,6 +22,7 @@ pub mod examples;
 pub mod loudness;
 pub mod presets;
 pub mod python_venv;
+pub mod realism;
 pub mod render;
 pub mod report;
 pub mod test_suite;
@@ -45,6 +46,9 @@ pub enum Cli {
     /// Measure the piano's loudness per key (EBU R128) at three velocities and its fortissimo
     /// chords; write the report's loudness plot or re-voice the keyboard.
     Loudness(loudness::LoudnessArgs),
+    /// Compare the piano with measured grands: two-stage decay, contact duration, inharmonicity
+    /// and decay rates against key, and a scale at three dynamics, into docs/report/realism.md.
+    Realism(realism::RealismArgs),
     /// List the factory presets: id, category, name and description.
     Presets,
     /// Render an audio example and spectrogram per preset category into docs/examples/.
@@ -104,6 +108,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>, stdout: &mut dyn Write, std
         Cli::Presets => presets::run(stdout).map_err(|e| e.to_string()),
         Cli::Examples(args) => examples::run(&args, stdout).map(|_| ()).map_err(|e| e.to_string()),
         Cli::Loudness(args) => loudness::run(&args, stdout),
+        Cli::Realism(args) => realism::run(&args, stdout),
         Cli::Bundle(args) => bundler("bundle", args.args),
         Cli::BundleUniversal(args) => bundler("bundle-universal", args.args),
         Cli::KnownPackages => bundler("known-packages", Vec::new()),

@@ -1,0 +1,497 @@
+//! How the piano compares with real grands: `cargo xtask realism` writes `docs/report/realism.md`
+//! with its pictures and sound examples in `docs/report/realism/`.
+//!
+//! - **Two-stage decay**: the partial envelopes of C4 struck mezzo-forte (pedal down), with the
+//!   default unison spread and with the unison tuned exactly alike.
+//! - **Contact duration** against key at mezzo-forte and forte, beside the string's period and
+//!   the published measurements of docs/physics.md §8.4.
+//! - **Inharmonicity** `B` against key beside the grands measured by Lehtonen et al. and Rigaud
+//!   et al.
+//! - **Decay rates** of the first two partials against key, prompt sound and aftersound.
+//! - **A scale at three dynamics**: C4 to C5 at velocities 40, 80 and 120, mono 16-bit WAV.
+//!
+//! The measuring functions here are also what the tests use (`tests/tests/piano_rule.rs`,
+//! `tests/tests/piano_realism.rs`).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use plotters::prelude::*;
+use qsa_dsp::instrument::{Event, Instrument, Settings, hammer_speed};
+use qsa_dsp::preset::{key_frequency, piano_note};
+
+/// Sample rate of every measurement (Hz).
+pub const FS: f64 = 48_000.0;
+
+/// Window of the partial levels (s).
+pub const LEVEL_WINDOW: f64 = 0.05;
+
+/// The prompt sound's and the aftersound's spans (s) for decay rates.
+pub const PROMPT: (f64, f64) = (0.05, 0.6);
+pub const AFTERSOUND: (f64, f64) = (2.0, 4.5);
+
+/// Hammer speeds of piano, mezzo-forte and forte (m/s): Askenfelt & Jansson give about 5 m/s for
+/// forte; Chaigne & Askenfelt simulate mezzo-forte at 2.5 m/s.
+pub const PIANO: f64 = 1.0;
+pub const MEZZO_FORTE: f64 = 2.5;
+pub const FORTE: f64 = 5.0;
+
+/// The MIDI velocity (0–1) at which the instrument's hammer leaves at `speed` (m/s), or `None`
+/// outside the velocity curve.
+pub fn velocity_for(speed: f64) -> Option<f32> {
+    let v = (speed / hammer_speed(0.0)).ln() / (hammer_speed(1.0) / hammer_speed(0.0)).ln();
+    ((0.0..=1.0).contains(&v) && (hammer_speed(v) - speed).abs() < 1e-9 * speed).then_some(v as f32)
+}
+
+/// Duration of the hammer's first contact with its strings (s) when `key` is struck at `speed`
+/// (m/s): the first continuous stretch of samples in which the instrument's hammer touches
+/// (`Instrument::in_contact`), one sample per call at [`FS`], so to ±1 sample. `None` if no
+/// contact ends within 20 ms or the speed is outside the velocity curve.
+pub fn contact_duration(key: u8, speed: f64) -> Option<f64> {
+    let mut piano = Instrument::new(FS, 1, Settings { limiter: false, ..Settings::default() });
+    piano.handle(Event::NoteOn { channel: 0, key, velocity: velocity_for(speed)? });
+    let (mut l, mut r) = ([0.0f32; 1], [0.0f32; 1]);
+    let mut first = None;
+    for n in 0..(0.02 * FS) as usize {
+        piano.process(&mut l, &mut r);
+        match (piano.in_contact() > 0, first) {
+            (true, None) => first = Some(n),
+            (false, Some(start)) => return Some((n - start) as f64 / FS),
+            _ => {}
+        }
+    }
+    None
+}
+
+/// Key `key` struck at `velocity` with the sustain pedal down, `seconds` long, with a unison
+/// spread of `detune` cents: the left channel.
+pub fn held_note(key: u8, velocity: f32, detune: f64, seconds: f64) -> Vec<f64> {
+    let settings = Settings { unison_detune: detune, ..Settings::default() };
+    let mut piano = Instrument::new(FS, 4, settings);
+    piano.handle(Event::Sustain { channel: 0, down: true });
+    piano.handle(Event::NoteOn { channel: 0, key, velocity });
+    let n = (seconds * FS) as usize;
+    let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
+    for (l, r) in left.chunks_mut(256).zip(right.chunks_mut(256)) {
+        piano.process(l, r);
+    }
+    left.into_iter().map(f64::from).collect()
+}
+
+/// The level (dB) of the component at `frequency` (Hz) in each [`LEVEL_WINDOW`] of `signal`
+/// (sampled at [`FS`]), by heterodyning.
+pub fn partial_levels(signal: &[f64], frequency: f64) -> Vec<f64> {
+    let w = (LEVEL_WINDOW * FS) as usize;
+    signal
+        .chunks_exact(w)
+        .enumerate()
+        .map(|(k, chunk)| {
+            let (mut re, mut im) = (0.0, 0.0);
+            for (i, x) in chunk.iter().enumerate() {
+                let phase = std::f64::consts::TAU * frequency * (k * w + i) as f64 / FS;
+                re += x * phase.cos();
+                im += x * phase.sin();
+            }
+            10.0 * ((re * re + im * im) / (w * w) as f64).log10()
+        })
+        .collect()
+}
+
+/// Least-squares slope (dB/s) of `levels` (one per [`LEVEL_WINDOW`]) over `span` (s).
+pub fn decay_rate(levels: &[f64], span: (f64, f64)) -> f64 {
+    let points: Vec<(f64, f64)> = levels
+        .iter()
+        .enumerate()
+        .map(|(k, &l)| ((k as f64 + 0.5) * LEVEL_WINDOW, l))
+        .filter(|&(t, _)| t >= span.0 && t <= span.1)
+        .collect();
+    let n = points.len() as f64;
+    let (mt, ml) = (points.iter().map(|p| p.0).sum::<f64>() / n, points.iter().map(|p| p.1).sum::<f64>() / n);
+    let cov: f64 = points.iter().map(|p| (p.0 - mt) * (p.1 - ml)).sum();
+    let var: f64 = points.iter().map(|p| (p.0 - mt).powi(2)).sum();
+    cov / var
+}
+
+/// Decay rates (dB/s) of partial `partial` of `key` struck at velocity 0.6 with a unison spread of
+/// `detune` cents: `(prompt sound, aftersound)`.
+pub fn two_stages(key: u8, partial: usize, detune: f64) -> (f64, f64) {
+    let out = held_note(key, 0.6, detune, 5.0);
+    let levels = partial_levels(&out, piano_note(key).string.partial(partial));
+    (decay_rate(&levels, PROMPT), decay_rate(&levels, AFTERSOUND))
+}
+
+/// Published inharmonicity coefficients of grands: `(key, low, high, source)`.
+pub const MEASURED_B: [(u8, f64, f64, &str); 6] = [
+    (36, 3.8e-5, 3.8e-5, "Lehtonen et al. 2007"),
+    (60, 3.3e-4, 3.3e-4, "Lehtonen et al. 2007"),
+    (84, 2.3e-3, 2.3e-3, "Lehtonen et al. 2007"),
+    (60, 3.1e-4, 3.3e-4, "Rigaud et al. 2013"),
+    (84, 2.8e-3, 3.2e-3, "Rigaud et al. 2013"),
+    (108, 2.6e-2, 3.1e-2, "Rigaud et al. 2013"),
+];
+
+/// Published contact durations: `(key, speed (m/s), low (ms), high (ms), source)`.
+pub const MEASURED_CONTACT: [(u8, f64, f64, f64, &str); 3] = [
+    (24, MEZZO_FORTE, 4.0, 5.0, "Askenfelt & Jansson 1990: 4–5 ms at C1"),
+    (108, MEZZO_FORTE, 0.0, 1.0, "Askenfelt & Jansson 1990: under 1 ms in the top treble"),
+    (96, MEZZO_FORTE, 0.602, 0.602, "Chaigne & Askenfelt 1994: 1.26 periods at C7, 2.5 m/s"),
+];
+
+/// Arguments of `cargo xtask realism`.
+#[derive(Debug, Args)]
+pub struct RealismArgs {
+    /// Repository root (docs/report/ is written under it).
+    #[arg(long, default_value = ".")]
+    pub root: PathBuf,
+}
+
+const BLUE: RGBColor = RGBColor(31, 119, 180);
+const GREEN: RGBColor = RGBColor(44, 160, 44);
+const RED: RGBColor = RGBColor(214, 39, 40);
+const PURPLE: RGBColor = RGBColor(148, 103, 189);
+
+/// Write the pictures, the sound examples and `docs/report/realism.md`.
+pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
+    let dir = args.root.join("docs/report/realism");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let envelopes = envelopes(&dir.join("envelopes.png"))?;
+    let contacts = contacts(&dir.join("contact.png"))?;
+    inharmonicity(&dir.join("inharmonicity.png"))?;
+    let decays = decays(&dir.join("decay.png"))?;
+    for (name, velocity) in [("pp", 40u8), ("mf", 80), ("ff", 120)] {
+        let path = dir.join(format!("scale-{name}.wav"));
+        let scale = scale(velocity);
+        crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scale))
+            .map_err(|e| e.to_string())?;
+    }
+    let text = readme(&envelopes, &contacts, &decays);
+    let path = args.root.join("docs/report/realism.md");
+    std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    writeln!(out, "{}", serde_json::json!({ "written": path.display().to_string() })).map_err(|e| e.to_string())
+}
+
+/// C4's partial levels: `(partial, detune, levels)` for partials 1–3 at the default spread and
+/// partial 2 tuned exactly.
+type Envelope = (usize, f64, Vec<f64>);
+
+fn envelopes(path: &Path) -> Result<Vec<Envelope>, String> {
+    let spread = Settings::default().unison_detune;
+    let (detuned, exact) = (held_note(60, 0.6, spread, 5.0), held_note(60, 0.6, 0.0, 5.0));
+    let c4 = piano_note(60).string;
+    let mut rows: Vec<Envelope> = (1..=3).map(|p| (p, spread, partial_levels(&detuned, c4.partial(p)))).collect();
+    rows.push((2, 0.0, partial_levels(&exact, c4.partial(2))));
+    let top = rows.iter().flat_map(|r| r.2.iter().copied()).fold(f64::NEG_INFINITY, f64::max);
+    let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("C4 struck mezzo-forte, pedal down: partial levels (50 ms windows)", ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0f64..5f64, (top - 80.0)..(top + 3.0))
+        .map_err(|e| e.to_string())?;
+    chart.configure_mesh().x_desc("time (s)").y_desc("level (dB)").draw().map_err(|e| e.to_string())?;
+    for ((partial, detune, levels), colour) in rows.iter().zip([BLUE, GREEN, RED, PURPLE]) {
+        let points = levels.iter().enumerate().map(|(k, &l)| ((k as f64 + 0.5) * LEVEL_WINDOW, l));
+        let label = if *detune > 0.0 {
+            format!("partial {partial}, unison spread {detune} cents")
+        } else {
+            format!("partial {partial}, unison tuned exactly alike")
+        };
+        let width = if *detune > 0.0 { 2 } else { 1 };
+        chart
+            .draw_series(LineSeries::new(points, colour.stroke_width(width)))
+            .map_err(|e| e.to_string())?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(width)));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())?;
+    Ok(rows)
+}
+
+/// Contact durations (ms) per key: `(key, mezzo-forte, forte)`.
+type Contact = (u8, f64, f64);
+
+fn contacts(path: &Path) -> Result<Vec<Contact>, String> {
+    let rows: Vec<Contact> = (21..=108u8)
+        .filter_map(|k| Some((k, contact_duration(k, MEZZO_FORTE)? * 1e3, contact_duration(k, FORTE)? * 1e3)))
+        .collect();
+    let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("Hammer–string contact duration against key", ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(60)
+        .build_cartesian_2d(20f64..109f64, (0.1f64..10.0f64).log_scale())
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc("MIDI key (21 = A0, 60 = C4, 108 = C8)")
+        .y_desc("duration (ms)")
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let series = [
+        (rows.iter().map(|r| (f64::from(r.0), r.1)).collect::<Vec<_>>(), BLUE, "the model, mezzo-forte (2.5 m/s)"),
+        (rows.iter().map(|r| (f64::from(r.0), r.2)).collect::<Vec<_>>(), RED, "the model, forte (5 m/s)"),
+        (
+            (21..=108u8).map(|k| (f64::from(k), 1e3 / key_frequency(k))).collect(),
+            RGBColor(128, 128, 128),
+            "the string's period",
+        ),
+    ];
+    for (points, colour, label) in series {
+        chart
+            .draw_series(LineSeries::new(points, colour.stroke_width(2)))
+            .map_err(|e| e.to_string())?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+    }
+    for (key, _, low, high, source) in MEASURED_CONTACT {
+        let (x, low) = (f64::from(key), low.max(0.1));
+        chart
+            .draw_series([
+                PathElement::new(vec![(x, low), (x, high)], GREEN.stroke_width(3)),
+                PathElement::new(vec![(x - 0.6, high), (x + 0.6, high)], GREEN.stroke_width(3)),
+            ])
+            .map_err(|e| e.to_string())?;
+        chart.draw_series([Circle::new((x, high), 4, GREEN.filled())]).map_err(|e| e.to_string())?;
+        let _ = source;
+    }
+    chart
+        .draw_series([Circle::new((0.0, 0.0), 0, GREEN.filled())])
+        .map_err(|e| e.to_string())?
+        .label("measured on grands (docs/physics.md §8.4)")
+        .legend(|(x, y)| Circle::new((x + 10, y), 4, GREEN.filled()));
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())?;
+    Ok(rows)
+}
+
+fn inharmonicity(path: &Path) -> Result<(), String> {
+    let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("Inharmonicity coefficient B against key", ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(70)
+        .build_cartesian_2d(20f64..109f64, (1e-5f64..0.1f64).log_scale())
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc("MIDI key (21 = A0, 60 = C4, 108 = C8)")
+        .y_desc("B")
+        .y_label_formatter(&|b| format!("{b:.0e}"))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let model: Vec<(f64, f64)> = (21..=108u8).map(|k| (f64::from(k), piano_note(k).string.inharmonicity())).collect();
+    chart
+        .draw_series(LineSeries::new(model, BLUE.stroke_width(2)))
+        .map_err(|e| e.to_string())?
+        .label("the per-note rule")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE.stroke_width(2)));
+    for (source, colour) in [("Lehtonen et al. 2007", RED), ("Rigaud et al. 2013", GREEN)] {
+        let marks: Vec<_> = MEASURED_B.iter().filter(|m| m.3 == source).collect();
+        for m in &marks {
+            let x = f64::from(m.0) + if colour == RED { -0.5 } else { 0.5 };
+            chart
+                .draw_series([PathElement::new(vec![(x, m.1), (x, m.2)], colour.stroke_width(3))])
+                .map_err(|e| e.to_string())?;
+        }
+        chart
+            .draw_series(marks.iter().map(|m| {
+                let x = f64::from(m.0) + if colour == RED { -0.5 } else { 0.5 };
+                Circle::new((x, (m.1 * m.2).sqrt()), 4, colour.filled())
+            }))
+            .map_err(|e| e.to_string())?
+            .label(format!("measured: {source}"))
+            .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())
+}
+
+/// Decay rates (dB/s) per key: `(key, [(prompt, aftersound); 2])` for partials 1 and 2.
+type Decay = (u8, [(f64, f64); 2]);
+
+fn decays(path: &Path) -> Result<Vec<Decay>, String> {
+    let spread = Settings::default().unison_detune;
+    let rows: Vec<Decay> = (24..=96u8)
+        .step_by(3)
+        .map(|k| {
+            let out = held_note(k, 0.6, spread, 5.0);
+            let note = piano_note(k).string;
+            let rates = [1, 2].map(|p| {
+                let levels = partial_levels(&out, note.partial(p));
+                (-decay_rate(&levels, PROMPT), -decay_rate(&levels, AFTERSOUND))
+            });
+            (k, rates)
+        })
+        .collect();
+    let top = rows.iter().flat_map(|r| r.1.iter().flat_map(|p| [p.0, p.1])).fold(1.0, f64::max);
+    let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("Decay rates of the first two partials (mezzo-forte, pedal down)", ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(60)
+        .build_cartesian_2d(20f64..100f64, (0.5f64..top * 1.5).log_scale())
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc("MIDI key (21 = A0, 60 = C4, 96 = C7)")
+        .y_desc("decay rate (dB/s)")
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let lines = [
+        (0, true, BLUE, "partial 1, prompt sound (0.05–0.6 s)"),
+        (0, false, RGBColor(150, 190, 220), "partial 1, aftersound (2–4.5 s)"),
+        (1, true, RED, "partial 2, prompt sound"),
+        (1, false, RGBColor(235, 150, 150), "partial 2, aftersound"),
+    ];
+    for (p, prompt, colour, label) in lines {
+        let points: Vec<(f64, f64)> = rows
+            .iter()
+            .map(|r| (f64::from(r.0), if prompt { r.1[p].0 } else { r.1[p].1 }))
+            .filter(|&(_, v)| v > 0.5)
+            .collect();
+        chart
+            .draw_series(LineSeries::new(points, colour.stroke_width(2)))
+            .map_err(|e| e.to_string())?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())?;
+    Ok(rows)
+}
+
+/// C4 to C5 (C major) at MIDI `velocity`, a note every 0.3 s held 0.28 s, the last held 1.5 s,
+/// at [`crate::examples::RATE`], normalised to the fortissimo scale's level: the left channel.
+fn scale(velocity: u8) -> Vec<f64> {
+    let fs = f64::from(crate::examples::RATE);
+    let mut piano = Instrument::new(fs, 16, Settings::default());
+    let keys = [60u8, 62, 64, 65, 67, 69, 71, 72];
+    let step = (0.3 * fs) as usize;
+    let n = step * keys.len() + (2.0 * fs) as usize;
+    let mut events: Vec<(usize, Event)> = Vec::new();
+    for (i, &key) in keys.iter().enumerate() {
+        let velocity = f32::from(velocity) / 127.0;
+        events.push((i * step, Event::NoteOn { channel: 0, key, velocity }));
+        let hold = if i + 1 == keys.len() { (1.5 * fs) as usize } else { (0.28 * fs) as usize };
+        events.push((i * step + hold, Event::NoteOff { channel: 0, key }));
+    }
+    events.sort_by_key(|e| e.0);
+    let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
+    let mut t = 0;
+    for (at, event) in events.into_iter().chain([(n, Event::AllNotesOff)]) {
+        if at > t {
+            piano.process(&mut left[t..at], &mut right[t..at]);
+            t = at;
+        }
+        if at < n {
+            piano.handle(event);
+        }
+    }
+    // The instrument's level (−40.5 LUFS at velocity 80) raised by a fixed 30 dB for listening.
+    left.into_iter().map(|x| f64::from(x) * 10f64.powf(30.0 / 20.0)).collect()
+}
+
+fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay]) -> String {
+    let spread = Settings::default().unison_detune;
+    let at = |levels: &[f64], span| -decay_rate(levels, span);
+    let mut rows = String::new();
+    for (partial, detune, levels) in envelopes {
+        rows += &format!(
+            "| {partial} | {} | {:.1} | {:.1} | {:.2} |\n",
+            if *detune > 0.0 { format!("{detune} cents") } else { "tuned alike".into() },
+            at(levels, PROMPT),
+            at(levels, AFTERSOUND),
+            at(levels, PROMPT) / at(levels, AFTERSOUND)
+        );
+    }
+    let contact = |key: u8| contacts.iter().find(|c| c.0 == key).map_or(f64::NAN, |c| c.1);
+    let crossover = contacts.iter().find(|c| c.1 * 1e-3 * key_frequency(c.0) >= 1.0).map_or(0, |c| c.0);
+    let two_stage = decays.iter().filter(|d| d.1[1].0 >= 2.0 * d.1[1].1).count();
+    let b = |key: u8| piano_note(key).string.inharmonicity();
+    let lehtonen =
+        |key: u8| MEASURED_B.iter().find(|m| m.0 == key && m.3.starts_with("Lehtonen")).map_or(f64::NAN, |m| m.1);
+    let c7_measured = MEASURED_CONTACT.iter().find(|m| m.0 == 96).map_or(f64::NAN, |m| m.2);
+    format!(
+        "# How the piano compares with real grands\n\n\
+         Written by `cargo xtask realism` (`xtask/src/realism.rs`); the model is in docs/physics.md §12, the \
+         published measurements and their sources in §8.4.\n\n\
+         ## Two-stage decay\n\n\
+         ![C4's partial levels](realism/envelopes.png)\n\n\
+         C4 struck at velocity 0.6 ({:.1} m/s) with the pedal down. Each partial's level is its heterodyned \
+         amplitude over 50 ms windows; a stage's decay rate is the least-squares slope over the prompt sound \
+         ({}–{} s) and the aftersound ({}–{} s). With the unison's strings mistuned (the default spread, {spread} \
+         cents) the strings soon move apart, and the motion that does not push the bridge decays slowly: the \
+         aftersound, with beats. Tuned exactly alike they stay together and decay in one stage (Weinreich, JASA \
+         62(6), 1977).\n\n\
+         | partial | unison | prompt sound (dB/s) | aftersound (dB/s) | ratio |\n|---|---|---|---|---|\n{rows}\n\
+         ## Decay rates against key\n\n\
+         ![decay rates](realism/decay.png)\n\n\
+         Every third key from C1 to C7: the second partial's prompt sound decays at least twice as fast as its \
+         aftersound on {two_stage} of {} keys. Per-key decay measurements of a grand were found only for C2–C4, \
+         so this picture has no published points yet.\n\n\
+         ## Contact duration against key\n\n\
+         ![contact duration](realism/contact.png)\n\n\
+         The hammer's first contact with its strings (±21 µs), at 2.5 m/s and 5 m/s. At mezzo-forte it lasts \
+         {:.2} ms at C1 (measured on grands: 4–5 ms), {:.2} ms at C4 and {:.2} ms at C7 (Chaigne & Askenfelt: \
+         {c7_measured:.2} ms); it first outlasts the string's period at key {crossover} (grands: about C6, key 84). The bass \
+         hammers of the rule are lighter than real ones (§8.4).\n\n\
+         ## Inharmonicity against key\n\n\
+         ![inharmonicity](realism/inharmonicity.png)\n\n\
+         The rule's B beside Lehtonen et al. (JASA 122(3), 2007, one grand) and Rigaud et al. (JASA 133(5), \
+         2013, the spread of their fit): the treble agrees; against Lehtonen's grand the rule's B is {:+.0} % at C4 \
+         and {:.1} times at C2.\n\n\
+         ## A scale at three dynamics\n\n\
+         C4 to C5 at MIDI velocities 40, 80 and 120, each note held 0.28 s, 32 kHz mono 16-bit, raised by a \
+         fixed 30 dB: [pianissimo](realism/scale-pp.wav), [mezzo-forte](realism/scale-mf.wav), \
+         [fortissimo](realism/scale-ff.wav).\n\n\
+         ## Not shown yet\n\n\
+         Sympathetic resonance: each key has its own copy of the soundboard, so with the pedal down other keys' \
+         strings do not ring with the struck one. The body's radiation and the slide guitar's body are not \
+         modelled.\n",
+        hammer_speed(0.6),
+        PROMPT.0,
+        PROMPT.1,
+        AFTERSOUND.0,
+        AFTERSOUND.1,
+        decays.len(),
+        contact(24),
+        contact(60),
+        contact(96),
+        100.0 * (b(60) / lehtonen(60) - 1.0),
+        b(36) / lehtonen(36),
+    )
+}
