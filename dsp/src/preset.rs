@@ -14,16 +14,17 @@
 //! For MIDI key `k` (0..=127), `f0 = 440·2^((k−69)/12)` Hz (equal temperament) and:
 //! - length `L = 0.62·2^(−e(k−60)/12)` m with `e = 0.9` above C4 and `e = 0.45` below (bass
 //!   strings are wound, so they grow more slowly), clamped to 1.9 m;
-//! - inharmonicity `B` log-linear through the Chaigne–Askenfelt anchors C2 (key 36) 7.4e-5,
-//!   C4 (60) 3.77e-4 and C7 (96) 8.56e-3 (extrapolated, clamped to [1e-5, 0.05]);
-//!   `EI = B T L²/π²`;
+//! - inharmonicity `B` log-linear through C2 (key 36) 3.8e-5 and C4 (60) 3.3e-4, measured on a
+//!   grand by Lehtonen et al. (JASA 122(3), 2007), and the Chaigne–Askenfelt C7 (96) 8.56e-3
+//!   (extrapolated, clamped to [1e-5, 0.05]); `EI = B T L²/π²`;
 //! - tension `T = 670 N` for every key, and `ρA = T/(2L f_flex)²` with `f_flex = f0/√(1 + B)`, so
 //!   that the first partial `f_flex √(1 + B)` is exactly `f0`, as a tuner would set it;
 //! - damping, per-mode law `σ_i = b1 + b3 ω0_i²`: b1 log-linear through 0.25, 1.1, 9.17 s⁻¹
 //!   (the C2/C4/C7 values of the second Chaigne–Askenfelt variant), b3 log-linear through
 //!   6.25e-9, 6.25e-9, 2.6e-10 s (Part I);
-//! - hammer mass log-linear through 4.9, 2.97, 2.2 g, clamped to [1, 12] g; felt stiffness κ
-//!   log-linear through 4e8, 4.5e9, 1e12 N/m^α, clamped to [1e8, 1e13]; exponent α linear
+//! - the whole hammer's mass ([`hammer_mass`]) piecewise linear through a concert grand's strike
+//!   weights, from 12.4 g at A0 to 5.8 g at C8, shared among the key's strings; felt stiffness κ (one string's
+//!   share) log-linear through 4e8, 4.5e9, 1e12 N/m^α, clamped to [1e8, 1e13]; exponent α linear
 //!   through 2.3, 2.5, 3.0, clamped to [2, 3.5]; striking position linear through 0.12, 0.12,
 //!   0.0625 of L, clamped to [0.04, 0.2].
 //!
@@ -31,8 +32,8 @@
 //! Each key has one to three strings ([`unison_strings`]), all the same string retensioned to a
 //! small detuning ([`unison_detune`]); the hammer values above are one string's share.
 //!
-//! The C2 and C7 hammer values are guesses in the source tables (docs/physics.md §8.2); the rule is meant
-//! to be plausible and smooth across the keyboard, not a measured piano.
+//! The C2 and C7 felt values are guesses in the source tables (docs/physics.md §8.2). How the
+//! rule compares with measured grands is in docs/physics.md §8.4 (`tests/tests/piano_rule.rs`).
 
 use crate::string::{Damping, StringParams};
 
@@ -109,6 +110,38 @@ pub fn unison_detune(key: u8) -> [f64; 3] {
     }
 }
 
+/// A concert grand's hammers (kg) at MIDI keys 21, 42, 64, 86 and 108: the strike weights of a
+/// technician's guideline for a full tone (Stanwood, PTG list 1995: 12.4, 11.5, 10.2, 8.3 and
+/// 5.8 g at keys 1, 22, 44, 66 and 88 of the keyboard, the boundary between its "full" and
+/// "medium" zones). A strike weight is the mass the hammer presents at the striking point, head
+/// and shank together (the head alone is about 1.9 g lighter; Conklin gives about 11 g for the
+/// largest bass heads and 3.5 g for the smallest treble ones): the mass of the lumped hammer.
+const HAMMER_MASSES: [(f64, f64); 5] =
+    [(21.0, 12.4e-3), (42.0, 11.5e-3), (64.0, 10.2e-3), (86.0, 8.3e-3), (108.0, 5.8e-3)];
+
+/// The strike weights scaled so that C4's hammer is Chaigne and Askenfelt's, 2.97 g for each of
+/// its three strings: their C4 string and hammer reproduce measured strikes (docs/physics.md
+/// §8.2), and the guideline's shape carries them across the keyboard.
+const HAMMER_SCALE: f64 = 3.0 * 2.97e-3 / (11.5e-3 + (10.2e-3 - 11.5e-3) * (60.0 - 42.0) / (64.0 - 42.0));
+
+/// The whole hammer's mass of MIDI key `key` (kg): [`HAMMER_MASSES`] joined by straight lines,
+/// constant beyond A0 and C8, scaled by [`HAMMER_SCALE`].
+pub fn hammer_mass(key: u8) -> f64 {
+    HAMMER_SCALE * strike_weight(key)
+}
+
+fn strike_weight(key: u8) -> f64 {
+    let k = f64::from(key);
+    let (first, last) = (HAMMER_MASSES[0], HAMMER_MASSES[HAMMER_MASSES.len() - 1]);
+    if k <= first.0 {
+        return first.1;
+    }
+    HAMMER_MASSES
+        .windows(2)
+        .find(|w| k <= w[1].0)
+        .map_or(last.1, |w| w[0].1 + (w[1].1 - w[0].1) * (k - w[0].0) / (w[1].0 - w[0].0))
+}
+
 /// Anchor keys of the per-note rule: C2, C4, C7.
 const ANCHOR_KEYS: [f64; 3] = [36.0, 60.0, 96.0];
 
@@ -134,7 +167,7 @@ pub fn piano_note(key: u8) -> PianoNote {
     let exponent = if k >= 60.0 { 0.9 } else { 0.45 };
     let length = (0.62 * 2f64.powf(-exponent * (k - 60.0) / 12.0)).min(1.9);
     let tension = 670.0;
-    let b = log_through(k, [7.4e-5, 3.77e-4, 8.56e-3]).clamp(1e-5, 0.05);
+    let b = log_through(k, [3.8e-5, 3.3e-4, 8.56e-3]).clamp(1e-5, 0.05);
     let flexible = f0 / (1.0 + b).sqrt();
     let linear_density = tension / (2.0 * length * flexible).powi(2);
     PianoNote {
@@ -150,7 +183,7 @@ pub fn piano_note(key: u8) -> PianoNote {
                 b3: log_through(k, [6.25e-9, 6.25e-9, 2.6e-10]),
             },
         },
-        hammer_mass: log_through(k, [4.9e-3, 2.97e-3, 2.2e-3]).clamp(1e-3, 12e-3),
+        hammer_mass: hammer_mass(key.min(127)) / unison_strings(key.min(127)) as f64,
         kappa: log_through(k, [4e8, 4.5e9, 1e12]).clamp(1e8, 1e13),
         alpha: through(k, [2.3, 2.5, 3.0]).clamp(2.0, 3.5),
         strike_position: through(k, [0.12, 0.12, 0.0625]).clamp(0.04, 0.2),

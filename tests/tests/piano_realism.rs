@@ -12,7 +12,7 @@
 use xtask::realism::two_stages as stages;
 
 /// Mid-range keys (G3, C4, G4, C5) with the default unison spread: the second partial's prompt
-/// sound decays at least twice as fast as its aftersound (measured 2.3–2.7 times; the prompt
+/// sound decays at least twice as fast as its aftersound (measured 2.28–2.69 times; the prompt
 /// sound 20–49 dB/s, the aftersound 8–21 dB/s).
 #[test]
 fn a_mistuned_unison_decays_in_two_stages() {
@@ -29,7 +29,7 @@ fn a_mistuned_unison_decays_in_two_stages() {
 
 /// The same C4 with its three strings tuned exactly alike: the hammer moves them together, the
 /// aftersound's antisymmetric motion is never excited, and the second partial decays in one
-/// stage (the two rates within 15 % of each other; measured 8 %).
+/// stage (the two rates within 15 % of each other; measured 6 %).
 #[test]
 fn an_exact_unison_decays_in_one_stage() {
     let (prompt, after) = stages(60, 2, 0.0);

@@ -159,10 +159,14 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let contacts = contacts(&dir.join("contact.png"))?;
     inharmonicity(&dir.join("inharmonicity.png"))?;
     let decays = decays(&dir.join("decay.png"))?;
-    for (name, velocity) in [("pp", 40u8), ("mf", 80), ("ff", 120)] {
+    let scales = [("pp", 40u8), ("mf", 80), ("ff", 120)].map(|(name, velocity)| (name, scale(velocity)));
+    // One gain for all three, the fortissimo scale peaking at −1 dBFS: the dynamics stay audible.
+    let peak = scales.iter().flat_map(|s| s.1.iter()).fold(0.0f64, |m, x| m.max(x.abs()));
+    let gain = 10f64.powf(-1.0 / 20.0) / peak.max(f64::MIN_POSITIVE);
+    for (name, scale) in &scales {
         let path = dir.join(format!("scale-{name}.wav"));
-        let scale = scale(velocity);
-        crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scale))
+        let scaled: Vec<f64> = scale.iter().map(|x| x * gain).collect();
+        crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scaled))
             .map_err(|e| e.to_string())?;
     }
     let text = readme(&envelopes, &contacts, &decays);
@@ -395,7 +399,7 @@ fn decays(path: &Path) -> Result<Vec<Decay>, String> {
 }
 
 /// C4 to C5 (C major) at MIDI `velocity`, a note every 0.3 s held 0.28 s, the last held 1.5 s,
-/// at [`crate::examples::RATE`], normalised to the fortissimo scale's level: the left channel.
+/// at [`crate::examples::RATE`]: the left channel.
 fn scale(velocity: u8) -> Vec<f64> {
     let fs = f64::from(crate::examples::RATE);
     let mut piano = Instrument::new(fs, 16, Settings::default());
@@ -421,8 +425,7 @@ fn scale(velocity: u8) -> Vec<f64> {
             piano.handle(event);
         }
     }
-    // The instrument's level (−40.5 LUFS at velocity 80) raised by a fixed 30 dB for listening.
-    left.into_iter().map(|x| f64::from(x) * 10f64.powf(30.0 / 20.0)).collect()
+    left.into_iter().map(f64::from).collect()
 }
 
 fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay]) -> String {
@@ -442,8 +445,6 @@ fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay]) -> Str
     let crossover = contacts.iter().find(|c| c.1 * 1e-3 * key_frequency(c.0) >= 1.0).map_or(0, |c| c.0);
     let two_stage = decays.iter().filter(|d| d.1[1].0 >= 2.0 * d.1[1].1).count();
     let b = |key: u8| piano_note(key).string.inharmonicity();
-    let lehtonen =
-        |key: u8| MEASURED_B.iter().find(|m| m.0 == key && m.3.starts_with("Lehtonen")).map_or(f64::NAN, |m| m.1);
     let c7_measured = MEASURED_CONTACT.iter().find(|m| m.0 == 96).map_or(f64::NAN, |m| m.2);
     format!(
         "# How the piano compares with real grands\n\n\
@@ -467,16 +468,17 @@ fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay]) -> Str
          ![contact duration](realism/contact.png)\n\n\
          The hammer's first contact with its strings (±21 µs), at 2.5 m/s and 5 m/s. At mezzo-forte it lasts \
          {:.2} ms at C1 (measured on grands: 4–5 ms), {:.2} ms at C4 and {:.2} ms at C7 (Chaigne & Askenfelt: \
-         {c7_measured:.2} ms); it first outlasts the string's period at key {crossover} (grands: about C6, key 84). The bass \
-         hammers of the rule are lighter than real ones (§8.4).\n\n\
+         {c7_measured:.2} ms); it first outlasts the string's period at key {crossover} (grands: about C6, key 84). The first \
+         bichords (F1–G1) part from their strings and strike again (§8.4).\n\n\
          ## Inharmonicity against key\n\n\
          ![inharmonicity](realism/inharmonicity.png)\n\n\
          The rule's B beside Lehtonen et al. (JASA 122(3), 2007, one grand) and Rigaud et al. (JASA 133(5), \
-         2013, the spread of their fit): the treble agrees; against Lehtonen's grand the rule's B is {:+.0} % at C4 \
-         and {:.1} times at C2.\n\n\
+         2013, the spread of their fit). The rule takes C2 and C4 from Lehtonen's grand ({:.2e} and {:.2e}) \
+         and lies within Rigaud's spread widened by 10 % at C4, C6 and C8; below C2 it falls to \
+         its clamp, where no measured bass string was found.\n\n\
          ## A scale at three dynamics\n\n\
-         C4 to C5 at MIDI velocities 40, 80 and 120, each note held 0.28 s, 32 kHz mono 16-bit, raised by a \
-         fixed 30 dB: [pianissimo](realism/scale-pp.wav), [mezzo-forte](realism/scale-mf.wav), \
+         C4 to C5 at MIDI velocities 40, 80 and 120, each note held 0.28 s, 32 kHz mono 16-bit, all three \
+         raised by one gain that brings the fortissimo scale's peak to −1 dBFS: [pianissimo](realism/scale-pp.wav), [mezzo-forte](realism/scale-mf.wav), \
          [fortissimo](realism/scale-ff.wav).\n\n\
          ## Not shown yet\n\n\
          Sympathetic resonance: each key has its own copy of the soundboard, so with the pedal down other keys' \
@@ -491,7 +493,7 @@ fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay]) -> Str
         contact(24),
         contact(60),
         contact(96),
-        100.0 * (b(60) / lehtonen(60) - 1.0),
-        b(36) / lehtonen(36),
+        b(36),
+        b(60),
     )
 }
