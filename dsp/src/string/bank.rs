@@ -12,7 +12,8 @@
 use std::ops::Range;
 
 use super::modes::{Coefficients, Mode};
-use super::{FLUSH_INTERVAL, Isa, LANES, ModalString, kernel, step};
+use super::step::Stepping;
+use super::{Isa, LANES, ModalString, kernel};
 
 /// Modes of several bodies, stepped together.
 #[derive(Debug, Clone)]
@@ -246,8 +247,8 @@ impl ModalBank {
     pub fn set_extra_decay(&mut self, range: Range<usize>, extra: &[f64]) {
         let dt = 1.0 / self.sample_rate;
         for (k, i) in range.enumerate() {
-            let d = (-extra.get(k).copied().unwrap_or(0.0) * dt).exp();
-            let c = Coefficients::new(self.own_p[i] * d, self.own_q[i] * (d * d), dt, self.mass[i]);
+            let extra = extra.get(k).copied().unwrap_or(0.0);
+            let c = Coefficients::with_extra_decay(self.own_p[i], self.own_q[i], extra, dt, self.mass[i]);
             self.coef_a[i] = c.a;
             self.coef_b[i] = c.b;
             self.coef_c[i] = c.c;
@@ -289,18 +290,9 @@ impl ModalBank {
     /// `outputs.len()` steps with no force, by the homogeneous recursion (see
     /// [`ModalString::free_steps`]), writing each step's `outputᵀu^{n+1}`.
     pub fn free_steps(&mut self, output: &[f64], outputs: &mut [f64]) {
-        let mut done = 0;
-        while done < outputs.len() {
-            let until_flush = (FLUSH_INTERVAL - self.since_flush) as usize;
-            let n = (outputs.len() - done).min(until_flush).min(kernel::RUN);
-            let (a, b) = (&self.coef_a, &self.coef_b);
-            kernel::free_run(self.isa, a, b, &mut self.u_prev, &mut self.u_now, output, &mut outputs[done..done + n]);
-            // `free_run` leaves the last state in `u_now`; `finish_step` swaps, so undo that.
-            std::mem::swap(&mut self.u_prev, &mut self.u_now);
-            self.since_flush += n as u32 - 1;
-            self.finish_step();
-            done += n;
-        }
+        let mut stepping =
+            Stepping { u_prev: &mut self.u_prev, u_now: &mut self.u_now, since_flush: &mut self.since_flush };
+        stepping.free_steps(self.isa, &self.coef_a, &self.coef_b, output, outputs);
         self.history_ready = false;
     }
 
@@ -352,13 +344,10 @@ impl ModalBank {
 
     #[inline]
     fn finish_step(&mut self) {
-        std::mem::swap(&mut self.u_prev, &mut self.u_now);
-        self.since_flush += 1;
-        if self.since_flush == FLUSH_INTERVAL {
-            self.since_flush = 0;
+        let mut stepping =
+            Stepping { u_prev: &mut self.u_prev, u_now: &mut self.u_now, since_flush: &mut self.since_flush };
+        if stepping.finish() {
             self.history_ready = false;
-            step::flush_tiny(&mut self.u_prev);
-            step::flush_tiny(&mut self.u_now);
         }
     }
 }

@@ -17,8 +17,8 @@ impl ModalString {
     pub fn set_extra_decay(&mut self, extra: &[f64]) {
         let (dt, m) = (1.0 / self.sample_rate, self.modal_mass);
         for i in 0..self.modes() {
-            let d = (-extra.get(i).copied().unwrap_or(0.0) * dt).exp();
-            let c = Coefficients::new(self.own_p[i] * d, self.own_q[i] * (d * d), dt, m);
+            let extra = extra.get(i).copied().unwrap_or(0.0);
+            let c = Coefficients::with_extra_decay(self.own_p[i], self.own_q[i], extra, dt, m);
             self.coef_a[i] = c.a;
             self.coef_b[i] = c.b;
             self.coef_c[i] = c.c;

@@ -111,6 +111,14 @@ pub(crate) struct Coefficients {
 }
 
 impl Coefficients {
+    /// The coefficients of a mode with recursion `(P, Q)` decaying `extra` (1/s) faster: `P` scaled
+    /// by `e^{−σ_eΔt}` and `Q` by its square, so the mode still rings at its own frequency.
+    #[inline]
+    pub(crate) fn with_extra_decay(p: f64, q: f64, extra: f64, dt: f64, modal_mass: f64) -> Self {
+        let d = (-extra * dt).exp();
+        Self::new(p * d, q * (d * d), dt, modal_mass)
+    }
+
     #[inline]
     pub(crate) fn new(p: f64, q: f64, dt: f64, modal_mass: f64) -> Self {
         let den = 1.0 + 2.0 * p + q;

@@ -14,9 +14,50 @@ use super::{FLUSH_BELOW, FLUSH_INTERVAL, ModalString, kernel};
 /// Set the amplitudes below [`FLUSH_BELOW`] (m) to zero. Written as a select, not a branch, so
 /// it compiles to a few vector instructions per chunk instead of a mispredicted branch per mode.
 #[inline]
-pub(super) fn flush_tiny(u: &mut [f64]) {
+fn flush_tiny(u: &mut [f64]) {
     for u in u {
         *u = if u.abs() < FLUSH_BELOW { 0.0 } else { *u };
+    }
+}
+
+/// The two-step state of a set of modes as it moves on: `u^{n−1}`, `u^n` and the steps since the
+/// last flush of tiny amplitudes. Shared by [`ModalString`] and [`ModalBank`](super::ModalBank).
+pub(super) struct Stepping<'a> {
+    pub(super) u_prev: &'a mut Vec<f64>,
+    pub(super) u_now: &'a mut Vec<f64>,
+    pub(super) since_flush: &'a mut u32,
+}
+
+impl Stepping<'_> {
+    /// Step the state on, flushing tiny amplitudes every [`FLUSH_INTERVAL`] steps. Returns
+    /// whether it flushed (which makes the next `z̃` stale).
+    #[inline]
+    pub(super) fn finish(&mut self) -> bool {
+        std::mem::swap(self.u_prev, self.u_now);
+        *self.since_flush += 1;
+        if *self.since_flush == FLUSH_INTERVAL {
+            *self.since_flush = 0;
+            flush_tiny(self.u_prev);
+            flush_tiny(self.u_now);
+            return true;
+        }
+        false
+    }
+
+    /// `outputs.len()` steps with no force by the homogeneous recursion with coefficients
+    /// `a = 2P`, `b = 1 + Q`, writing each step's `outputᵀu^{n+1}` (see `kernel::free_run`).
+    pub(super) fn free_steps(&mut self, isa: super::Isa, a: &[f64], b: &[f64], output: &[f64], outputs: &mut [f64]) {
+        let mut done = 0;
+        while done < outputs.len() {
+            let until_flush = (FLUSH_INTERVAL - *self.since_flush) as usize;
+            let n = (outputs.len() - done).min(until_flush).min(kernel::RUN);
+            kernel::free_run(isa, a, b, self.u_prev, self.u_now, output, &mut outputs[done..done + n]);
+            // `free_run` leaves the last state in `u_now`; `finish` swaps, so undo that.
+            std::mem::swap(self.u_prev, self.u_now);
+            *self.since_flush += n as u32 - 1;
+            self.finish();
+            done += n;
+        }
     }
 }
 
@@ -95,18 +136,9 @@ impl ModalString {
     /// differently: a few ulps per step), writing each step's `outputᵀ ũ^{n+1}` into `outputs`.
     /// The state stays in registers between steps (see `kernel::free_run`).
     pub fn free_steps(&mut self, output: &[f64], outputs: &mut [f64]) {
-        let mut done = 0;
-        while done < outputs.len() {
-            let until_flush = (FLUSH_INTERVAL - self.since_flush) as usize;
-            let n = (outputs.len() - done).min(until_flush).min(kernel::RUN);
-            let (a, b) = (&self.coef_a, &self.coef_b);
-            kernel::free_run(self.isa, a, b, &mut self.u_prev, &mut self.u_now, output, &mut outputs[done..done + n]);
-            // `free_run` leaves the last state in `u_now`; `finish_step` swaps, so undo that.
-            std::mem::swap(&mut self.u_prev, &mut self.u_now);
-            self.since_flush += n as u32 - 1;
-            self.finish_step();
-            done += n;
-        }
+        let mut stepping =
+            Stepping { u_prev: &mut self.u_prev, u_now: &mut self.u_now, since_flush: &mut self.since_flush };
+        stepping.free_steps(self.isa, &self.coef_a, &self.coef_b, output, outputs);
         self.history_ready = false;
     }
 
@@ -114,13 +146,10 @@ impl ModalString {
     /// the next `z̃` stale).
     #[inline]
     pub(super) fn finish_step(&mut self) {
-        std::mem::swap(&mut self.u_prev, &mut self.u_now);
-        self.since_flush += 1;
-        if self.since_flush == FLUSH_INTERVAL {
-            self.since_flush = 0;
+        let mut stepping =
+            Stepping { u_prev: &mut self.u_prev, u_now: &mut self.u_now, since_flush: &mut self.since_flush };
+        if stepping.finish() {
             self.history_ready = false;
-            flush_tiny(&mut self.u_prev);
-            flush_tiny(&mut self.u_now);
         }
     }
 }
