@@ -473,16 +473,15 @@ impl UnisonCore {
         let (cp, cn) = self.coupled_bank.state(self.coupled_ranges[0].clone());
         let (fp, fn_) = self.free_bank.state(self.free_ranges[0].clone());
         let string = &mut self.strings[0];
-        if string.modes() != cp.len() + fp.len() || cp.len() + fp.len() > MIRROR_MODES {
+        if string.modes() != cp.len() + fp.len() {
             return;
         }
-        let (mut prev, mut now) = ([0.0; MIRROR_MODES], [0.0; MIRROR_MODES]);
+        let (prev, now) = string.state_mut();
         let m = cp.len();
         prev[..m].copy_from_slice(cp);
         now[..m].copy_from_slice(cn);
-        prev[m..m + fp.len()].copy_from_slice(fp);
-        now[m..m + fp.len()].copy_from_slice(fn_);
-        string.set_state(&prev[..string.modes()], &now[..string.modes()]);
+        prev[m..].copy_from_slice(fp);
+        now[m..].copy_from_slice(fn_);
     }
 
     /// Throw the hammer (its whole mass) again, `gap` beyond the string under it: see
@@ -773,9 +772,6 @@ impl UnisonCore {
     }
 }
 
-/// Most modes the monitor's copy of the first string may have (more are not mirrored).
-const MIRROR_MODES: usize = 4096;
-
 /// A hammer striking a unison on a bridge, as a scene (for renders and tests).
 #[derive(Debug, Clone)]
 pub struct HammerUnison<S> {
@@ -935,64 +931,5 @@ mod tests {
         let worst = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
         println!("peak {peak:.3} N, worst difference {worst:.2e} N");
         assert!(peak > 1.0 && worst < 1e-9 * peak, "{worst:e} of {peak}");
-    }
-}
-
-#[cfg(test)]
-mod decay_probe {
-    use super::*;
-    use crate::bridge::SOUNDBOARD_CONDUCTANCE;
-    use crate::contact::{PowerLaw, QsaSolver, QuadSpline};
-    use crate::preset::piano_note;
-    use crate::scene::Scene;
-
-    #[test]
-    fn probe() {
-        let fs = 48_000.0;
-        for (key, strings, detune) in [
-            (60u8, 3, [-1.5, 0.3, 1.2]),
-            (60, 3, [-3.0, 0.5, 2.5]),
-            (60, 2, [-1.0, 1.0, 0.0]),
-            (55, 3, [-1.5, 0.3, 1.2]),
-            (67, 3, [-1.5, 0.3, 1.2]),
-        ] {
-            let note = piano_note(key);
-            let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
-            let mut core = UnisonCore::new(400, &board, fs).unwrap();
-            core.retune(&UnisonParams { string: note.string, strings, detune }, 20_000.0, note.strike_position)
-                .unwrap();
-            let s = strings as f64;
-            core.strike(&HammerParams {
-                mass: note.hammer_mass * s,
-                velocity: 2.0,
-                position: note.strike_position,
-                gap: 1e-4,
-            });
-            let law = PowerLaw::new(note.kappa * s, note.alpha).unwrap();
-            let y_ref = law.compression_at_energy(0.5 * note.hammer_mass * s * 4.0);
-            let mut scene = HammerUnison::new(core, QsaSolver::new(QuadSpline::new(law, y_ref, 6).unwrap()));
-            let n = (6.0 * fs) as usize;
-            let mut out = vec![0.0; n];
-            scene.process_output(&mut out);
-            println!("parts {:?} retired {}", scene.core().parts(), scene.core().retired());
-            let f1 = note.string.partial(1);
-            for partial in [1usize, 2] {
-                let f = note.string.partial(partial);
-                let w = (0.05 * fs) as usize;
-                let levels: Vec<f64> = (0..n / w)
-                    .map(|k| {
-                        let (mut re, mut im) = (0.0, 0.0);
-                        for i in k * w..(k + 1) * w {
-                            let ph = std::f64::consts::TAU * f * i as f64 / fs;
-                            re += out[i] * ph.cos();
-                            im += out[i] * ph.sin();
-                        }
-                        10.0 * ((re * re + im * im) / (w * w) as f64).log10()
-                    })
-                    .collect();
-                let row: Vec<String> = levels.iter().step_by(4).map(|l| format!("{l:.0}")).collect();
-                println!("key {key} S {strings} {detune:?} f1 {f1:.1} partial {partial}: {}", row.join(" "));
-            }
-        }
     }
 }

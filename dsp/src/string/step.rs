@@ -80,6 +80,14 @@ impl ModalString {
         self.history_ready = false;
     }
 
+    /// `(ũ^{n−1}, ũ^n)` (m, M entries each) to be written in place (what follows must not rely
+    /// on a `z̃` computed before).
+    pub(crate) fn state_mut(&mut self) -> (&mut [f64], &mut [f64]) {
+        let m = self.modes();
+        self.history_ready = false;
+        (&mut self.u_prev[..m], &mut self.u_now[..m])
+    }
+
     /// Bring the string to rest.
     pub fn reset(&mut self) {
         self.u_prev.fill(0.0);
