@@ -1,9 +1,10 @@
-//! A piano voice: one string with its hammer, damper and solvers, reused note after note.
+//! A piano voice: a key's unison of strings on its bridge ([`UnisonCore`]), with its hammer,
+//! damper and solvers, reused note after note. "The string" below is every string of the unison.
 //!
 //! # A note's life
 //!
 //! - **Strike.** The hammer is thrown at the string from just beyond where the string is under it
-//!   ([`HammerCore::strike`]): on a string at rest that is the usual small gap; on a string still
+//!   ([`UnisonCore::strike`]): on a string at rest that is the usual small gap; on a string still
 //!   swinging from an earlier strike (a repeated note), the felt meets it wherever it is, at the
 //!   relative speed of the two, as a hammer flying free from the action does. The QSA fit spans
 //!   the hammer's kinetic energy plus the string's energy: all the energy there is, so no
@@ -20,10 +21,10 @@
 //!   with time constant `damper_time` as the felt settles (towards 0 as it lifts). The rates
 //!   change the string's coefficients, never its state ([`ModalString::set_extra_decay`]), so the
 //!   sound dies away continuously however fast the damper lands.
-//! - **Release.** A voice is free again once its string is silent: the string's energy (the
-//!   hammer flying off does not count) below [`RELEASE_ENERGY`] of its latest strike's, with the
-//!   hammer retired (out of the string's reach for good, see [`HammerCore`]). The string's energy
-//!   here and in the guard is weighed with its own modal stiffnesses
+//! - **Release.** A voice is free again once its strings are silent: their energy (the hammer
+//!   flying off and the bridge's slowest modes do not count) below [`RELEASE_ENERGY`] of its latest
+//!   strike's, with the hammer flying away (a silent string cannot reach it). The energy here and
+//!   in the guard (which counts the bridge too) is weighed with its own modal stiffnesses
 //!   ([`ModalString::own_energy`]): the scheme's numerical energy depends on the decay rates, so
 //!   a damper landing would make it jump although the string has not moved.
 //! - **Stealing.** With every voice busy, a new note takes the least audible voice, judged by the
