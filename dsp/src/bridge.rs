@@ -33,8 +33,6 @@
 //! where `n_j` is the bank's own modal density at mode `j`. The loss factor is the ~2 % that Ege
 //! and Boutillon measured on a piano soundboard (docs/physics.md §12 has the sources).
 
-use crate::string::{Coefficients, Mode};
-
 /// Most bridge modes a bank may have.
 pub const MAX_BRIDGE_MODES: usize = 256;
 
@@ -140,169 +138,10 @@ impl BridgeParams {
     }
 }
 
-/// The bridge's modes prepared for one sample rate: coefficients and state.
-#[derive(Debug, Clone)]
-pub struct Bridge {
-    /// `2P_j`.
-    coef_a: Vec<f64>,
-    /// `1 + Q_j`.
-    coef_b: Vec<f64>,
-    /// `C_j` (m/N).
-    coef_c: Vec<f64>,
-    /// `K̂_j` (N/m).
-    stiffness: Vec<f64>,
-    /// `R̂_j` (kg/s).
-    resistance: Vec<f64>,
-    /// `M_j` (kg).
-    mass: Vec<f64>,
-    /// `q^{n−1}`, `q^n` (m).
-    q_prev: Vec<f64>,
-    q_now: Vec<f64>,
-    /// `q^{n−1} − z̃` of the coming step (m).
-    free: Vec<f64>,
-    /// `C_Σ = Σ_j C_j` (m/N).
-    compliance: f64,
-    /// `b^{n−1}`, `b^n` (m), kept as the sums of `q^{n−1}`, `q^n`.
-    b: (f64, f64),
-    /// `b_free` of the coming step (m).
-    b_free: f64,
-    sample_rate: f64,
-}
-
-/// Energy terms of one bridge step (J).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct BridgeEnergy {
-    /// `Σ_j ½M_j((q^{n+1} − q^n)/Δt)² + ½K̂_j((q^{n+1} + q^n)/2)²` (J).
-    pub stored: f64,
-    /// `Δt Σ_j R̂_j ((q^{n+1} − q^{n−1})/(2Δt))²` (J).
-    pub dissipated: f64,
-}
-
-impl Bridge {
-    /// Prepare `params` at `sample_rate` (Hz), at rest, with the modes below 0.98 of Nyquist (a
-    /// mode's scheme is exact below it; the modes above would only alias).
-    pub fn new(params: &BridgeParams, sample_rate: f64) -> Result<Self, BridgeError> {
-        params.validate()?;
-        if !(sample_rate > 0.0 && sample_rate.is_finite()) {
-            return Err(BridgeError("the sample rate must be positive".into()));
-        }
-        let dt = 1.0 / sample_rate;
-        let mut bridge = Self {
-            coef_a: Vec::new(),
-            coef_b: Vec::new(),
-            coef_c: Vec::new(),
-            stiffness: Vec::new(),
-            resistance: Vec::new(),
-            mass: Vec::new(),
-            q_prev: Vec::new(),
-            q_now: Vec::new(),
-            free: Vec::new(),
-            compliance: 0.0,
-            b: (0.0, 0.0),
-            b_free: 0.0,
-            sample_rate,
-        };
-        let kept = params.modes.iter().filter(|m| m.frequency < 0.49 * sample_rate);
-        for m in kept {
-            let omega0 = std::f64::consts::TAU * m.frequency;
-            let (p, q) = Mode::oscillator(omega0, 0.5 * m.loss_factor * omega0).recursion(dt);
-            let c = Coefficients::new(p, q, dt, m.mass);
-            bridge.coef_a.push(c.a);
-            bridge.coef_b.push(c.b);
-            bridge.coef_c.push(c.c);
-            bridge.stiffness.push(c.stiffness);
-            bridge.resistance.push(c.resistance);
-            bridge.mass.push(m.mass);
-        }
-        let modes = bridge.mass.len();
-        bridge.q_prev.resize(modes, 0.0);
-        bridge.q_now.resize(modes, 0.0);
-        bridge.free.resize(modes, 0.0);
-        bridge.compliance = bridge.coef_c.iter().sum();
-        Ok(bridge)
-    }
-
-    /// Number of modes.
-    pub fn modes(&self) -> usize {
-        self.mass.len()
-    }
-
-    /// The bridge at rest.
-    pub fn reset(&mut self) {
-        self.q_prev.fill(0.0);
-        self.q_now.fill(0.0);
-        self.b = (0.0, 0.0);
-    }
-
-    /// `(b^{n−1}, b^n)` (m).
-    #[inline]
-    pub fn displacement(&self) -> (f64, f64) {
-        self.b
-    }
-
-    /// First half of a step: `(b_free, C_Σ)` (m, m/N), where the bridge would be at `n+1`
-    /// with no force, and how far a force moves it (module docs).
-    #[inline]
-    pub fn predict(&mut self) -> (f64, f64) {
-        // Four partial sums, so that the additions do not wait on each other.
-        let mut sums = [0.0; 4];
-        let modes = self.free.len();
-        let (a, b, prev, now, free) = (&self.coef_a, &self.coef_b, &self.q_prev, &self.q_now, &mut self.free);
-        for j in 0..modes {
-            let f = prev[j] - (b[j] * prev[j] - a[j] * now[j]);
-            free[j] = f;
-            sums[j % 4] += f;
-        }
-        self.b_free = (sums[0] + sums[1]) + (sums[2] + sums[3]);
-        (self.b_free, self.compliance)
-    }
-
-    /// Second half: apply the force `f` (N) and step on. Returns `b^{n+1}` (m).
-    #[inline]
-    pub fn advance(&mut self, f: f64) -> f64 {
-        for ((q, &free), &c) in self.q_prev.iter_mut().zip(&self.free).zip(&self.coef_c) {
-            *q = free + c * f;
-        }
-        std::mem::swap(&mut self.q_prev, &mut self.q_now);
-        let next = self.b_free + self.compliance * f;
-        self.b = (self.b.1, next);
-        next
-    }
-
-    /// [`advance`](Self::advance), also returning the energy terms of the step.
-    pub fn advance_monitored(&mut self, f: f64) -> (f64, BridgeEnergy) {
-        let fs = self.sample_rate;
-        let mut energy = BridgeEnergy::default();
-        for j in 0..self.free.len() {
-            let next = self.free[j] + self.coef_c[j] * f;
-            let (now, before) = (self.q_now[j], self.q_prev[j]);
-            let (v, mean) = ((next - now) * fs, 0.5 * (next + now));
-            energy.stored += 0.5 * self.mass[j] * v * v + 0.5 * self.stiffness[j] * mean * mean;
-            let centred = 0.5 * (next - before) * fs;
-            energy.dissipated += self.resistance[j] * centred * centred / fs;
-            self.q_prev[j] = next;
-        }
-        std::mem::swap(&mut self.q_prev, &mut self.q_now);
-        let next = self.b_free + self.compliance * f;
-        self.b = (self.b.1, next);
-        (next, energy)
-    }
-
-    /// The bridge's own energy `H^{n−1/2}` between `q^{n−1}` and `q^n` (J).
-    pub fn energy(&self) -> f64 {
-        let fs = self.sample_rate;
-        (0..self.mass.len())
-            .map(|j| {
-                let (v, mean) = ((self.q_now[j] - self.q_prev[j]) * fs, 0.5 * (self.q_now[j] + self.q_prev[j]));
-                0.5 * self.mass[j] * v * v + 0.5 * self.stiffness[j] * mean * mean
-            })
-            .sum()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::string::ModalBank;
 
     /// The soundboard's mobility averaged over its band has the real part it was built for
     /// (the mean-value relation `n/(4M)` holds to the bank's discreteness: within 25 % over
@@ -317,37 +156,46 @@ mod tests {
         assert!((mean / SOUNDBOARD_CONDUCTANCE - 1.0).abs() < 0.25, "{mean:e}");
     }
 
-    /// A free bridge mode rings at its frequency and decays at `σ = ηω/2`: the exact scheme,
-    /// to 1e-9 after 4,800 steps, and a bridge driven by a force impulse holds what the force
-    /// put in, less what it dissipated, to rounding.
+    /// A bridge mode, stepped as the unison steps it (an oscillator of a [`ModalBank`]), rings at
+    /// its frequency and decays at `σ = ηω/2`: the exact scheme, to 1e-9 after 4,800 steps; and the
+    /// soundboard driven at the bridge by a force pulse holds what the force put in, less what it
+    /// dissipated, to rounding.
     #[test]
     fn a_bridge_mode_rings_exactly_and_keeps_its_energy_balance() {
-        let params = BridgeParams { modes: vec![BridgeMode { frequency: 220.0, mass: 0.5, loss_factor: 0.02 }] };
         let fs = 48_000.0;
-        let mut bridge = Bridge::new(&params, fs).unwrap();
         let (w0, sigma) = (std::f64::consts::TAU * 220.0, 0.01 * std::f64::consts::TAU * 220.0);
+        let mut bank = ModalBank::with_capacity(1, fs);
+        bank.push_oscillator(w0, sigma, 0.5);
+        bank.finish();
         let w = (w0 * w0 - sigma * sigma).sqrt();
         let exact = |n: f64| (-sigma * n / fs).exp() * (w * n / fs).cos();
-        bridge.q_prev[0] = exact(-1.0);
-        bridge.q_now[0] = exact(0.0);
-        bridge.b = (exact(-1.0), exact(0.0));
-        for n in 1..=4800 {
-            bridge.predict();
-            let b = bridge.advance(0.0);
-            assert!((b - exact(n as f64)).abs() < 1e-9, "step {n}: {b} vs {}", exact(n as f64));
+        bank.set_state(&[exact(-1.0)], &[exact(0.0)]);
+        let mut probe = vec![0.0; bank.padded_len()];
+        probe[0] = 1.0;
+        let mut out = vec![0.0; 4800];
+        bank.free_steps(&probe, &mut out);
+        for (n, &b) in out.iter().enumerate() {
+            assert!((b - exact(n as f64 + 1.0)).abs() < 1e-9, "step {n}: {b} vs {}", exact(n as f64 + 1.0));
         }
-        let mut bridge = Bridge::new(&BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE), fs).unwrap();
+        let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
+        let mut bank = ModalBank::with_capacity(board.modes.len(), fs);
+        for m in &board.modes {
+            let omega0 = std::f64::consts::TAU * m.frequency;
+            bank.push_oscillator(omega0, 0.5 * m.loss_factor * omega0, m.mass);
+        }
+        bank.finish();
+        let ones: Vec<f64> = (0..bank.padded_len()).map(|i| if i < bank.modes() { 1.0 } else { 0.0 }).collect();
+        let gains: Vec<f64> = ones.iter().zip(bank.input_gains()).map(|(e, c)| e * c).collect();
         let (mut work, mut losses, mut stored) = (0.0, 0.0, 0.0);
         for n in 0..2000 {
             let f = if n < 3 { 10.0 } else { 0.0 };
-            let (before, now) = bridge.displacement();
-            bridge.predict();
-            let (next, e) = bridge.advance_monitored(f);
+            let before = bank.project_state(&ones).0;
+            bank.history([]);
+            let (next, e, lost) = bank.advance_monitored([(&gains[..], f)], &ones);
             // The force's work over the step, f·(b^{n+1} − b^{n−1})/2.
             work += 0.5 * f * (next - before);
-            let _ = now;
-            losses += e.dissipated;
-            stored = e.stored;
+            losses += lost;
+            stored = e;
         }
         println!("stored {stored:e} J, losses {losses:e} J, work {work:e} J");
         assert!(work > 0.0 && losses > 0.0);
@@ -362,7 +210,7 @@ mod tests {
             BridgeMode { frequency: 100.0, mass: f64::NAN, loss_factor: 0.02 },
             BridgeMode { frequency: 100.0, mass: 1.0, loss_factor: -1.0 },
         ] {
-            assert!(Bridge::new(&BridgeParams { modes: vec![m] }, 48_000.0).is_err(), "{m:?}");
+            assert!(BridgeParams { modes: vec![m] }.validate().is_err(), "{m:?}");
         }
     }
 }

@@ -71,7 +71,6 @@ mod vectors;
 pub use bank::ModalBank;
 pub use energy::StringEnergy;
 pub use kernel::GramVector;
-pub(crate) use modes::{Coefficients, Mode};
 pub use params::{Damping, StringError, StringParams};
 pub use simd::{Isa, LANES};
 
