@@ -9,6 +9,8 @@
 //!   problem `s + z − q F = 0` (seed eq. 18).
 //! - [`string`]: the modal stiff string with exact per-mode coefficients.
 //! - [`bridge`]: the bridge and soundboard at the bridge point, a modal bank the strings drive.
+//! - [`body`]: the body as a listener hears it, the bridge force radiated through its modes.
+//! - [`pickup`]: the magnetic pickup's electrical response.
 //! - [`exciter`]: the hammer (and the slide and fingers).
 //! - [`scene`]: physical set-ups built from a solver and bodies; each holds only what it needs.
 //! - [`instrument`]: the playable engine: a voice pool driven by note and controller events.
@@ -38,11 +40,13 @@
 
 #[doc(hidden)]
 pub mod bench_support;
+pub mod body;
 pub mod bridge;
 pub mod contact;
 pub mod control;
 pub mod exciter;
 pub mod instrument;
+pub mod pickup;
 pub mod preset;
 pub mod scene;
 pub mod scene_file;
