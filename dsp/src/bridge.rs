@@ -82,12 +82,17 @@ pub const SOUNDBOARD_LOSS_FACTOR: f64 = 0.02;
 pub const SOUNDBOARD_BAND: (f64, f64, f64) = (90.0, 16_000.0, 1.2);
 
 impl BridgeParams {
-    /// The piano's soundboard (module docs): modes from [`SOUNDBOARD_BAND`]'s lowest frequency up
-    /// to its highest, each a ratio apart with a fixed jitter of up to ±35 % of the spacing (a
-    /// regular comb would give every octave the same pattern), effective masses from the mean
-    /// conductance `conductance` (s/kg) and the loss factor [`SOUNDBOARD_LOSS_FACTOR`].
+    /// The piano's soundboard (module docs): [`mean_value`](Self::mean_value) over
+    /// [`SOUNDBOARD_BAND`].
     pub fn soundboard(conductance: f64) -> Self {
-        let (low, high, ratio) = SOUNDBOARD_BAND;
+        Self::mean_value(conductance, SOUNDBOARD_BAND)
+    }
+
+    /// A mean-value plate (module docs): modes from `low` up to `high` (Hz), each `ratio` apart
+    /// with a fixed jitter of up to ±35 % of the spacing (a regular comb would give every octave
+    /// the same pattern), effective masses from the mean conductance `conductance` (s/kg) and the
+    /// loss factor [`SOUNDBOARD_LOSS_FACTOR`].
+    pub fn mean_value(conductance: f64, (low, high, ratio): (f64, f64, f64)) -> Self {
         let count = ((high / low).ln() / ratio.ln()).floor() as usize + 1;
         let modes = (0..count)
             .map(|j| {

@@ -94,7 +94,12 @@ mod tests {
             let p = PickupCircuit::new(3500.0, fs);
             let db = |f: f64| 20.0 * p.magnitude(f, fs).log10();
             let peak = (1000..9000).map(|f| db(f as f64)).fold(f64::MIN, f64::max);
-            println!("{fs} Hz: 200 Hz {:.3} dB, 3.5 kHz {:.2} dB, peak {peak:.2} dB, 9.9 kHz {:.1} dB", db(200.0), db(3500.0), db(9900.0));
+            println!(
+                "{fs} Hz: 200 Hz {:.3} dB, 3.5 kHz {:.2} dB, peak {peak:.2} dB, 9.9 kHz {:.1} dB",
+                db(200.0),
+                db(3500.0),
+                db(9900.0)
+            );
             assert!(db(200.0).abs() < 0.1);
             assert!((peak - 4.0).abs() < 0.3, "{peak}");
             assert!((db(3500.0) - 20.0 * PICKUP_Q.log10()).abs() < 1e-9);

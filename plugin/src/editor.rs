@@ -29,7 +29,7 @@ use crate::params::{ModeParam, QsaParams};
 use views::History;
 
 /// Editor window size (logical pixels).
-pub const SIZE: (f64, f64) = (1000.0, 720.0);
+pub const SIZE: (f64, f64) = (1000.0, 750.0);
 
 /// Width of the parameter sliders (logical pixels).
 const SLIDER_WIDTH: f32 = 100.0;
@@ -206,6 +206,7 @@ fn parameters(ui: &mut Ui, p: &QsaParams, setter: &ParamSetter) {
         section(ui, "Output", None, |ui| {
             row(ui, &p.output.gain, setter);
             row(ui, &p.output.limiter, setter);
+            row(ui, &p.output.stereo_width, setter);
         });
         ui.add_space(10.0);
         presets::section(ui, p, setter);
@@ -235,6 +236,7 @@ fn parameters(ui: &mut Ui, p: &QsaParams, setter: &ParamSetter) {
             row(ui, &p.slide.alpha, setter);
             row(ui, &p.slide.pluck_position, setter);
             row(ui, &p.slide.pickup_position, setter);
+            row(ui, &p.slide.pickup_resonance, setter);
         });
     });
 }

@@ -4,8 +4,8 @@
 //! mapped to the engine's [`Settings`] by [`ParamValues::settings`].
 //!
 //! Hosts see them in four groups, the editor's sections (VST3 units, CLAP modules): Engine
-//! (`mode` to `voices`), Piano (`hard` to `detune`), Slide (`slide` to `pickup`) and Output
-//! (`gain`, `limit`), in the order of the table. `slide` and `hand` take CLAP polyphonic
+//! (`mode` to `voices`), Piano (`hard` to `detune`), Slide (`slide` to `ptone`) and Output
+//! (`gain`, `limit`, `width`), in the order of the table. `slide` and `hand` take CLAP polyphonic
 //! modulation: a per-note offset, in the parameter's units, added to the value for that note
 //! alone (the sum clamped to the range), where the parameter acts (`slide` when the slide does not
 //! follow keys, `hand` when `Hand height from` is Parameter).
@@ -40,8 +40,10 @@
 //! | `alpha` | Slide exponent | 1..=3 | 1.5 | [`Settings::slide_alpha`] (α) |
 //! | `pluck` | Pluck position | 0.5..=0.98 | 0.9 | [`Settings::pluck_position`] (fraction of the length) |
 //! | `pickup` | Pickup position | 0.5..=0.98 | 0.9 | [`Settings::pickup_position`] (fraction of the length) |
+//! | `ptone` | Pickup resonance | 1000..=10000 Hz | 3500 Hz | [`Settings::pickup_resonance`] (the loaded pickup's resonance) |
 //! | `gain` | Output gain | -36..=12 dB | 0 dB | [`Settings::gain`] (linear) |
 //! | `limit` | Safety limiter | on/off | on | [`Settings::limiter`] |
+//! | `width` | Stereo width | -100..=100 % | 60 % | [`Settings::stereo_width`] (×0.01; the piano's keys panned along the bridge) |
 
 use std::sync::Arc;
 
@@ -341,6 +343,8 @@ param_group! {
         pluck_position: FloatParam = "pluck",
         /// Pickup position (fraction of the length).
         pickup_position: FloatParam = "pickup",
+        /// The loaded pickup's resonance (Hz).
+        pickup_resonance: FloatParam = "ptone",
     }
 }
 
@@ -351,6 +355,8 @@ param_group! {
         gain: FloatParam = "gain",
         /// Safety limiter on the output.
         limiter: BoolParam = "limit",
+        /// Stereo width of the piano (%).
+        stereo_width: FloatParam = "width",
     }
 }
 
@@ -482,7 +488,7 @@ mod tests {
         let expected = |id: &str| match id {
             "mode" | "solver" | "segs" | "nb" | "voices" => "Engine",
             "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" | "detune" => "Piano",
-            "gain" | "limit" => "Output",
+            "gain" | "limit" | "width" => "Output",
             _ => "Slide",
         };
         for (id, group) in &groups {

@@ -32,7 +32,7 @@ use clack_extensions::audio_ports::{AudioPortInfoBuffer, PluginAudioPorts};
 use clack_extensions::note_ports::{NoteDialect, NotePortInfoBuffer, PluginNotePorts};
 use clack_extensions::params::{ParamInfoBuffer, ParamInfoFlags};
 use clack_host::prelude::*;
-use qsa_dsp::instrument::{CEILING, Settings};
+use qsa_dsp::instrument::{CEILING, Settings, pan_gains};
 use qsa_tests::{fundamental, seeded_rng, spectral_peak};
 use rand::RngExt;
 
@@ -140,15 +140,18 @@ fn bit_identical(a: &Audio, b: &Audio) -> Option<usize> {
 
 const FS: f64 = 48_000.0;
 
-/// Notes in both modes: finite, not silent, at their pitch; the two channels carry the same
-/// (mono) signal.
+/// Notes in both modes: finite, not silent, at their pitch; a piano key's two channels differ
+/// by its pan gains alone (the soundboard of each channel is the same linear system).
 fn core_notes(bundle: &Path) {
     for key in [36u8, 60, 84] {
         let mut p = Plugin::at_48k(bundle, &[]);
         let audio = p.render_blocks(&[(0, Ev::On(0, key, 0.7)), (19_200, Ev::Off(0, key))], 24_000, 512);
         audio.assert_finite("piano");
         assert!(audio.peak() > AUDIBLE, "piano key {key} is silent: peak {}", audio.peak());
-        assert_eq!(audio.left, audio.right, "the engine is mono: both channels carry it");
+        let rms = |x: &[f32]| x.iter().map(|&v| f64::from(v) * f64::from(v)).sum::<f64>().sqrt();
+        let [gl, gr] = pan_gains(key, Settings::default().stereo_width);
+        let (got, want) = (20.0 * (rms(&audio.left) / rms(&audio.right)).log10(), 20.0 * (gl / gr).log10());
+        assert!((got - want).abs() < 0.01, "piano key {key}: left over right {got} dB, the pan law's {want} dB");
         assert_pitch(piano_pitch(&audio, FS, key), key_hz(key), &format!("piano key {key}, peak {:.3}", audio.peak()));
     }
     for key in [52u8, 57, 64] {
@@ -957,7 +960,7 @@ fn parameters_are_grouped_and_slide_and_hand_are_polyphonic() {
     let expected_group = |id: &str| match id {
         "mode" | "solver" | "segs" | "nb" | "voices" => "Engine",
         "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" | "detune" => "Piano",
-        "gain" | "limit" => "Output",
+        "gain" | "limit" | "width" => "Output",
         _ => "Slide",
     };
     let order: Vec<u32> = PARAMETERS.iter().map(|(id, ..)| clap_id(id)).collect();

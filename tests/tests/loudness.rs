@@ -162,7 +162,7 @@ fn a_held_piano_note_has_no_dc() {
     for key in [21u8, 60, 108] {
         for velocity in [30u8, 127] {
             let out: Vec<f64> =
-                loudness::strike(&[key], velocity, &Settings::default(), 2.0).into_iter().map(f64::from).collect();
+                loudness::strike(&[key], velocity, &Settings::default(), 2.0).0.into_iter().map(f64::from).collect();
             let db = dc_db(&out, 4_800..out.len());
             let rms = (out[4_800..].iter().map(|x| x * x).sum::<f64>() / (out.len() - 4_800) as f64).sqrt();
             println!("key {key} velocity {velocity}: DC {db:.1} dB of the RMS {rms:.2e}");

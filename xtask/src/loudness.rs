@@ -31,7 +31,7 @@ pub const SAMPLE_RATE: f64 = 48_000.0;
 pub const VELOCITIES: [u8; 3] = [40, 80, 120];
 
 /// Loudness every key has after voicing at MIDI velocity 80 (LUFS)...
-pub const TARGET_LUFS_AT_80: f64 = -40.5;
+pub const TARGET_LUFS_AT_80: f64 = -41.5;
 
 /// ...and its rise per step of MIDI velocity (LU): the middle register's own dynamic range (C4
 /// rises 9 LU from velocity 40 to 80 and 8.5 LU from 80 to 120), at a level where the loudest
@@ -71,8 +71,8 @@ pub struct KeyLoudness {
 }
 
 /// Render `keys` struck together at `velocity` and held for `seconds`, with `settings` (the
-/// safety limiter as the settings say). Returns the left channel (the piano is mono).
-pub fn strike(keys: &[u8], velocity: u8, settings: &Settings, seconds: f64) -> Vec<f32> {
+/// safety limiter as the settings say). Returns the left and right channels.
+pub fn strike(keys: &[u8], velocity: u8, settings: &Settings, seconds: f64) -> (Vec<f32>, Vec<f32>) {
     let mut piano = Instrument::new(SAMPLE_RATE, keys.len().max(1), *settings);
     for &key in keys {
         piano.handle(Event::NoteOn { channel: 0, key, velocity: f32::from(velocity) / 127.0 });
@@ -82,7 +82,7 @@ pub fn strike(keys: &[u8], velocity: u8, settings: &Settings, seconds: f64) -> V
     for (l, r) in left.chunks_mut(512).zip(right.chunks_mut(512)) {
         piano.process(l, r);
     }
-    left
+    (left, right)
 }
 
 /// Integrated loudness (LUFS) of a mono signal played on both channels of a stereo pair (as
@@ -115,9 +115,11 @@ pub fn rms_frequency(signal: &[f32], sample_rate: f64) -> f64 {
     (slope / power).sqrt() / std::f64::consts::TAU
 }
 
-/// Measure one key.
+/// Measure one key, centred: a key panned by the stereo width has the same loudness, since the pan
+/// keeps its power (`g_L² + g_R² = 2`, [`qsa_dsp::instrument::pan_gains`]) and both channels
+/// pass the same soundboard.
 pub fn measure(key: u8, velocity: u8, settings: &Settings) -> KeyLoudness {
-    let out = strike(&[key], velocity, &Settings { limiter: false, ..*settings }, SECONDS);
+    let (out, _) = strike(&[key], velocity, &Settings { limiter: false, stereo_width: 0.0, ..*settings }, SECONDS);
     KeyLoudness {
         key,
         velocity,
@@ -132,13 +134,14 @@ pub fn keyboard(settings: &Settings) -> Vec<KeyLoudness> {
     VELOCITIES.iter().flat_map(|&v| KEYS.map(move |k| measure(k, v, settings))).collect()
 }
 
-/// Peak of each of [`CHORDS`] struck fortissimo with the limiter off (full scale = 1).
+/// Peak of each of [`CHORDS`] struck fortissimo with the limiter off, over both channels (full
+/// scale = 1).
 pub fn chord_peaks(settings: &Settings) -> Vec<(&'static str, f64)> {
     CHORDS
         .iter()
         .map(|(name, keys)| {
-            let out = strike(keys, 127, &Settings { limiter: false, ..*settings }, 0.5);
-            (*name, out.iter().fold(0.0f64, |m, &x| m.max(f64::from(x).abs())))
+            let (left, right) = strike(keys, 127, &Settings { limiter: false, ..*settings }, 0.5);
+            (*name, left.iter().chain(&right).fold(0.0f64, |m, &x| m.max(f64::from(x).abs())))
         })
         .collect()
 }

@@ -76,6 +76,11 @@ pub struct RenderArgs {
     /// Render in calls of N samples (0: seeded random sizes) [default: one call].
     #[arg(long, value_name = "N")]
     pub chunk: Option<usize>,
+    /// For --midi: write the dry signals, centred (each piano key's bridge force, each slide
+    /// voice's string velocity at the pickup), without the soundboard's radiation, the stereo
+    /// pan or the pickup's circuit.
+    #[arg(long, requires = "midi")]
+    pub raw: bool,
 }
 
 /// What `--mode` takes: the option ids of the `mode` parameter.
@@ -100,6 +105,7 @@ impl Default for RenderArgs {
             out: None,
             csv: false,
             chunk: None,
+            raw: false,
         }
     }
 }

@@ -44,10 +44,17 @@
 //!
 //! # Output
 //!
-//! The voices are summed (each scaled to full scale by [`OUTPUT_SCALE`] or [`SLIDE_SCALE`]), then
-//! pass the output stage ([`OutputStage`]): the gain, smoothed over a few milliseconds, and the
-//! safety limiter, which holds every sample at or below −0.1 dBFS when it is on. The limiter looks
-//! 1 ms ahead, so the output is late by [`Instrument::latency`] samples, on or off.
+//! What a listener hears (docs/physics.md §13):
+//! - the piano's voices, each panned by its key's place along the bridge
+//!   ([`pan_gains`], `Settings::stereo_width`), sum into a left and a right bridge force, each
+//!   radiated through the soundboard ([`crate::body`]), then scaled by [`OUTPUT_SCALE`];
+//! - the slide guitar's voices sum, centred, through the pickup's circuit
+//!   ([`crate::pickup`]), scaled by [`SLIDE_SCALE`].
+//!
+//! [`Instrument::set_raw_output`] gives the dry signals instead, centred. Both then pass the
+//! output stage ([`OutputStage`]): the gain, smoothed over a few milliseconds, and the safety
+//! limiter, which holds every sample at or below −0.1 dBFS when it is on. The limiter looks 1 ms
+//! ahead, so the output is late by [`Instrument::latency`] samples, on or off.
 //!
 //! # Timing
 //!
@@ -89,6 +96,8 @@ pub use slide_voice::{
 pub use solvers::Solvers;
 pub use voicing::{VOICING_DB, VOICING_VELOCITIES, voicing_gain};
 
+use crate::body::{Body, BodyParams};
+use crate::pickup::PickupCircuit;
 use crate::string::ModalString;
 use notes::NoteBook;
 
@@ -99,11 +108,14 @@ pub const VOICING_TIME: f64 = 0.005;
 /// lengths per second): a jump across the whole range takes half a second.
 pub const PICKUP_SPEED: f64 = 1.0;
 
+/// How fast the pickup's resonance follows its setting (s per octave).
+pub const PICKUP_GLIDE: f64 = 0.05;
+
 /// Most voices an instrument may have.
 pub const MAX_VOICES: usize = 128;
 
 /// Output scale of the piano (1/N): bridge force to full scale, before each key's voicing
-/// ([`voicing_gain`]), which sets the loudness (−40.5 LUFS for a key struck alone at velocity 80).
+/// ([`voicing_gain`]), which sets the loudness (−41.5 LUFS for a key struck alone at velocity 80).
 pub const OUTPUT_SCALE: f64 = 0.016;
 
 /// Output scale of the slide guitar (s/m): string velocity at the pickup to full scale. The
@@ -243,6 +255,16 @@ pub struct Instrument {
     scratch: Vec<f64>,
     /// Notes that had to take a busy voice.
     steals: u64,
+    /// The piano's soundboard radiating the left and right channels' bridge forces.
+    boards: [Body; 2],
+    /// One control block of the piano's bridge forces, left and right, and of the slide
+    /// guitar's pickup signal.
+    buses: [Vec<f64>; 3],
+    /// The slide guitar's pickup circuit, and the resonance it is tuned to now (Hz).
+    circuit: PickupCircuit,
+    resonance: f64,
+    /// Whether the output is the dry signals (no body, pan or pickup circuit).
+    raw: bool,
     /// Gain ramp and safety limiter.
     output: OutputStage,
     /// Fraction of the way a voice's voicing gain moves to its target each sample.
@@ -271,6 +293,11 @@ impl Instrument {
             now: 0,
             in_block: 0,
             scratch: vec![0.0; MAX_BLOCK],
+            boards: [(); 2].map(|_| Body::new(&BodyParams::piano(), sample_rate)),
+            buses: [(); 3].map(|_| vec![0.0; MAX_BLOCK]),
+            circuit: PickupCircuit::new(settings.pickup_resonance, sample_rate),
+            resonance: settings.pickup_resonance,
+            raw: false,
             steals: 0,
             output: OutputStage::new(sample_rate, settings.gain),
             voicing_rate: 1.0 - (-1.0 / (VOICING_TIME * sample_rate)).exp(),
@@ -412,6 +439,8 @@ impl Instrument {
                 self.voices.iter_mut().for_each(PianoVoice::silence);
                 self.slides.iter_mut().for_each(SlideVoice::silence);
                 self.output.clear();
+                self.boards.iter_mut().for_each(Body::reset);
+                self.circuit.reset();
             }
         }
     }
@@ -519,14 +548,33 @@ impl Instrument {
             }
             let len = (self.settings.block - self.in_block).min(n - done);
             let scratch = &mut self.scratch[..len];
-            let (l, r) = (&mut left[done..done + len], &mut right[done..done + len]);
+            let [bus_l, bus_r, bus_s] = &mut self.buses;
+            let (bus_l, bus_r, bus_s) = (&mut bus_l[..len], &mut bus_r[..len], &mut bus_s[..len]);
+            bus_l.fill(0.0);
+            bus_r.fill(0.0);
+            bus_s.fill(0.0);
+            let width = if self.raw { 0.0 } else { self.settings.stereo_width };
             for voice in self.voices.iter_mut().filter(|v| v.sounding) {
                 voice.render(scratch);
-                mix_voiced(scratch, OUTPUT_SCALE, voice.voicing, &mut voice.voiced, self.voicing_rate, l, r);
+                let pan = pan_gains(voice.strike.key, width);
+                let gains = Gains { voicing: voice.voicing, pan, rate: self.voicing_rate };
+                mix_voiced(scratch, &gains, &mut voice.voiced, &mut voice.pan, bus_l, bus_r);
             }
             for voice in self.slides.iter_mut().filter(|v| v.sounding) {
                 voice.render(scratch);
-                mix(scratch, SLIDE_SCALE, l, r);
+                bus_s.iter_mut().zip(scratch.iter()).for_each(|(b, x)| *b += x);
+            }
+            if !self.raw {
+                self.boards[0].process(bus_l);
+                self.boards[1].process(bus_r);
+                self.circuit.process(bus_s);
+            }
+            let (l, r) = (&mut left[done..done + len], &mut right[done..done + len]);
+            for (((l, r), (pl, pr)), s) in
+                l.iter_mut().zip(r.iter_mut()).zip(bus_l.iter().zip(bus_r.iter())).zip(bus_s.iter())
+            {
+                *l = (pl * OUTPUT_SCALE + s * SLIDE_SCALE) as f32;
+                *r = (pr * OUTPUT_SCALE + s * SLIDE_SCALE) as f32;
             }
             self.output.process(l, r, self.settings.limiter);
             done += len;
@@ -538,10 +586,23 @@ impl Instrument {
         }
     }
 
+    /// Output the dry signals (`true`): each piano key's bridge force and each slide voice's
+    /// string velocity at the pickup, centred, without the soundboard's radiation, the stereo
+    /// pan or the pickup's circuit; what research renders compare against the scenes.
+    pub fn set_raw_output(&mut self, raw: bool) {
+        self.raw = raw;
+    }
+
     fn begin_block(&mut self) {
         self.settings = self.requested;
         let len = self.settings.block;
         self.output.set_gain(self.settings.gain);
+        // The pickup's resonance glides, an octave per 50 ms at most, instead of stepping.
+        let octaves = len as f64 / self.sample_rate / PICKUP_GLIDE;
+        let target = self.settings.pickup_resonance;
+        self.resonance = (self.resonance * (target / self.resonance).clamp(0.5f64.powf(octaves), 2f64.powf(octaves)))
+            .clamp(target.min(self.resonance), target.max(self.resonance));
+        self.circuit.tune(self.resonance, self.sample_rate);
         for v in &mut self.voices {
             let sustained = self.sustain[usize::from(v.strike.channel)];
             v.begin_block(&self.settings, sustained, len, self.now);
@@ -564,25 +625,36 @@ impl Instrument {
     }
 }
 
-/// Add `x · scale · g` to both channels, with `g` moving from `voiced` towards `voicing` by the
-/// fraction `rate` each sample (a voice struck again at another dynamic level changes its gain
-/// smoothly, not in a step).
-fn mix_voiced(x: &[f64], scale: f64, voicing: f64, voiced: &mut f64, rate: f64, left: &mut [f32], right: &mut [f32]) {
-    let mut g = *voiced;
-    for ((l, r), &v) in left.iter_mut().zip(right.iter_mut()).zip(x) {
-        g += (voicing - g) * rate;
-        let y = (v * scale * g) as f32;
-        *l += y;
-        *r += y;
-    }
-    *voiced = g;
+/// Where a piano voice's gains go: its voicing, its pan, and the fraction of the way a gain
+/// moves to its target each sample.
+struct Gains {
+    voicing: f64,
+    pan: [f64; 2],
+    rate: f64,
 }
 
-/// Add `x · scale` to both channels.
-fn mix(x: &[f64], scale: f64, left: &mut [f32], right: &mut [f32]) {
+/// The left and right gains of `key` at stereo width `width` (−1..=1): a constant-power pan by
+/// the key's place along the bridge, A0 at `−width` and C8 at `+width` (`−1` full left), the
+/// gains `√2·cos θ` and `√2·sin θ`, `θ = (1 + place)·π/4`: 1 and 1 in the centre, and the same
+/// power (`g_L² + g_R² = 2`) everywhere.
+pub fn pan_gains(key: u8, width: f64) -> [f64; 2] {
+    let place = ((f64::from(key) - 64.5) / 43.5).clamp(-1.0, 1.0) * width.clamp(-1.0, 1.0);
+    let angle = (1.0 + place) * std::f64::consts::FRAC_PI_4;
+    [std::f64::consts::SQRT_2 * angle.cos(), std::f64::consts::SQRT_2 * angle.sin()]
+}
+
+/// Add `x · g · p_L` and `x · g · p_R` to the buses, with the voicing gain `g` (from `voiced`)
+/// and the pan gains `p` (from `pan`) moving towards their targets by `gains.rate` each sample:
+/// a voice struck again at another dynamic level, or a width moved, changes smoothly.
+fn mix_voiced(x: &[f64], gains: &Gains, voiced: &mut f64, pan: &mut [f64; 2], left: &mut [f64], right: &mut [f64]) {
+    let (mut g, [mut pl, mut pr]) = (*voiced, *pan);
     for ((l, r), &v) in left.iter_mut().zip(right.iter_mut()).zip(x) {
-        let y = (v * scale) as f32;
-        *l += y;
-        *r += y;
+        g += (gains.voicing - g) * gains.rate;
+        pl += (gains.pan[0] - pl) * gains.rate;
+        pr += (gains.pan[1] - pr) * gains.rate;
+        *l += v * g * pl;
+        *r += v * g * pr;
     }
+    *voiced = g;
+    *pan = [pl, pr];
 }

@@ -177,7 +177,7 @@ const fn float(min: f32, max: f32, default: f32, unit: &'static str, scale: Scal
 }
 
 /// Every parameter, in display order (the groups in the order Engine, Piano, Slide, Output).
-pub const PARAMETERS: [ParamSpec; 28] = [
+pub const PARAMETERS: [ParamSpec; 30] = [
     ParamSpec {
         id: "mode",
         name: "Mode",
@@ -451,6 +451,15 @@ pub const PARAMETERS: [ParamSpec; 28] = [
         put: |v, x| v.pickup_position = x,
     },
     ParamSpec {
+        id: "ptone",
+        name: "Pickup resonance",
+        group: Group::Slide,
+        kind: float(1000.0, 10_000.0, 3500.0, " Hz", Scale::Skewed(-1.0), ValueDisplay::Rounded(0)),
+        maps_to: "[`Settings::pickup_resonance`] (the loaded pickup's resonance)",
+        get: |v| v.pickup_resonance,
+        put: |v, x| v.pickup_resonance = x,
+    },
+    ParamSpec {
         id: "gain",
         name: "Output gain",
         group: Group::Output,
@@ -467,6 +476,15 @@ pub const PARAMETERS: [ParamSpec; 28] = [
         maps_to: "[`Settings::limiter`]",
         get: |v| switch(v.limiter),
         put: |v, x| v.limiter = x != 0.0,
+    },
+    ParamSpec {
+        id: "width",
+        name: "Stereo width",
+        group: Group::Output,
+        kind: float(-100.0, 100.0, 60.0, " %", Scale::Linear, ValueDisplay::Rounded(0)),
+        maps_to: "[`Settings::stereo_width`] (×0.01; the piano's keys panned along the bridge)",
+        get: |v| v.stereo_width,
+        put: |v, x| v.stereo_width = x,
     },
 ];
 
@@ -673,10 +691,14 @@ pub struct ParamValues {
     pub pluck_position: f32,
     /// `pickup` (fraction).
     pub pickup_position: f32,
+    /// `ptone` (Hz).
+    pub pickup_resonance: f32,
     /// `gain` (linear).
     pub gain: f32,
     /// `limit`.
     pub limiter: bool,
+    /// `width` (%).
+    pub stereo_width: f32,
 }
 
 impl Default for ParamValues {
@@ -709,8 +731,10 @@ impl Default for ParamValues {
             alpha: 0.0,
             pluck_position: 0.0,
             pickup_position: 0.0,
+            pickup_resonance: 0.0,
             gain: 0.0,
             limiter: false,
+            stereo_width: 0.0,
         };
         for spec in &PARAMETERS {
             (spec.put)(&mut values, spec.default_plain());
@@ -767,8 +791,10 @@ impl ParamValues {
             slide_alpha: f(self.alpha),
             pluck_position: f(self.pluck_position),
             pickup_position: f(self.pickup_position),
+            pickup_resonance: f(self.pickup_resonance),
             gain: f(self.gain),
             limiter: self.limiter,
+            stereo_width: f(self.stereo_width) * 0.01,
             ..Settings::default()
         }
     }
@@ -830,7 +856,7 @@ mod tests {
         let released = [
             "mode", "solver", "segs", "nb", "voices", "hard", "hmass", "strike", "damp", "bright", "damper", "detune",
             "slide", "follow", "glide", "bend", "hand", "handsrc", "smass", "hstiff", "hdamp", "fdamp", "kappa",
-            "alpha", "pluck", "pickup", "gain", "limit",
+            "alpha", "pluck", "pickup", "ptone", "gain", "limit", "width",
         ];
         assert_eq!(PARAM_IDS, released);
     }
@@ -862,7 +888,9 @@ mod tests {
             (s.slide_alpha, d.slide_alpha),
             (s.pluck_position, d.pluck_position),
             (s.pickup_position, d.pickup_position),
+            (s.pickup_resonance, d.pickup_resonance),
             (s.gain, d.gain),
+            (s.stereo_width, d.stereo_width),
         ];
         for (i, (got, want)) in pairs.into_iter().enumerate() {
             assert!((got - want).abs() <= 1e-7 * want.abs().max(1e-3), "pair {i}: {got} vs {want}");
@@ -881,6 +909,7 @@ mod tests {
                 .chain([s.unison_detune])
                 .chain([s.glide_time, s.bend_range, s.hand_height, s.slide_mass, s.hand_stiffness, s.hand_damping])
                 .chain([s.finger_damping, s.slide_kappa, s.slide_alpha, s.pluck_position, s.pickup_position])
+                .chain([s.pickup_resonance, s.stereo_width])
                 .collect::<Vec<f64>>()
         };
         for spec in PARAMETERS.iter().filter(|p| p.id != "gain") {

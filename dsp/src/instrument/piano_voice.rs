@@ -144,6 +144,9 @@ pub struct PianoVoice {
     pub voicing: f64,
     /// Output gain now: moves to `voicing` after a re-strike at another level.
     pub voiced: f64,
+    /// Left and right gains now ([`super::pan_gains`]): they move to the key's when the stereo
+    /// width changes.
+    pub pan: [f64; 2],
     /// The damper's decay rate at the fundamental now, `D` (1/s), moving towards its target.
     damper: f64,
     /// The extra decay at the fundamental the string's coefficients hold now (1/s).
@@ -193,6 +196,7 @@ impl PianoVoice {
             started: 0,
             voicing: 1.0,
             voiced: 1.0,
+            pan: [1.0; 2],
             damper: 0.0,
             applied: 0.0,
             since_update: 0.0,
@@ -230,6 +234,7 @@ impl PianoVoice {
         let strings = note.strings as f64;
         if !restrike {
             self.voiced = self.voicing;
+            self.pan = super::pan_gains(strike.key, settings.stereo_width);
             let fs = self.core.string().sample_rate();
             let unison = UnisonParams {
                 string: Self::string_for(strike.key, settings),

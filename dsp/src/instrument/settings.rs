@@ -73,6 +73,10 @@ pub struct Settings {
     pub gain: f64,
     /// Whether the safety limiter holds the output at or below its ceiling (0 dBFS).
     pub limiter: bool,
+    /// Stereo width of the piano, −1..=1: each key is panned by its place along the bridge, the
+    /// lowest key to the left and the highest to the right at 1 (the pianist's view), mirrored
+    /// below 0 (the audience's), all keys centred at 0.
+    pub stereo_width: f64,
     /// Slide position in semitones above the open string, 0..=24 (when not following the key).
     pub slide_position: f64,
     /// Whether the slide follows the played key (legato notes glide there).
@@ -97,6 +101,9 @@ pub struct Settings {
     pub pluck_position: f64,
     /// Pickup position, fraction of the length from the nut, 0.5..=0.98.
     pub pickup_position: f64,
+    /// Resonance of the pickup loaded by its cable (Hz), 1 kHz..=10 kHz
+    /// ([`crate::pickup::PickupCircuit`]).
+    pub pickup_resonance: f64,
     /// Slide contact stiffness κ (N/m^α), 1e6..=1e13.
     pub slide_kappa: f64,
     /// Slide contact exponent α, 1..=3.
@@ -121,6 +128,7 @@ impl Default for Settings {
             damper_time: 0.01,
             gain: 1.0,
             limiter: true,
+            stereo_width: 0.6,
             slide_position: 5.0,
             follow_key: true,
             glide_time: 0.05,
@@ -133,6 +141,7 @@ impl Default for Settings {
             finger_damping: 5.0,
             pluck_position: 0.9,
             pickup_position: 0.9,
+            pickup_resonance: 3500.0,
             slide_kappa: 1e9,
             slide_alpha: 1.5,
         }
@@ -164,6 +173,7 @@ impl Settings {
             damper_time: clamp(self.damper_time, 0.001, 0.1, d.damper_time),
             gain: clamp(self.gain, 0.0, 10.0, d.gain),
             limiter: self.limiter,
+            stereo_width: clamp(self.stereo_width, -1.0, 1.0, d.stereo_width),
             mode: self.mode,
             slide_position: clamp(self.slide_position, 0.0, 24.0, d.slide_position),
             follow_key: self.follow_key,
@@ -177,6 +187,7 @@ impl Settings {
             finger_damping: clamp(self.finger_damping, 0.0, 50.0, d.finger_damping),
             pluck_position: clamp(self.pluck_position, 0.5, 0.98, d.pluck_position),
             pickup_position: clamp(self.pickup_position, 0.5, 0.98, d.pickup_position),
+            pickup_resonance: clamp(self.pickup_resonance, 1000.0, 10_000.0, d.pickup_resonance),
             slide_kappa: clamp(self.slide_kappa, 1e6, 1e13, d.slide_kappa),
             slide_alpha: clamp(self.slide_alpha, 1.0, 3.0, d.slide_alpha),
         }

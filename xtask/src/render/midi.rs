@@ -100,9 +100,21 @@ pub fn render(
     tail: f64,
     chunk: usize,
 ) -> (Vec<f32>, Vec<f32>, f64) {
+    render_signals(score, params, sample_rate, (tail, chunk), false)
+}
+
+/// [`render`], with `raw` the dry signals ([`Instrument::set_raw_output`]).
+pub fn render_signals(
+    score: &Score,
+    params: &ParamValues,
+    sample_rate: f64,
+    (tail, chunk): (f64, usize),
+    raw: bool,
+) -> (Vec<f32>, Vec<f32>, f64) {
     let end = score.events.last().map_or(0, |e| e.0) + (tail.max(0.0) * sample_rate).round() as u64;
     let samples = end.max(1) as usize;
     let mut engine = Instrument::new(sample_rate, params.voices.clamp(1, 128) as usize, params.settings());
+    engine.set_raw_output(raw);
     let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
     let start = std::time::Instant::now();
     let mut next = 0;
@@ -198,7 +210,8 @@ pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSumma
     }
     let wav_path = args.out.clone().unwrap_or_else(|| path.with_extension("wav"));
     super::check_output_path(&wav_path, path)?;
-    let (left, right, wall) = render(&score, &params, fs, args.tail, args.chunk.unwrap_or(512).max(1));
+    let (left, right, wall) =
+        render_signals(&score, &params, fs, (args.tail, args.chunk.unwrap_or(512).max(1)), args.raw);
     let spec = hound::WavSpec {
         channels: 2,
         sample_rate: args.rate,
