@@ -609,7 +609,8 @@ const KEYBOARD_BAND_LU: f64 = 6.0;
 #[test]
 fn piano_keys_0_and_127_sound_at_the_rules_pitch_and_level() {
     let bundle = release_bundle();
-    let lufs = |key: u8| xtask::loudness::integrated_lufs(&held_note(&bundle, 0.0, key, 2.0).left, FS);
+    let stereo = |a: &Audio| xtask::loudness::integrated_lufs_stereo(&a.left, &a.right, FS);
+    let lufs = |key: u8| stereo(&held_note(&bundle, 0.0, key, 2.0));
     let (a0, c8) = (lufs(21), lufs(108));
     let from = (0.05 * FS) as usize;
     for (key, analysed) in [(0u8, (2.0 * FS) as usize - from), (127, (0.15 * FS) as usize)] {
@@ -623,7 +624,7 @@ fn piano_keys_0_and_127_sound_at_the_rules_pitch_and_level() {
         let cents = note.detune[..note.strings].iter().map(|d| d * Settings::default().unison_detune);
         let (low, high) = cents.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), c| (l.min(c), h.max(c)));
         let (lowest, highest) = (expected * 2f64.powf(low / 1200.0), expected * 2f64.powf(high / 1200.0));
-        let level = xtask::loudness::integrated_lufs(&audio.left, FS);
+        let level = stereo(&audio);
         let neighbour = if key == 0 { a0 } else { c8 };
         println!(
             "key {key}: {f:.4} Hz (expected {expected:.4} Hz, {:+.5} %, tolerance {tolerance:.3} Hz); {level:.2} LUFS, \

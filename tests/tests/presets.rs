@@ -16,6 +16,9 @@ const FS: f64 = 48_000.0;
 fn render(values: &ParamValues, events: &[(f64, Event)], seconds: f64) -> Vec<f64> {
     let samples = (seconds * FS) as usize;
     let mut engine = Instrument::new(FS, values.voices.clamp(1, 128) as usize, values.settings());
+    // The dry signals: what a preset sets (strings, hammer, slide); the soundboard's radiation,
+    // the pan and the pickup's circuit are common to every preset (tests/tests/radiation.rs).
+    engine.set_raw_output(true);
     let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
     let mut t = 0;
     let mut next = 0;

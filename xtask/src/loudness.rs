@@ -91,16 +91,23 @@ pub fn strike(keys: &[u8], velocity: u8, settings: &Settings, seconds: f64) -> (
 /// the absolute gate at −70 LUFS (the relative gate, and so the result, does not depend on the
 /// scale).
 pub fn integrated_lufs(signal: &[f32], sample_rate: f64) -> f64 {
-    let rms = (signal.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / signal.len().max(1) as f64).sqrt();
+    integrated_lufs_stereo(signal, signal, sample_rate)
+}
+
+/// Integrated loudness (LUFS) of a stereo pair, metered as [`integrated_lufs`] meters one signal.
+pub fn integrated_lufs_stereo(left: &[f32], right: &[f32], sample_rate: f64) -> f64 {
+    let power = left.iter().chain(right).map(|&x| f64::from(x).powi(2)).sum::<f64>();
+    let rms = (power / (left.len() + right.len()).max(1) as f64).sqrt();
     if !(rms > 0.0) {
         return f64::NEG_INFINITY;
     }
     let scale = 0.1 / rms;
-    let scaled: Vec<f32> = signal.iter().map(|&x| (f64::from(x) * scale) as f32).collect();
+    let scaled = |x: &[f32]| x.iter().map(|&x| (f64::from(x) * scale) as f32).collect::<Vec<f32>>();
+    let (l, r) = (scaled(left), scaled(right));
     let Ok(mut meter) = ebur128::EbuR128::new(2, sample_rate as u32, ebur128::Mode::I) else {
         return f64::NAN;
     };
-    if meter.add_frames_planar_f32(&[&scaled, &scaled]).is_err() {
+    if meter.add_frames_planar_f32(&[&l, &r]).is_err() {
         return f64::NAN;
     }
     meter.loudness_global().map_or(f64::NAN, |l| l - 20.0 * scale.log10())

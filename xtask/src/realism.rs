@@ -65,10 +65,13 @@ pub fn contact_duration(key: u8, speed: f64) -> Option<f64> {
 }
 
 /// Key `key` struck at `velocity` with the sustain pedal down, `seconds` long, with a unison
-/// spread of `detune` cents: the left channel.
+/// spread of `detune` cents: the dry bridge force (full scale as the output).
 pub fn held_note(key: u8, velocity: f32, detune: f64, seconds: f64) -> Vec<f64> {
     let settings = Settings { unison_detune: detune, ..Settings::default() };
     let mut piano = Instrument::new(FS, 4, settings);
+    // The strings' own decay: the dry bridge force, without the soundboard's radiation (whose
+    // modes add their own ringing to a partial's envelope).
+    piano.set_raw_output(true);
     piano.handle(Event::Sustain { channel: 0, down: true });
     piano.handle(Event::NoteOn { channel: 0, key, velocity });
     let n = (seconds * FS) as usize;
