@@ -48,6 +48,7 @@
 //! frequencies at any sample rate. A mode at or above 0.49 of the sample rate is left out.
 
 use crate::bridge::{BridgeMode, BridgeParams, SOUNDBOARD_BAND, SOUNDBOARD_CONDUCTANCE};
+use crate::string::simd::{Chunk, Isa, Kernel, LANES, Lanes};
 
 /// Speed of sound in air (m/s) at 20 °C.
 pub const SPEED_OF_SOUND: f64 = 343.0;
@@ -186,6 +187,8 @@ pub struct Body {
     radiation: Vec<f64>,
     x: Vec<f64>,
     v: Vec<f64>,
+    /// The vector unit the steps run on.
+    isa: Isa,
 }
 
 /// Below this mean-square velocity (m²/s²) with no force, a body has fallen silent.
@@ -205,6 +208,7 @@ impl Body {
             radiation: Vec::new(),
             x: Vec::new(),
             v: Vec::new(),
+            isa: Isa::detect(),
         };
         for m in params.modes.iter().filter(|m| m.mode.frequency < 0.49 * sample_rate) {
             let w0 = std::f64::consts::TAU * m.mode.frequency;
@@ -224,12 +228,19 @@ impl Body {
             body.b2.push(a12 / m.mode.mass);
             body.radiation.push(m.radiation);
         }
+        // Pad to whole lanes with inert modes (no coefficients, no input, no radiation).
+        while !body.a11.len().is_multiple_of(LANES) {
+            for v in [&mut body.a11, &mut body.a12, &mut body.a21, &mut body.a22, &mut body.b1, &mut body.b2] {
+                v.push(0.0);
+            }
+            body.radiation.push(0.0);
+        }
         body.x = vec![0.0; body.a11.len()];
         body.v = vec![0.0; body.a11.len()];
         body
     }
 
-    /// How many modes step.
+    /// How many modes step, padded with inert ones to a whole number of lanes.
     pub fn modes(&self) -> usize {
         self.x.len()
     }
@@ -252,31 +263,60 @@ impl Body {
             self.reset();
             return;
         }
-        let n = self.x.len();
-        let (a11, a12, a21, a22) = (&self.a11[..n], &self.a12[..n], &self.a21[..n], &self.a22[..n]);
-        let (b1, b2, r) = (&self.b1[..n], &self.b2[..n], &self.radiation[..n]);
-        let (x, v) = (&mut self.x[..n], &mut self.v[..n]);
-        for y in io.iter_mut() {
-            let f = *y;
-            for j in 0..n {
-                let (xj, vj) = (x[j], v[j]);
-                x[j] = a11[j] * xj + a12[j] * vj + b1[j] * f;
-                v[j] = a21[j] * xj + a22[j] * vj + b2[j] * f;
-            }
-            // Four partial sums, so the reduction vectorises.
-            let mut sums = [0.0; 4];
-            let (rc, vc) = (r.chunks_exact(4), v.chunks_exact(4));
-            let tail: f64 = rc.remainder().iter().zip(vc.remainder()).map(|(r, v)| r * v).sum();
-            for (rq, vq) in rc.zip(vc) {
-                for k in 0..4 {
-                    sums[k] += rq[k] * vq[k];
-                }
-            }
-            *y = sums[0] + sums[1] + sums[2] + sums[3] + tail;
-        }
+        let step = Step {
+            a: [whole(&self.a11), whole(&self.a12), whole(&self.a21), whole(&self.a22)],
+            b: [whole(&self.b1), whole(&self.b2)],
+            r: whole(&self.radiation),
+            x: self.x.as_chunks_mut::<LANES>().0,
+            v: self.v.as_chunks_mut::<LANES>().0,
+            io,
+        };
+        self.isa.run(step);
         if !self.v.iter().all(|v| v.is_finite()) {
             self.reset();
             io.fill(0.0);
+        }
+    }
+}
+
+/// The whole chunks of a padded per-mode vector.
+fn whole(v: &[f64]) -> &[Chunk] {
+    v.as_chunks::<LANES>().0
+}
+
+/// One block of a body's exact steps (module docs), a chunk of [`LANES`] modes at a time on
+/// whatever vector unit the CPU has.
+struct Step<'a> {
+    /// `A₁₁, A₁₂, A₂₁, A₂₂`, `B₁/M, B₂/M`, `r`.
+    a: [&'a [Chunk]; 4],
+    b: [&'a [Chunk]; 2],
+    r: &'a [Chunk],
+    x: &'a mut [Chunk],
+    v: &'a mut [Chunk],
+    io: &'a mut [f64],
+}
+
+impl Kernel for Step<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<L: Lanes>(self, s: L) {
+        let [a11, a12, a21, a22] = self.a;
+        let [b1, b2] = self.b;
+        for y in self.io.iter_mut() {
+            let f = s.splat(*y);
+            let mut sum = s.splat(0.0);
+            for (j, (x, v)) in self.x.iter_mut().zip(self.v.iter_mut()).enumerate() {
+                let (xj, vj) = (s.load(x), s.load(v));
+                let x_next =
+                    s.add(s.add(s.mul(s.load(&a11[j]), xj), s.mul(s.load(&a12[j]), vj)), s.mul(s.load(&b1[j]), f));
+                let v_next =
+                    s.add(s.add(s.mul(s.load(&a21[j]), xj), s.mul(s.load(&a22[j]), vj)), s.mul(s.load(&b2[j]), f));
+                s.store(x, x_next);
+                s.store(v, v_next);
+                sum = s.add(sum, s.mul(s.load(&self.r[j]), v_next));
+            }
+            *y = s.sum(sum);
         }
     }
 }

@@ -7,7 +7,7 @@
 //! A partial's level is measured by heterodyning the output at the partial's frequency over
 //! 50 ms windows; a stage's decay rate (dB/s) is the least-squares slope of the level over its
 //! span: the prompt sound over 0.05–0.6 s, the aftersound over 2–4.5 s, struck at velocity 0.6
-//! with the pedal down (`xtask::realism::two_stages`, which also makes the report's pictures).
+//! and held, the pedal up (`xtask::realism::two_stages`, which also makes the report's pictures).
 
 use xtask::realism::two_stages as stages;
 

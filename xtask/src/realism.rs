@@ -1,13 +1,14 @@
 //! How the piano compares with real grands: `cargo xtask realism` writes `docs/report/realism.md`
 //! with its pictures and sound examples in `docs/report/realism/`.
 //!
-//! - **Two-stage decay**: the partial envelopes of C4 struck mezzo-forte (pedal down), with the
+//! - **Two-stage decay**: the partial envelopes of C4 struck mezzo-forte and held, with the
 //!   default unison spread and with the unison tuned exactly alike.
 //! - **Contact duration** against key at mezzo-forte and forte, beside the string's period and
 //!   the published measurements of docs/physics.md §8.4.
 //! - **Inharmonicity** `B` against key beside the grands measured by Lehtonen et al. and Rigaud
 //!   et al.
 //! - **Decay rates** of the first two partials against key, prompt sound and aftersound.
+//! - **Sympathetic resonance**: what the pedal adds to C3 at each key's pitch.
 //! - **A scale at three dynamics**: C4 to C5 at velocities 40, 80 and 120, mono 16-bit WAV.
 //!
 //! The measuring functions here are also what the tests use (`tests/tests/piano_rule.rs`,
@@ -64,15 +65,15 @@ pub fn contact_duration(key: u8, speed: f64) -> Option<f64> {
     None
 }
 
-/// Key `key` struck at `velocity` with the sustain pedal down, `seconds` long, with a unison
-/// spread of `detune` cents: the dry bridge force (full scale as the output).
+/// Key `key` struck at `velocity` and held (its damper off, the pedal up: no sympathetic
+/// partners), `seconds` long, with a unison spread of `detune` cents: the dry bridge force (full
+/// scale as the output).
 pub fn held_note(key: u8, velocity: f32, detune: f64, seconds: f64) -> Vec<f64> {
     let settings = Settings { unison_detune: detune, ..Settings::default() };
     let mut piano = Instrument::new(FS, 4, settings);
     // The strings' own decay: the dry bridge force, without the soundboard's radiation (whose
     // modes add their own ringing to a partial's envelope).
     piano.set_raw_output(true);
-    piano.handle(Event::Sustain { channel: 0, down: true });
     piano.handle(Event::NoteOn { channel: 0, key, velocity });
     let n = (seconds * FS) as usize;
     let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
@@ -155,6 +156,37 @@ const RED: RGBColor = RGBColor(214, 39, 40);
 const PURPLE: RGBColor = RGBColor(148, 103, 189);
 
 /// Write the pictures, the sound examples and `docs/report/realism.md`.
+/// Key `key` struck at velocity 0.7 and held for `seconds`, the sustain pedal down or up: the dry
+/// output, centred (what `tests/tests/sympathetic.rs` compares).
+pub fn held_with_pedal(key: u8, pedal: bool, seconds: f64) -> Vec<f64> {
+    let mut piano = Instrument::new(FS, 8, Settings { limiter: false, stereo_width: 0.0, ..Settings::default() });
+    piano.set_raw_output(true);
+    piano.handle(Event::Sustain { channel: 0, down: pedal });
+    piano.handle(Event::NoteOn { channel: 0, key, velocity: 0.7 });
+    let n = (seconds * FS) as usize;
+    let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
+    for (l, r) in left.chunks_mut(128).zip(right.chunks_mut(128)) {
+        piano.process(l, r);
+    }
+    left.into_iter().map(f64::from).collect()
+}
+
+/// The amplitude of `x` at `frequency` (Hz) by heterodyning over `from..`.
+pub fn amplitude_at(x: &[f64], from: usize, frequency: f64) -> f64 {
+    let w = std::f64::consts::TAU * frequency / FS;
+    let (s, c) = x[from..].iter().enumerate().fold((0.0, 0.0), |(s, c), (n, &v)| {
+        let t = w * (n + from) as f64;
+        (s + v * t.sin(), c + v * t.cos())
+    });
+    2.0 * s.hypot(c) / (x.len() - from).max(1) as f64
+}
+
+/// The largest amplitude of `x` within ±0.3 % of `frequency` (Hz), over `from..` (a partial's
+/// level, wherever inharmonicity and tuning put it).
+pub fn level_near(x: &[f64], from: usize, frequency: f64) -> f64 {
+    (0..=60).map(|k| amplitude_at(x, from, frequency * (0.997 + 1e-4 * k as f64))).fold(0.0, f64::max)
+}
+
 pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let dir = args.root.join("docs/report/realism");
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -162,6 +194,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let contacts = contacts(&dir.join("contact.png"))?;
     inharmonicity(&dir.join("inharmonicity.png"))?;
     let decays = decays(&dir.join("decay.png"))?;
+    let sympathy = sympathetic(&dir.join("sympathetic.png"))?;
     let scales = [("pp", 40u8), ("mf", 80), ("ff", 120)].map(|(name, velocity)| (name, scale(velocity)));
     // One gain for all three, the fortissimo scale peaking at −1 dBFS: the dynamics stay audible.
     let peak = scales.iter().flat_map(|s| s.1.iter()).fold(0.0f64, |m, x| m.max(x.abs()));
@@ -172,7 +205,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
         crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scaled))
             .map_err(|e| e.to_string())?;
     }
-    let text = readme(&envelopes, &contacts, &decays);
+    let text = readme(&envelopes, &contacts, &decays, &sympathy);
     let path = args.root.join("docs/report/realism.md");
     std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     writeln!(out, "{}", serde_json::json!({ "written": path.display().to_string() })).map_err(|e| e.to_string())
@@ -192,7 +225,7 @@ fn envelopes(path: &Path) -> Result<Vec<Envelope>, String> {
     let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let mut chart = ChartBuilder::on(&root)
-        .caption("C4 struck mezzo-forte, pedal down: partial levels (50 ms windows)", ("sans-serif", 22))
+        .caption("C4 struck mezzo-forte and held: partial levels (50 ms windows)", ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(44)
         .y_label_area_size(60)
@@ -360,7 +393,7 @@ fn decays(path: &Path) -> Result<Vec<Decay>, String> {
     let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let mut chart = ChartBuilder::on(&root)
-        .caption("Decay rates of the first two partials (mezzo-forte, pedal down)", ("sans-serif", 22))
+        .caption("Decay rates of the first two partials (mezzo-forte, held)", ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(44)
         .y_label_area_size(60)
@@ -401,6 +434,64 @@ fn decays(path: &Path) -> Result<Vec<Decay>, String> {
     Ok(rows)
 }
 
+/// The name of `key` (MIDI), sharps for black keys: 61 is C♯4.
+fn name_of(key: u8) -> String {
+    const NAMES: [&str; 12] = ["C", "C♯", "D", "D♯", "E", "F", "F♯", "G", "G♯", "A", "A♯", "B"];
+    format!("{}{}", NAMES[usize::from(key % 12)], i32::from(key / 12) - 1)
+}
+
+/// What the pedal adds to C3 (held 3 s, over 1–3 s) at the pitch of each key from C3 to C6,
+/// against C3 with the pedal up at the same pitch: `(key, added, pedal up)` amplitudes.
+type Sympathy = Vec<(u8, f64, f64)>;
+
+fn sympathetic(path: &Path) -> Result<Sympathy, String> {
+    let (down, up) = (held_with_pedal(48, true, 3.0), held_with_pedal(48, false, 3.0));
+    let added: Vec<f64> = down.iter().zip(&up).map(|(d, u)| d - u).collect();
+    let from = FS as usize;
+    let rows: Sympathy = (49..=84u8)
+        .map(|k| (k, level_near(&added, from, key_frequency(k)), level_near(&up, from, key_frequency(k))))
+        .collect();
+    let db = |a: f64| 20.0 * a.max(1e-12).log10();
+    let top = rows.iter().map(|r| db(r.1).max(db(r.2))).fold(f64::NEG_INFINITY, f64::max);
+    let root = BitMapBackend::new(path, (960, 520)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("C3 held, 1–3 s: what the pedal adds at each key's pitch", ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(60)
+        .build_cartesian_2d(48.5f64..84.5f64, (top - 90.0)..(top + 5.0))
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc("key (MIDI): 60 C4, 67 G4, 72 C5, 76 E5")
+        .y_desc("amplitude (dB)")
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let added_points = rows.iter().map(|r| (f64::from(r.0), db(r.1)));
+    chart
+        .draw_series(added_points.clone().map(|(x, y)| Circle::new((x, y), 4, RED.filled())))
+        .map_err(|e| e.to_string())?
+        .label("added by the pedal (pedal down − pedal up)")
+        .legend(|(x, y)| Circle::new((x + 10, y), 4, RED.filled()));
+    chart.draw_series(LineSeries::new(added_points, RED.stroke_width(1))).map_err(|e| e.to_string())?;
+    let up_points = rows.iter().map(|r| (f64::from(r.0), db(r.2)));
+    chart
+        .draw_series(LineSeries::new(up_points, BLUE.stroke_width(2)))
+        .map_err(|e| e.to_string())?
+        .label("C3 with the pedal up")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE.stroke_width(2)));
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::LowerLeft)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())?;
+    Ok(rows)
+}
+
 /// C4 to C5 (C major) at MIDI `velocity`, a note every 0.3 s held 0.28 s, the last held 1.5 s,
 /// at [`crate::examples::RATE`]: the left channel.
 fn scale(velocity: u8) -> Vec<f64> {
@@ -431,7 +522,7 @@ fn scale(velocity: u8) -> Vec<f64> {
     left.into_iter().map(f64::from).collect()
 }
 
-fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay]) -> String {
+fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay], sympathy: &Sympathy) -> String {
     let spread = Settings::default().unison_detune;
     let at = |levels: &[f64], span| -decay_rate(levels, span);
     let mut rows = String::new();
@@ -448,6 +539,15 @@ fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay]) -> Str
     let crossover = contacts.iter().find(|c| c.1 * 1e-3 * key_frequency(c.0) >= 1.0).map_or(0, |c| c.0);
     let two_stage = decays.iter().filter(|d| d.1[1].0 >= 2.0 * d.1[1].1).count();
     let b = |key: u8| piano_note(key).string.inharmonicity();
+    let added = |key: u8| sympathy.iter().find(|r| r.0 == key).map_or(f64::NAN, |r| r.1);
+    let names = [(60u8, "C4"), (67, "G4"), (72, "C5"), (76, "E5")];
+    let sympathy_rows = names
+        .iter()
+        .map(|&(key, name)| {
+            format!("{name} {:.1} dB above {}", 20.0 * (added(key) / added(key + 1)).log10(), name_of(key + 1))
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
     let c7_measured = MEASURED_CONTACT.iter().find(|m| m.0 == 96).map_or(f64::NAN, |m| m.2);
     format!(
         "# How the piano compares with real grands\n\n\
@@ -455,7 +555,7 @@ fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay]) -> Str
          published measurements and their sources in §8.4.\n\n\
          ## Two-stage decay\n\n\
          ![C4's partial levels](realism/envelopes.png)\n\n\
-         C4 struck at velocity 0.6 ({:.1} m/s) with the pedal down. Each partial's level is its heterodyned \
+         C4 struck at velocity 0.6 ({:.1} m/s) and held, the pedal up, on the dry bridge force. Each partial's level is its heterodyned \
          amplitude over 50 ms windows; a stage's decay rate is the least-squares slope over the prompt sound \
          ({}–{} s) and the aftersound ({}–{} s). With the unison's strings mistuned (the default spread, {spread} \
          cents) the strings soon move apart, and the motion that does not push the bridge decays slowly: the \
@@ -483,10 +583,15 @@ fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay]) -> Str
          C4 to C5 at MIDI velocities 40, 80 and 120, each note held 0.28 s, 32 kHz mono 16-bit, all three \
          raised by one gain that brings the fortissimo scale's peak to −1 dBFS: [pianissimo](realism/scale-pp.wav), [mezzo-forte](realism/scale-mf.wav), \
          [fortissimo](realism/scale-ff.wav).\n\n\
+         ## Sympathetic resonance\n\n\
+         ![sympathetic resonance](realism/sympathetic.png)\n\n\
+         C3 struck at velocity 0.7 and held 3 s, with the pedal down and with it up (dry, centred); over 1–3 s, \
+         the amplitude of their difference at each key's pitch (what the pedal adds: the partner strings \
+         ringing, and C3's partials giving up the energy they take, docs/physics.md §14), beside C3 alone. \
+         The pedal adds most where C3's partials meet other keys' strings: {sympathy_rows}.\n\n\
          ## Not shown yet\n\n\
-         Sympathetic resonance: each key has its own copy of the soundboard, so with the pedal down other keys' \
-         strings do not ring with the struck one. The body's radiation and the slide guitar's body are not \
-         modelled.\n",
+         Each key has its own copy of the soundboard and of its partners, so keys played together do not \
+         ring through one bridge. The slide guitar's acoustic body is not modelled.\n",
         hammer_speed(0.6),
         PROMPT.0,
         PROMPT.1,

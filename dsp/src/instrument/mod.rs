@@ -67,6 +67,7 @@ mod monitor;
 mod notes;
 mod output;
 mod params;
+mod partners;
 mod piano_voice;
 mod presets;
 mod settings;
@@ -81,6 +82,9 @@ pub use output::{CEILING, LOOKAHEAD, OutputStage, RELEASE, lookahead_samples};
 pub use params::{
     Group, PARAM_IDS, PARAMETERS, ParamError, ParamKind, ParamSpec, ParamValues, Scale, ValueDisplay, param_index,
     param_spec,
+};
+pub use partners::{
+    MAX_PARTNER_MODES, PARTNER_BAND, PARTNER_KEYS, PARTNER_TOLERANCE_CENTS, PartnerTable, STRIKING_PARTIALS,
 };
 pub use piano_voice::{
     DAMPER_UPDATE, DAMPER_WIDTH, GUARD_FACTOR, PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike,
@@ -253,6 +257,8 @@ pub struct Instrument {
     in_block: usize,
     /// One control block of one voice's output.
     scratch: Vec<f64>,
+    /// Every key's strings as partners of the keys struck (docs/physics.md §14).
+    partners: PartnerTable,
     /// Notes that had to take a busy voice.
     steals: u64,
     /// The piano's soundboard radiating the left and right channels' bridge forces.
@@ -293,6 +299,7 @@ impl Instrument {
             now: 0,
             in_block: 0,
             scratch: vec![0.0; MAX_BLOCK],
+            partners: PartnerTable::new(sample_rate, &settings),
             boards: [(); 2].map(|_| Body::new(&BodyParams::piano(), sample_rate)),
             buses: [(); 3].map(|_| vec![0.0; MAX_BLOCK]),
             circuit: PickupCircuit::new(settings.pickup_resonance, sample_rate),
@@ -486,15 +493,17 @@ impl Instrument {
         // The same key again: strike the same string.
         if let Some(i) = self.voices.iter().position(|v| v.upcoming_key() == Some(strike.key)) {
             let v = &mut self.voices[i];
+            let pedal = self.sustain[usize::from(strike.channel & 15)];
             if v.fading() {
                 v.steal(strike, self.sample_rate, now);
             } else {
-                v.play(strike, &self.settings, now);
+                v.play_with(strike, &self.settings, now, Some((&self.partners, pedal)));
             }
             return Some(i);
         }
         if let Some(i) = self.voices.iter().position(|v| !v.sounding && !v.fading()) {
-            self.voices[i].play(strike, &self.settings, now);
+            let pedal = self.sustain[usize::from(strike.channel & 15)];
+            self.voices[i].play_with(strike, &self.settings, now, Some((&self.partners, pedal)));
             return Some(i);
         }
         // Steal the least audible voice: the quietest output over its latest block.
@@ -603,9 +612,10 @@ impl Instrument {
         self.resonance = (self.resonance * (target / self.resonance).clamp(0.5f64.powf(octaves), 2f64.powf(octaves)))
             .clamp(target.min(self.resonance), target.max(self.resonance));
         self.circuit.tune(self.resonance, self.sample_rate);
+        self.partners.retune(&self.settings);
         for v in &mut self.voices {
             let sustained = self.sustain[usize::from(v.strike.channel)];
-            v.begin_block(&self.settings, sustained, len, self.now);
+            v.begin_block(&self.settings, sustained, len, self.now, Some(&self.partners));
         }
         // The pickup slides to a new position instead of jumping: its weights move a little in
         // each block, linearly across the block, never in one audible step.

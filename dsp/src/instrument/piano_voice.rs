@@ -40,10 +40,11 @@
 use crate::bridge::{BridgeParams, SOUNDBOARD_CONDUCTANCE};
 use crate::contact::{Method, PowerLaw};
 use crate::exciter::HammerParams;
+use crate::instrument::partners::PartnerTable;
 use crate::instrument::settings::{Settings, hammer_speed};
 use crate::instrument::solvers::Solvers;
 use crate::preset::piano_note;
-use crate::scene::{UnisonCore, UnisonParams};
+use crate::scene::{MAX_PARTNERS, UnisonCore, UnisonParams};
 use crate::string::{Damping, ModalString, StringParams};
 
 /// Energy below which a voice that is not touching its hammer is released, relative to the
@@ -151,6 +152,12 @@ pub struct PianoVoice {
     damper: f64,
     /// The extra decay at the fundamental the string's coefficients hold now (1/s).
     applied: f64,
+    /// The partner strings' dampers' decay rate now (1/s), moving towards 0 with the pedal down
+    /// and towards the damper's rate with it up, and the rate their coefficients hold.
+    partner_damper: f64,
+    partner_applied: f64,
+    /// Seconds since the partners' coefficients were last updated.
+    partner_since: f64,
     /// The damper's share of each mode relative to the fundamental, `g_i` (module docs).
     damper_shape: Vec<f64>,
     /// Scratch: the extra decay rate of each mode (1/s).
@@ -199,6 +206,9 @@ impl PianoVoice {
             pan: [1.0; 2],
             damper: 0.0,
             applied: 0.0,
+            partner_damper: 0.0,
+            partner_applied: 0.0,
+            partner_since: 0.0,
             since_update: 0.0,
             reference_energy: 0.0,
             position: note.strike_position,
@@ -227,6 +237,18 @@ impl PianoVoice {
     /// Play `strike` now: on the same string if this voice already sounds that key (a re-strike),
     /// else on a freshly tuned string at rest. Never allocates.
     pub fn play(&mut self, strike: Strike, settings: &Settings, now: u64) {
+        self.play_with(strike, settings, now, None);
+    }
+
+    /// [`play`](Self::play), a key struck from silence with the pedal down (`partners.1`) ringing
+    /// with its partners from the table `partners.0` (docs/physics.md §14).
+    pub fn play_with(
+        &mut self,
+        strike: Strike,
+        settings: &Settings,
+        now: u64,
+        partners: Option<(&PartnerTable, bool)>,
+    ) {
         let note = piano_note(strike.key);
         let position = (note.strike_position * settings.strike_position).clamp(0.02, 0.5);
         let restrike = self.sounding && self.strike.key == strike.key && self.pending.is_none();
@@ -243,8 +265,26 @@ impl PianoVoice {
             };
             let max_frequency = settings.max_frequency.min(0.5 * fs);
             // The per-note rule and the clamped settings always give a valid unison.
-            if self.core.retune(&unison, max_frequency, position).is_err() {
+            // Partners ring only from a key struck with the pedal down: under their dampers
+            // they would barely move, and cost as much.
+            let retuned = match partners {
+                Some((table, true)) => {
+                    let mut picks = [(0, 0); MAX_PARTNERS];
+                    let count = table.pick(strike.key, &mut picks);
+                    let strings: [(&ModalString, usize); MAX_PARTNERS] =
+                        std::array::from_fn(|j| (table.string(picks[j].0), picks[j].1));
+                    self.core.retune_with_partners(&unison, max_frequency, position, &strings[..count])
+                }
+                _ => self.core.retune(&unison, max_frequency, position),
+            };
+            if retuned.is_err() {
                 return;
+            }
+            let pedal = partners.is_some_and(|(_, down)| down);
+            self.partner_damper = if pedal { 0.0 } else { settings.damper_rate };
+            self.partner_applied = self.partner_damper;
+            if self.partner_damper > 0.0 {
+                self.core.set_partner_decay(self.partner_damper);
             }
             self.shape_damper(position);
             self.damper = 0.0;
@@ -292,6 +332,8 @@ impl PianoVoice {
         self.extra.clear();
         self.extra.resize(self.core.modes(), STEAL_RATE);
         self.core.set_extra_decay(&self.extra, STEAL_RATE);
+        self.core.set_partner_decay(STEAL_RATE);
+        self.partner_applied = f64::NAN;
         self.applied = f64::NAN;
     }
 
@@ -364,7 +406,14 @@ impl PianoVoice {
 
     /// Work at a control-block boundary: start a pending note, move the damper towards its
     /// target for the coming `len` samples, release the voice once silent.
-    pub fn begin_block(&mut self, settings: &Settings, sustained: bool, len: usize, now: u64) {
+    pub fn begin_block(
+        &mut self,
+        settings: &Settings,
+        sustained: bool,
+        len: usize,
+        now: u64,
+        partners: Option<&PartnerTable>,
+    ) {
         if !self.sounding && self.pending.is_none() {
             return;
         }
@@ -378,7 +427,7 @@ impl PianoVoice {
         {
             self.pending = None;
             self.sounding = false;
-            self.play(strike, settings, now);
+            self.play_with(strike, settings, now, partners.map(|table| (table, sustained)));
             self.key_down = !self.pending_released;
         }
         if self.pending.is_some() {
@@ -399,6 +448,22 @@ impl PianoVoice {
             self.extra.extend(self.damper_shape.iter().map(|g| self.damper * g));
             self.core.set_extra_decay(&self.extra, 0.0);
         }
+        // The other keys' dampers fall on their strings as the pedal lifts, and rise as it goes
+        // down, as the voice's own does.
+        let target = if sustained { 0.0 } else { settings.damper_rate };
+        self.partner_damper += (target - self.partner_damper) * (1.0 - (-span / settings.damper_time).exp());
+        if (target - self.partner_damper).abs() <= 1e-3 * target.max(1.0) {
+            self.partner_damper = target;
+        }
+        self.partner_since += span;
+        if self.core.partners() > 0
+            && self.partner_damper != self.partner_applied
+            && (self.partner_since >= DAMPER_UPDATE || self.partner_damper == target)
+        {
+            self.partner_since = 0.0;
+            self.partner_applied = self.partner_damper;
+            self.core.set_partner_decay(self.partner_damper);
+        }
         let string_energy = self.core.own_energy();
         // The guard: with no source but the hammer, the string never holds more than the strike's
         // energy (the hammer's and what the string had); far more, or a non-finite state, is a
@@ -411,6 +476,11 @@ impl PianoVoice {
         if self.core.hammer_leaving() && silent {
             self.sounding = false;
         }
+    }
+
+    /// How many strings the unison has.
+    pub fn strings(&self) -> usize {
+        self.core.strings()
     }
 
     /// The first string of the unison, for monitoring.
@@ -456,7 +526,7 @@ mod tests {
         voice.play(Strike { channel: 0, key: 60, velocity: 0.7 }, &settings, 0);
         let mut out = [0.0; 64];
         for _ in 0..blocks {
-            voice.begin_block(&settings, false, 64, 0);
+            voice.begin_block(&settings, false, 64, 0, None);
             voice.render(&mut out);
         }
         (voice, settings)
@@ -481,15 +551,15 @@ mod tests {
         let (mut voice, settings) = struck(20);
         let mut twin = voice.clone();
         let (mut plain, mut faded) = ([0.0; 64], [0.0; 64]);
-        twin.begin_block(&settings, false, 64, 0);
+        twin.begin_block(&settings, false, 64, 0, None);
         twin.render(&mut plain);
         voice.reference_energy *= 1e-6;
-        voice.begin_block(&settings, false, 64, 0);
+        voice.begin_block(&settings, false, 64, 0, None);
         voice.render(&mut faded);
         for (i, (f, p)) in faded.iter().zip(&plain).enumerate() {
             assert_eq!(*f, p * (1.0 - i as f64 / 64.0), "sample {i}");
         }
-        voice.begin_block(&settings, false, 64, 0);
+        voice.begin_block(&settings, false, 64, 0, None);
         assert!(!voice.sounding);
         assert_eq!(voice.guard_trips(), 1);
         assert_eq!(voice.core.own_energy(), 0.0);

@@ -79,6 +79,15 @@
 //! bridge (`g_i = 0`). The modes on the bridge and the bridge's own form one [`ModalBank`] (the
 //! coupled part), the others a second (the free part).
 //!
+//! # Sympathetic partners
+//!
+//! Other keys' strings on the same bridge ring with the key (docs/physics.md §14): a partner is
+//! one string whose end moves with the bridge exactly as the unison's strings do (its own `g`,
+//! `m_L`, `k_L`), with no hammer on it (`h = 0`), its lowest modes in the coupled part, and its
+//! bridge force in the output. It only adds terms to the sums `Θ`, `E` and `G₀` above: the bridge
+//! is still eliminated in closed form and the contact stays one scalar. A damper on the partners
+//! (the pedal up) is an extra decay rate on their modes ([`UnisonCore::set_partner_decay`]).
+//!
 //! # Retiring the hammer
 //!
 //! As for a single string ([`HammerCore`](super::HammerCore)): with `H` the energy of strings and
@@ -136,6 +145,12 @@ pub enum UnisonError {
 /// How much faster than the bridge drains it a mode's own decay must be for the mode to be left
 /// off the bridge (module docs).
 pub const COUPLING_RATIO: f64 = 10.0;
+
+/// Most partner strings a unison rings with (module docs, "Sympathetic partners").
+pub const MAX_PARTNERS: usize = 12;
+
+/// Most modes of a partner string.
+pub const PARTNER_MODES: usize = 16;
 
 /// Steps between checks whether the hammer is out of the unison's reach for good.
 pub const RETIRE_CHECK: u32 = 64;
@@ -223,6 +238,9 @@ pub struct UnisonCore {
     /// The free part: the strings' higher modes.
     free_bank: ModalBank,
     free: Part,
+    /// The partner strings' modes in the coupled part (module docs), and how many partners.
+    partner_ranges: [Range<usize>; MAX_PARTNERS],
+    partners: usize,
     /// The bridge's modes in the coupled part.
     bridge_range: Range<usize>,
     bridge: Vec<BridgeMode>,
@@ -278,6 +296,8 @@ impl UnisonCore {
             free: Part::new(&free_bank),
             coupled_bank,
             free_bank,
+            partner_ranges: [(); MAX_PARTNERS].map(|_| 0..0),
+            partners: 0,
             bridge_range: 0..0,
             bridge: bridge.modes.clone(),
             conductance: bridge.mean_conductance(),
@@ -304,6 +324,19 @@ impl UnisonCore {
     /// Re-prepare for `params` (every string and the bridge at rest), with the modes below
     /// `max_frequency` (Hz), struck at `position` (fraction of the length). Never allocates.
     pub fn retune(&mut self, params: &UnisonParams, max_frequency: f64, position: f64) -> Result<(), UnisonError> {
+        self.retune_with_partners(params, max_frequency, position, &[])
+    }
+
+    /// [`retune`](Self::retune), with the lowest modes of other keys' strings on the same bridge
+    /// (module docs, "Sympathetic partners"): `(string, modes)` for each partner, at most
+    /// [`MAX_PARTNERS`] of them (the rest are left out). Their modes start at rest and free.
+    pub fn retune_with_partners(
+        &mut self,
+        params: &UnisonParams,
+        max_frequency: f64,
+        position: f64,
+        partners: &[(&ModalString, usize)],
+    ) -> Result<(), UnisonError> {
         if !(1..=MAX_UNISON).contains(&params.strings) {
             return Err(UnisonError::Strings(params.strings));
         }
@@ -327,6 +360,10 @@ impl UnisonCore {
             self.coupled_ranges[s] = self.coupled_bank.push_modes(string, 0..split);
             self.free_ranges[s] = self.free_bank.push_modes(string, split..string.modes());
         }
+        self.partners = partners.len().min(MAX_PARTNERS);
+        for (range, (string, modes)) in self.partner_ranges.iter_mut().zip(partners) {
+            *range = self.coupled_bank.push_modes(string, 0..(*modes).min(string.modes()).min(PARTNER_MODES));
+        }
         let start = self.coupled_bank.modes();
         for m in self.bridge.iter().filter(|m| m.frequency < 0.49 * fs) {
             let omega0 = std::f64::consts::TAU * m.frequency;
@@ -336,6 +373,7 @@ impl UnisonCore {
         self.coupled_bank.finish();
         self.free_bank.finish();
         self.place();
+        self.place_partners(&partners[..self.partners]);
         self.losses = 0.0;
         self.measure();
         Ok(())
@@ -386,6 +424,50 @@ impl UnisonCore {
         self.coupling.lift_mass = lift_mass;
         self.coupling.lift_stiffness = lift_stiffness;
         self.refresh_coupling();
+    }
+
+    /// The partners' lifts and bridge force weights (over the unison's `S`, as its own strings'
+    /// output), and their static shares of the bridge's mass and stiffness.
+    fn place_partners(&mut self, partners: &[(&ModalString, usize)]) {
+        let n = self.count as f64;
+        let mut weights = [0.0; PARTNER_MODES];
+        for (range, (string, _)) in self.partner_ranges.iter().zip(partners) {
+            let p = string.params();
+            // The lowest modes' weights (the weights run over as many modes as they are given).
+            string.bridge_weights(true, &mut weights);
+            for (k, i) in range.clone().enumerate() {
+                let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+                self.coupled.lift[i] = sign * p.linear_density / string.wavenumbers()[k];
+                self.coupled.pickup[i] = weights[k] / n;
+            }
+            self.coupling.lift_mass += p.linear_density * p.length / 3.0;
+            self.coupling.lift_stiffness += p.tension / p.length;
+        }
+        self.refresh_coupling();
+    }
+
+    /// Add the decay rate `rate` (1/s) to every partner mode's own (a damper on the partners'
+    /// strings, or 0 to lift it). The state is untouched; the coupling follows.
+    pub fn set_partner_decay(&mut self, rate: f64) {
+        let rates = [rate; PARTNER_MODES];
+        for range in self.partner_ranges[..self.partners].iter().cloned() {
+            let n = range.len().min(rates.len());
+            self.coupled_bank.set_extra_decay(range, &rates[..n]);
+        }
+        self.refresh_coupling();
+        if self.retired {
+            self.measure();
+        }
+    }
+
+    /// The partner strings' energy weighed with their own stiffnesses (J).
+    pub fn partners_energy(&self) -> f64 {
+        self.partner_ranges[..self.partners].iter().map(|r| self.coupled_bank.own_energy(r.clone())).sum()
+    }
+
+    /// How many partner strings ring with the unison.
+    pub fn partners(&self) -> usize {
+        self.partners
     }
 
     /// After the banks' coefficients changed (a damper): the gains, the coupling and the reach
@@ -548,6 +630,11 @@ impl UnisonCore {
         self.retired
     }
 
+    /// How many strings the unison has.
+    pub fn strings(&self) -> usize {
+        self.count
+    }
+
     /// The most modes any string of the unison has.
     pub fn modes(&self) -> usize {
         self.strings[..self.count].iter().map(ModalString::modes).max().unwrap_or(0)
@@ -568,7 +655,7 @@ impl UnisonCore {
     /// The strings' and the bridge's energy weighed with their own stiffnesses (J), the
     /// coupling's cross terms left out: what a voice's guard reads.
     pub fn own_energy(&self) -> f64 {
-        self.strings_energy() + self.coupled_bank.own_energy(self.bridge_range.clone())
+        self.strings_energy() + self.partners_energy() + self.coupled_bank.own_energy(self.bridge_range.clone())
     }
 
     /// The strings' and bridge's numerical energy and the hammer's (J), without the coupling's
@@ -868,6 +955,66 @@ mod tests {
             assert!(drift < 1e-9, "{name}: {drift:e}");
             assert!(losses > 0.05, "{name}: the strings and bridge dissipate ({losses})");
         }
+    }
+
+    /// With partner strings on the bridge (C5 and G5, whose fundamentals C4's 2nd and 3rd
+    /// partials meet, each its unison's mass and tension in one string), a strike and 1 s of
+    /// ringing keep `H + losses` at its initial value to 1e-9 relative, for each solver; the
+    /// partners take energy from the key (measured 0.3 % of it at 1 s), as nothing else gives them
+    /// any; and the real-time path, which retires the hammer, gives the monitored output to 1e-9
+    /// of its peak.
+    #[test]
+    fn partner_strings_ring_from_the_key_and_keep_the_energy_balance() {
+        let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
+        let partner = |key: u8| {
+            let note = crate::preset::piano_note(key);
+            let mut p = note.string;
+            p.linear_density *= note.strings as f64;
+            p.tension *= note.strings as f64;
+            let mut s = ModalString::with_capacity(PARTNER_MODES + 1);
+            s.retune(p, FS, 4.3 * p.fundamental()).unwrap();
+            s
+        };
+        let (c5, g5) = (partner(72), partner(79));
+        let keyed = || {
+            let c4 = chaigne_askenfelt_c4();
+            let params = UnisonParams { string: c4.string, strings: 3, detune: [-1.0, 0.2, 0.8] };
+            let mut core = UnisonCore::new(200, &board, FS).unwrap();
+            core.retune_with_partners(&params, f64::INFINITY, c4.strike_position, &[(&c5, 4), (&g5, 3)]).unwrap();
+            core.strike(&HammerParams {
+                mass: 3.0 * c4.hammer_mass,
+                velocity: 3.5,
+                position: c4.strike_position,
+                gap: 2e-4,
+            });
+            core
+        };
+        let y_ref = law(3).compression_at_energy(0.5 * 3.0 * 2.97e-3 * 3.5 * 3.5);
+        let qsa = || QsaSolver::new(QuadSpline::new(law(3), y_ref, 6).unwrap());
+        let n = 48_000;
+        fn check<S: ContactSolver>(mut scene: HammerUnison<S>, name: &str, n: usize) -> Vec<Frame> {
+            let mut frames = vec![Frame::default(); n];
+            scene.process(&mut frames);
+            let start = scene.initial_energy();
+            let peak = frames.iter().map(|f| f.energy).fold(start, f64::max);
+            let drift = frames.iter().map(|f| (f.balance() - start).abs()).fold(0.0, f64::max) / peak;
+            let share = scene.core().partners_energy() / scene.core().own_energy();
+            println!("{name}: drift {drift:.2e}; the partners hold {:.1} % of the key's energy at 1 s", 100.0 * share);
+            assert!(drift < 1e-9, "{name}: {drift:e}");
+            assert!(share > 1e-3, "{name}: {share}");
+            frames
+        }
+        let frames = check(HammerUnison::new(keyed(), qsa()), "qsa", n);
+        check(HammerUnison::new(keyed(), NewtonSolver::new(law(3))), "imp", n);
+        check(HammerUnison::new(keyed(), ExplicitSolver::new(law(3))), "exp", n);
+        let mut fast = HammerUnison::new(keyed(), qsa());
+        let mut out = vec![0.0; n];
+        out.chunks_mut(64).for_each(|block| fast.process_output(block));
+        assert!(fast.core().retired());
+        let peak = frames.iter().fold(0.0f64, |m, f| m.max(f.output.abs()));
+        let worst = out.iter().zip(&frames).map(|(x, f)| (x - f.output).abs()).fold(0.0, f64::max);
+        println!("real-time path: worst {worst:.2e} of the peak {peak:.3}");
+        assert!(worst < 1e-9 * peak, "{worst:e}");
     }
 
     /// The real-time path (the hammer retired once out of reach, the free part run on its own)
