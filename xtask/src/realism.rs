@@ -493,10 +493,10 @@ fn sympathetic(path: &Path) -> Result<Sympathy, String> {
 }
 
 /// C4 to C5 (C major) at MIDI `velocity`, a note every 0.3 s held 0.28 s, the last held 1.5 s,
-/// at [`crate::examples::RATE`]: the left channel.
+/// at [`crate::examples::RATE`]: what a listener hears, centred (stereo width 0).
 fn scale(velocity: u8) -> Vec<f64> {
     let fs = f64::from(crate::examples::RATE);
-    let mut piano = Instrument::new(fs, 16, Settings::default());
+    let mut piano = Instrument::new(fs, 16, Settings { stereo_width: 0.0, ..Settings::default() });
     let keys = [60u8, 62, 64, 65, 67, 69, 71, 72];
     let step = (0.3 * fs) as usize;
     let n = step * keys.len() + (2.0 * fs) as usize;
