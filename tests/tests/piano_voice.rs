@@ -17,7 +17,7 @@ fn c4_core() -> (HammerCore, PowerLaw) {
     let params = HammerStringParams {
         string: note.string,
         hammer: HammerParams { mass: note.hammer_mass, velocity: 0.0, position: note.strike_position, gap: 1e-3 },
-        pickup: Pickup { kind: OutputKind::BridgeForce, position: 0.5 },
+        pickup: Pickup::point(OutputKind::BridgeForce, 0.5),
     };
     (HammerCore::new(string, &params), PowerLaw::new(note.kappa, note.alpha).unwrap())
 }

@@ -33,7 +33,7 @@ fn fig5(velocity: f64) -> HammerStringParams {
             position: c4.strike_position,
             gap: HammerParams::DEFAULT_GAP,
         },
-        pickup: Pickup { kind: OutputKind::Displacement, position: 0.3 },
+        pickup: Pickup::point(OutputKind::Displacement, 0.3),
     }
 }
 

@@ -58,6 +58,11 @@ use crate::preset::slide_guitar;
 use crate::scene::{OutputKind, Pickup, SlideControls, SlideCore, SlideStringParams};
 use crate::string::ModalString;
 
+/// Length of string the slide guitar's pickup senses (m): a single coil's, about an inch
+/// (Tillman, "Response effects of guitar pickup position and width"). Modes whose half-wavelength
+/// is shorter are averaged out (docs/physics.md §13.4).
+pub const PICKUP_APERTURE: f64 = 0.0254;
+
 /// MIDI key of the open string (A2).
 pub const OPEN_KEY: u8 = 45;
 
@@ -191,7 +196,11 @@ impl SlideVoice {
             left: g.left,
             right: g.right,
             block: settings.block,
-            pickup: Pickup { kind: OutputKind::Velocity, position: settings.pickup_position },
+            pickup: Pickup {
+                kind: OutputKind::Velocity,
+                position: settings.pickup_position,
+                aperture: PICKUP_APERTURE,
+            },
         };
         let law = PowerLaw::new(settings.slide_kappa, settings.slide_alpha).expect("clamped settings give a valid law");
         Self {
@@ -452,7 +461,7 @@ impl SlideVoice {
     /// Move the pickup to `position` (fraction of the length), gliding over the next `samples`
     /// samples.
     pub fn set_pickup(&mut self, position: f64, samples: usize) {
-        self.core.set_pickup(Pickup { kind: OutputKind::Velocity, position }, samples);
+        self.core.set_pickup(Pickup { kind: OutputKind::Velocity, position, aperture: PICKUP_APERTURE }, samples);
     }
 
     /// Render `out.len()` samples of string velocity at the pickup (m/s, see

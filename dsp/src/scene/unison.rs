@@ -1067,7 +1067,7 @@ mod tests {
         let params = HammerStringParams {
             string: c4.string,
             hammer: HammerParams { mass: c4.hammer_mass, velocity: 3.5, position: c4.strike_position, gap: 2e-4 },
-            pickup: Pickup { kind: OutputKind::BridgeForce, position: 0.5 },
+            pickup: Pickup::point(OutputKind::BridgeForce, 0.5),
         };
         let string = ModalString::new(c4.string, FS).unwrap();
         let mut single = HammerString::new(string, &params, QsaSolver::new(QuadSpline::new(law(1), y_ref, 6).unwrap()));

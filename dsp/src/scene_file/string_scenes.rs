@@ -270,10 +270,8 @@ impl Default for StringOutputTable {
 
 impl StringOutputTable {
     fn pickup(&self, default_kind: OutputKind) -> Result<Pickup, SceneError> {
-        Ok(Pickup {
-            kind: self.kind.unwrap_or(default_kind),
-            position: fraction("output.position", self.position.unwrap_or(0.9))?,
-        })
+        let position = fraction("output.position", self.position.unwrap_or(0.9))?;
+        Ok(Pickup::point(self.kind.unwrap_or(default_kind), position))
     }
 
     fn options(&self) -> OutputTable {

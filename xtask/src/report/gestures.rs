@@ -57,7 +57,7 @@ pub fn preset_params(block: usize) -> SlideStringParams {
         left: g.left,
         right: g.right,
         block,
-        pickup: Pickup { kind: OutputKind::Displacement, position: 0.9 },
+        pickup: Pickup::point(OutputKind::Displacement, 0.9),
     }
 }
 
@@ -231,7 +231,7 @@ impl Trajectory {
             left: FingerParams { damping: finger_damping, ..g.left },
             right: FingerParams { damping: finger_damping, ..g.right },
             block,
-            pickup: Pickup { kind: OutputKind::Displacement, position: 0.9 },
+            pickup: Pickup::point(OutputKind::Displacement, 0.9),
         };
         Self { law, params, fs: fs as u32, seconds, lanes }
     }

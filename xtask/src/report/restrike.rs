@@ -89,7 +89,7 @@ pub struct Restrike {
 
 impl Restrike {
     /// What a run listens to: the bridge force.
-    pub const PICKUP: Pickup = Pickup { kind: OutputKind::BridgeForce, position: 0.5 };
+    pub const PICKUP: Pickup = Pickup::point(OutputKind::BridgeForce, 0.5);
 
     /// The prepared string (every mode below [`MAX_FREQUENCY`] and Nyquist).
     pub fn modal_string(&self) -> ModalString {

@@ -450,7 +450,7 @@ fn hammer_string(id: String, law: PowerLaw, fs: u32, segments: usize, h: HammerD
     let fsf = f64::from(fs);
     let string = if h.lossless { StringParams { damping: Damping::LOSSLESS, ..h.string } } else { h.string };
     let hammer = HammerParams { mass: h.mass, velocity: h.v, position: h.position, gap: h.gap };
-    let params = HammerStringParams { string, hammer, pickup: Pickup { kind: OutputKind::BridgeForce, position: 0.9 } };
+    let params = HammerStringParams { string, hammer, pickup: Pickup::point(OutputKind::BridgeForce, 0.9) };
     let cap = (400_000 / modes(string, fsf)).min(2000);
     let seconds = h.gap / h.v.max(1e-300) + 2.0 * hertz_time(&law, h.mass, h.v);
     let samples = samples_within(seconds, fsf, 64, cap);
@@ -503,7 +503,7 @@ fn slide_string(id: String, law: PowerLaw, fs: u32, segments: usize, d: SlideDra
         left: FingerParams { width: g.left.width, damping: finger_damping },
         right: FingerParams { width: g.right.width, damping: finger_damping },
         block: d.block,
-        pickup: Pickup { kind: OutputKind::Displacement, position: 0.9 },
+        pickup: Pickup::point(OutputKind::Displacement, 0.9),
     };
     let samples = samples_within(300_000.0 / modes(string, fsf) as f64, 1.0, 64, 1500);
     let run = samples as f64 / fsf;
@@ -838,7 +838,7 @@ pub fn corners(kind: Kind, excerpt_scene: Option<&CaseScene>) -> Vec<ParamSet> {
                     left: FingerParams { damping: 0.0, ..g.left },
                     right: FingerParams { damping: 0.0, ..g.right },
                     block,
-                    pickup: Pickup { kind: OutputKind::Displacement, position: 0.9 },
+                    pickup: Pickup::point(OutputKind::Displacement, 0.9),
                 },
                 fs: 48_000,
                 seconds: 0.2,
