@@ -491,10 +491,10 @@ impl Instrument {
     /// Strike `strike` on a piano voice; the index of the voice that took it.
     fn note_on(&mut self, strike: Strike) -> Option<usize> {
         let now = self.now;
+        let pedal = self.sustain[usize::from(strike.channel & 15)];
         // The same key again: strike the same string.
         if let Some(i) = self.voices.iter().position(|v| v.upcoming_key() == Some(strike.key)) {
             let v = &mut self.voices[i];
-            let pedal = self.sustain[usize::from(strike.channel & 15)];
             if v.fading() {
                 v.steal(strike, self.sample_rate, now);
             } else {
@@ -503,7 +503,6 @@ impl Instrument {
             return Some(i);
         }
         if let Some(i) = self.voices.iter().position(|v| !v.sounding && !v.fading()) {
-            let pedal = self.sustain[usize::from(strike.channel & 15)];
             self.voices[i].play_with(strike, &self.settings, now, Some((&self.partners, pedal)));
             return Some(i);
         }

@@ -478,11 +478,6 @@ impl PianoVoice {
         }
     }
 
-    /// How many strings the unison has.
-    pub fn strings(&self) -> usize {
-        self.core.strings()
-    }
-
     /// The first string of the unison, for monitoring.
     pub fn string(&self) -> &ModalString {
         self.core.string()

@@ -630,11 +630,6 @@ impl UnisonCore {
         self.retired
     }
 
-    /// How many strings the unison has.
-    pub fn strings(&self) -> usize {
-        self.count
-    }
-
     /// The most modes any string of the unison has.
     pub fn modes(&self) -> usize {
         self.strings[..self.count].iter().map(ModalString::modes).max().unwrap_or(0)
