@@ -280,12 +280,9 @@ impl PianoVoice {
             if retuned.is_err() {
                 return;
             }
-            let pedal = partners.is_some_and(|(_, down)| down);
-            self.partner_damper = if pedal { 0.0 } else { settings.damper_rate };
-            self.partner_applied = self.partner_damper;
-            if self.partner_damper > 0.0 {
-                self.core.set_partner_decay(self.partner_damper);
-            }
+            // Partners start free: a key struck with the pedal up has none to damp.
+            self.partner_damper = 0.0;
+            self.partner_applied = 0.0;
             self.shape_damper(position);
             self.damper = 0.0;
             self.applied = 0.0;
