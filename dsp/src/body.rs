@@ -48,7 +48,7 @@
 //! frequencies at any sample rate. A mode at or above 0.49 of the sample rate is left out.
 
 use crate::bridge::{BridgeMode, BridgeParams, SOUNDBOARD_BAND, SOUNDBOARD_CONDUCTANCE};
-use crate::string::simd::{Chunk, Isa, Kernel, LANES, Lanes};
+use crate::string::simd::{Chunk, Isa, Kernel, LANES, Lanes, chunks, chunks_mut};
 
 /// Speed of sound in air (m/s) at 20 °C.
 pub const SPEED_OF_SOUND: f64 = 343.0;
@@ -264,11 +264,11 @@ impl Body {
             return;
         }
         let step = Step {
-            a: [whole(&self.a11), whole(&self.a12), whole(&self.a21), whole(&self.a22)],
-            b: [whole(&self.b1), whole(&self.b2)],
-            r: whole(&self.radiation),
-            x: self.x.as_chunks_mut::<LANES>().0,
-            v: self.v.as_chunks_mut::<LANES>().0,
+            a: [chunks(&self.a11), chunks(&self.a12), chunks(&self.a21), chunks(&self.a22)],
+            b: [chunks(&self.b1), chunks(&self.b2)],
+            r: chunks(&self.radiation),
+            x: chunks_mut(&mut self.x),
+            v: chunks_mut(&mut self.v),
             io,
         };
         self.isa.run(step);
@@ -277,11 +277,6 @@ impl Body {
             io.fill(0.0);
         }
     }
-}
-
-/// The whole chunks of a padded per-mode vector.
-fn whole(v: &[f64]) -> &[Chunk] {
-    v.as_chunks::<LANES>().0
 }
 
 /// One block of a body's exact steps (module docs), a chunk of [`LANES`] modes at a time on

@@ -7,21 +7,7 @@
 //! two and sums the lanes in a fixed order; with no fused multiply-adds anywhere, every
 //! instruction set gives bit-identical results.
 
-use super::simd::{Chunk, Isa, Kernel, LANES, Lanes, lane_sum};
-
-#[inline(always)]
-fn chunks(x: &[f64]) -> &[Chunk] {
-    let (chunks, rest) = x.as_chunks::<LANES>();
-    debug_assert!(rest.is_empty(), "per-mode arrays hold whole chunks");
-    chunks
-}
-
-#[inline(always)]
-fn chunks_mut(x: &mut [f64]) -> &mut [Chunk] {
-    let (chunks, rest) = x.as_chunks_mut::<LANES>();
-    debug_assert!(rest.is_empty(), "per-mode arrays hold whole chunks");
-    chunks
-}
+use super::simd::{Chunk, Isa, Kernel, LANES, Lanes, chunks, chunks_mut, lane_sum};
 
 /// Run `$body` for every chunk index `$c` in `0..$n` with `$acc` bound to the even or the odd
 /// accumulator, two chunks per iteration, so the two stay in registers.

@@ -21,6 +21,22 @@ pub const LANES: usize = 8;
 /// One chunk of modes.
 pub type Chunk = [f64; LANES];
 
+/// The whole chunks of a per-mode array padded to a multiple of [`LANES`].
+#[inline(always)]
+pub fn chunks(x: &[f64]) -> &[Chunk] {
+    let (chunks, rest) = x.as_chunks::<LANES>();
+    debug_assert!(rest.is_empty(), "per-mode arrays hold whole chunks");
+    chunks
+}
+
+/// [`chunks`], mutable.
+#[inline(always)]
+pub fn chunks_mut(x: &mut [f64]) -> &mut [Chunk] {
+    let (chunks, rest) = x.as_chunks_mut::<LANES>();
+    debug_assert!(rest.is_empty(), "per-mode arrays hold whole chunks");
+    chunks
+}
+
 /// Sum of the lanes in a fixed order: the halving tree of a vector reduction (lanes `i` and
 /// `i+4`, then `i` and `i+2`, then the last two).
 #[inline(always)]
