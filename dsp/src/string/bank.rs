@@ -159,6 +159,34 @@ impl ModalBank {
         start..self.modes
     }
 
+    /// Insert the modes `modes` of `string` (as [`push_modes`](Self::push_modes)), at rest, before
+    /// the bank's mode `at`: the modes from `at` on move up by as many, with their coefficients
+    /// (any extra decay too) and their state. Returns the new modes' indices (fewer if the
+    /// capacity runs out). Call [`finish`](Self::finish) before stepping. Never allocates.
+    pub fn insert_modes(&mut self, at: usize, string: &ModalString, modes: Range<usize>) -> Range<usize> {
+        self.unpad();
+        let at = at.min(self.modes);
+        let wanted = modes.end.min(string.modes()).saturating_sub(modes.start);
+        let count = wanted.min(self.capacity() - self.modes);
+        let (m, dt) = (self.modes, 1.0 / self.sample_rate);
+        for v in self.arrays_mut() {
+            v.resize(m + count, 0.0);
+            v.copy_within(at..m, at + count);
+        }
+        for (k, i) in (modes.start..modes.start + count).enumerate() {
+            let (p, q, mass) = (string.own_p[i], string.own_q[i], string.modal_mass);
+            let c = Coefficients::new(p, q, dt, mass);
+            let j = at + k;
+            (self.coef_a[j], self.coef_b[j], self.coef_c[j]) = (c.a, c.b, c.c);
+            (self.stiffness[j], self.resistance[j], self.own_stiffness[j]) = (c.stiffness, c.resistance, c.stiffness);
+            (self.own_p[j], self.own_q[j], self.mass[j]) = (p, q, mass);
+            (self.u_prev[j], self.u_now[j], self.history[j]) = (0.0, 0.0, 0.0);
+        }
+        self.modes += count;
+        self.history_ready = false;
+        at..at + count
+    }
+
     /// Append a damped oscillator of undamped angular frequency `omega0` (rad/s), decay rate
     /// `sigma` (1/s) and modal mass `mass` (kg), at rest. Returns its index.
     pub fn push_oscillator(&mut self, omega0: f64, sigma: f64, mass: f64) -> Option<usize> {
