@@ -426,13 +426,17 @@ fn garbage_input_is_safe_and_allocation_free() {
     assert!(left.iter().all(|v| v.is_finite()));
 }
 
-/// A steady stream of notes (with steals and releases) allocates nothing after `new`.
+/// A steady stream of notes (with steals, releases, and the pedal going down on sounding keys,
+/// which brings their partners onto their bridges) allocates nothing after `new`.
 #[test]
 fn playing_allocates_nothing() {
     let mut p = piano(8);
     let (mut left, mut right) = (vec![0.0f32; 256], vec![0.0f32; 256]);
     let count = allocations_in(|| {
         for i in 0..400u32 {
+            if i % 7 == 0 {
+                p.handle(Event::Sustain { channel: 0, down: i % 14 == 7 });
+            }
             if i % 3 == 0 {
                 p.handle(on(21 + (i * 7 % 88) as u8, 0.5 + (i % 5) as f32 * 0.1));
             }

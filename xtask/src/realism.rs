@@ -155,23 +155,32 @@ const GREEN: RGBColor = RGBColor(44, 160, 44);
 const RED: RGBColor = RGBColor(214, 39, 40);
 const PURPLE: RGBColor = RGBColor(148, 103, 189);
 
-/// Write the pictures, the sound examples and `docs/report/realism.md`.
-/// Key `key` struck at velocity 0.7 and held for `seconds`, the sustain pedal down or up: the dry
-/// output, centred (what `tests/tests/sympathetic.rs` compares).
-pub fn held_with_pedal(key: u8, pedal: bool, seconds: f64) -> Vec<f64> {
+/// Key `key` struck at velocity 0.7 and held for `seconds`, the sustain pedal going down `pedal`
+/// seconds after the strike (at 0, just before it) or never (`None`): the dry output, centred
+/// (what `tests/tests/sympathetic.rs` compares).
+pub fn held_with_pedal(key: u8, pedal: Option<f64>, seconds: f64) -> Vec<f64> {
     let mut piano = Instrument::new(FS, 8, Settings { limiter: false, stereo_width: 0.0, ..Settings::default() });
     piano.set_raw_output(true);
-    piano.handle(Event::Sustain { channel: 0, down: pedal });
+    let pedal_at = pedal.map(|t| (t.max(0.0) * FS) as usize);
+    if pedal_at == Some(0) {
+        piano.handle(Event::Sustain { channel: 0, down: true });
+    }
     piano.handle(Event::NoteOn { channel: 0, key, velocity: 0.7 });
     let n = (seconds * FS) as usize;
     let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
-    for (l, r) in left.chunks_mut(128).zip(right.chunks_mut(128)) {
+    const BLOCK: usize = 128;
+    for (k, (l, r)) in left.chunks_mut(BLOCK).zip(right.chunks_mut(BLOCK)).enumerate() {
+        if let Some(at) = pedal_at
+            && at > 0
+            && (k * BLOCK..(k + 1) * BLOCK).contains(&at)
+        {
+            piano.handle(Event::Sustain { channel: 0, down: true });
+        }
         piano.process(l, r);
     }
     left.into_iter().map(f64::from).collect()
 }
 
-/// The amplitude of `x` at `frequency` (Hz) by heterodyning over `from..`.
 pub fn amplitude_at(x: &[f64], from: usize, frequency: f64) -> f64 {
     let w = std::f64::consts::TAU * frequency / FS;
     let (s, c) = x[from..].iter().enumerate().fold((0.0, 0.0), |(s, c), (n, &v)| {
@@ -187,6 +196,7 @@ pub fn level_near(x: &[f64], from: usize, frequency: f64) -> f64 {
     (0..=60).map(|k| amplitude_at(x, from, frequency * (0.997 + 1e-4 * k as f64))).fold(0.0, f64::max)
 }
 
+/// Write the pictures, the sound examples and `docs/report/realism.md`.
 pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let dir = args.root.join("docs/report/realism");
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -445,7 +455,7 @@ fn name_of(key: u8) -> String {
 type Sympathy = Vec<(u8, f64, f64)>;
 
 fn sympathetic(path: &Path) -> Result<Sympathy, String> {
-    let (down, up) = (held_with_pedal(48, true, 3.0), held_with_pedal(48, false, 3.0));
+    let (down, up) = (held_with_pedal(48, Some(0.0), 3.0), held_with_pedal(48, None, 3.0));
     let added: Vec<f64> = down.iter().zip(&up).map(|(d, u)| d - u).collect();
     let from = FS as usize;
     let rows: Sympathy = (49..=84u8)

@@ -21,6 +21,12 @@
 //!   with time constant `damper_time` as the felt settles (towards 0 as it lifts). The rates
 //!   change the string's coefficients, never its state ([`ModalString::set_extra_decay`]), so the
 //!   sound dies away continuously however fast the damper lands.
+//! - **Partners.** With the sustain pedal down, the strings of the other keys whose modes meet
+//!   the key's partials ring with it on its bridge (docs/physics.md §14). A key struck with the
+//!   pedal down starts with them free; one struck before the pedal goes down gets them at the
+//!   first block with the pedal down and the felt off the strings, at rest on the bridge's line
+//!   ([`UnisonCore::add_partners`]), their dampers lifting as the pedal's do. Lifting the pedal
+//!   lets their dampers down; they stay on the bridge until the key's next strike from silence.
 //! - **Release.** A voice is free again once its strings are silent: their energy (the hammer
 //!   flying off and the bridge's slowest modes do not count) below [`RELEASE_ENERGY`] of its latest
 //!   strike's, with the hammer flying away (a silent string cannot reach it). The energy here and
@@ -128,6 +134,13 @@ pub fn damper_shares(string: &ModalString, position: f64, out: &mut Vec<f64>) {
     out.extend(string.wavenumbers().iter().map(|&beta| (mean(beta) / first).max(1.0)));
 }
 
+/// The strings of `key`'s partners in `table` and how many there are.
+fn partner_strings(table: &PartnerTable, key: u8) -> ([(&ModalString, usize); MAX_PARTNERS], usize) {
+    let mut picks = [(0, 0); MAX_PARTNERS];
+    let count = table.pick(key, &mut picks);
+    (std::array::from_fn(|j| (table.string(picks[j].0), picks[j].1)), count)
+}
+
 /// One piano voice.
 #[derive(Debug, Clone)]
 pub struct PianoVoice {
@@ -158,6 +171,8 @@ pub struct PianoVoice {
     partner_applied: f64,
     /// Seconds since the partners' coefficients were last updated.
     partner_since: f64,
+    /// Whether the voice has looked for partners since its strike (it has them if any were found).
+    partners_sought: bool,
     /// The damper's share of each mode relative to the fundamental, `g_i` (module docs).
     damper_shape: Vec<f64>,
     /// Scratch: the extra decay rate of each mode (1/s).
@@ -209,6 +224,7 @@ impl PianoVoice {
             partner_damper: 0.0,
             partner_applied: 0.0,
             partner_since: 0.0,
+            partners_sought: false,
             since_update: 0.0,
             reference_energy: 0.0,
             position: note.strike_position,
@@ -269,10 +285,7 @@ impl PianoVoice {
             // they would barely move, and cost as much.
             let retuned = match partners {
                 Some((table, true)) => {
-                    let mut picks = [(0, 0); MAX_PARTNERS];
-                    let count = table.pick(strike.key, &mut picks);
-                    let strings: [(&ModalString, usize); MAX_PARTNERS] =
-                        std::array::from_fn(|j| (table.string(picks[j].0), picks[j].1));
+                    let (strings, count) = partner_strings(table, strike.key);
                     self.core.retune_with_partners(&unison, max_frequency, position, &strings[..count])
                 }
                 _ => self.core.retune(&unison, max_frequency, position),
@@ -280,6 +293,7 @@ impl PianoVoice {
             if retuned.is_err() {
                 return;
             }
+            self.partners_sought = matches!(partners, Some((_, true)));
             // Partners start free: a key struck with the pedal up has none to damp.
             self.partner_damper = 0.0;
             self.partner_applied = 0.0;
@@ -308,6 +322,19 @@ impl PianoVoice {
         self.sounding = true;
         self.key_down = true;
         self.started = now;
+    }
+
+    /// With the pedal down, the partners of a key struck with it up join its bridge, at rest
+    /// where their dampers held them, their dampers lifting as the pedal's do.
+    fn seek_partners(&mut self, settings: &Settings, table: &PartnerTable) {
+        self.partners_sought = true;
+        let (strings, count) = partner_strings(table, self.strike.key);
+        if self.core.add_partners(&strings[..count]) > 0 {
+            self.partner_damper = settings.damper_rate;
+            self.partner_applied = settings.damper_rate;
+            self.partner_since = 0.0;
+            self.core.set_partner_decay(settings.damper_rate);
+        }
     }
 
     /// The damper's share of each mode for a pad from the striking point `position`.
@@ -430,6 +457,14 @@ impl PianoVoice {
         if self.pending.is_some() {
             self.fade_left = self.fade_left.saturating_sub(len);
             return;
+        }
+        // Not while the felt may touch: the contact's coefficients would change under the solver.
+        if sustained
+            && !self.partners_sought
+            && !self.core.in_contact()
+            && let Some(table) = partners
+        {
+            self.seek_partners(settings, table);
         }
         let span = len as f64 / fs;
         let target = if self.key_down || sustained { 0.0 } else { settings.damper_rate };
