@@ -944,6 +944,18 @@ mod tests {
         core
     }
 
+    /// Key `key`'s unison as one partner string (its mass and tension together), up to the
+    /// modes below 4.3 times its fundamental.
+    fn partner(key: u8) -> ModalString {
+        let note = crate::preset::piano_note(key);
+        let mut p = note.string;
+        p.linear_density *= note.strings as f64;
+        p.tension *= note.strings as f64;
+        let mut s = ModalString::with_capacity(PARTNER_MODES + 1);
+        s.retune(p, FS, 4.3 * p.fundamental()).unwrap();
+        s
+    }
+
     fn law(strings: usize) -> PowerLaw {
         let c4 = chaigne_askenfelt_c4();
         PowerLaw::new(c4.kappa * strings as f64, c4.alpha).unwrap()
@@ -988,15 +1000,6 @@ mod tests {
     #[test]
     fn partner_strings_ring_from_the_key_and_keep_the_energy_balance() {
         let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
-        let partner = |key: u8| {
-            let note = crate::preset::piano_note(key);
-            let mut p = note.string;
-            p.linear_density *= note.strings as f64;
-            p.tension *= note.strings as f64;
-            let mut s = ModalString::with_capacity(PARTNER_MODES + 1);
-            s.retune(p, FS, 4.3 * p.fundamental()).unwrap();
-            s
-        };
         let (c5, g5) = (partner(72), partner(79));
         let keyed = || {
             let c4 = chaigne_askenfelt_c4();
@@ -1048,15 +1051,6 @@ mod tests {
     #[test]
     fn partners_added_to_a_ringing_key_start_on_the_bridge_and_keep_the_balance() {
         let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
-        let partner = |key: u8| {
-            let note = crate::preset::piano_note(key);
-            let mut p = note.string;
-            p.linear_density *= note.strings as f64;
-            p.tension *= note.strings as f64;
-            let mut s = ModalString::with_capacity(PARTNER_MODES + 1);
-            s.retune(p, FS, 4.3 * p.fundamental()).unwrap();
-            s
-        };
         let (c5, g5) = (partner(72), partner(79));
         let y_ref = law(3).compression_at_energy(0.5 * 3.0 * 2.97e-3 * 3.5 * 3.5);
         let solver = || QsaSolver::new(QuadSpline::new(law(3), y_ref, 6).unwrap());
