@@ -248,7 +248,7 @@ impl Body {
         self.w.iter_mut().for_each(|w| w.fill(0.0));
     }
 
-    /// Whether every mode is at rest (to [`SILENT`]).
+    /// Whether every mode is at rest (to `SILENT`).
     pub fn is_silent(&self) -> bool {
         let [re, im] = &self.w;
         let motion: f64 = self.beta2.iter().zip(re.iter().zip(im)).map(|(b, (x, y))| b * (x * x + y * y)).sum();

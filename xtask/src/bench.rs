@@ -13,7 +13,8 @@
 //! - `piano/c4`: one C4 voice of the instrument at 48 kHz; its line says how many such voices fit
 //!   in real time on one core (`1/rtf`, rounded down);
 //! - `piano/88-keys`: all 88 keys (A0 to C8) struck together, pedal down, 48 kHz: the whole
-//!   piano at once;
+//!   piano at once; `piano/88-keys/late-pedal` the same with the pedal pressed 0.5 s after the
+//!   strike, when every key brings its partners onto its bridge (its worst call);
 //! - `piano/restrike/{qsa,exp,imp}`: the 16 keys struck together again every 40 ms, 50 times,
 //!   each time at a seeded random velocity in [`RESTRIKE_VELOCITIES`] (the same for all 16, so
 //!   that their contacts overlap), in calls of 16 samples, for each solver: every voice in
@@ -338,6 +339,8 @@ pub struct Performance<'a> {
     pub keys: &'a [u8],
     /// Calls between strikes and the velocities' seed.
     pub restrike: Option<(usize, u64)>,
+    /// The call before which the sustain pedal goes down, if not with the first strike.
+    pub late_pedal: Option<usize>,
 }
 
 /// Time the instrument with `settings` playing `play` for `seconds` in calls of `call` samples,
@@ -357,7 +360,9 @@ pub fn measure_piano(
         // One channel per note (the MPE way) so that slide notes are separate voices, not glides.
         for (i, &key) in keys.iter().enumerate() {
             let channel = if mode == Mode::Slide { (i % 16) as u8 } else { 0 };
-            piano.handle(Event::Sustain { channel, down: true });
+            if play.late_pedal.is_none() {
+                piano.handle(Event::Sustain { channel, down: true });
+            }
             piano.handle(Event::NoteOn { channel, key, velocity });
         }
     };
@@ -374,6 +379,9 @@ pub fn measure_piano(
                 && n % every == 0
             {
                 strike(&mut piano, velocities.random_range(RESTRIKE_VELOCITIES));
+            }
+            if play.late_pedal == Some(n) {
+                piano.handle(Event::Sustain { channel: 0, down: true });
             }
             let in_contact = piano.in_contact();
             let t = std::time::Instant::now();
@@ -532,9 +540,11 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
     let c4 = vec![60u8];
     let piano = Settings { mode: Mode::Piano, ..Settings::default() };
     let slide = Settings { mode: Mode::Slide, ..Settings::default() };
-    let once = |keys| Performance { keys, restrike: None };
+    let once = |keys| Performance { keys, restrike: None, late_pedal: None };
     // Every 120 calls of 16 samples: 40 ms, 50 strikes in 2 s.
-    let restrike = Performance { keys: &sixteen, restrike: Some((120, 6)) };
+    let restrike = Performance { keys: &sixteen, restrike: Some((120, 6)), late_pedal: None };
+    // The pedal 0.5 s after the strike: every key brings its partners in.
+    let late_pedal = Performance { keys: &all, restrike: None, late_pedal: Some(375) };
     let with = |method| Settings { method, ..piano };
     let cases = [
         ("piano/c4", piano, once(&c4), 64),
@@ -543,6 +553,7 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
         ("slide/16-voices/64", slide, once(&sixteen), 64),
         ("slide/16-voices/512", slide, once(&sixteen), 512),
         ("piano/88-keys", piano, once(&all), 64),
+        ("piano/88-keys/late-pedal", piano, late_pedal, 64),
         ("piano/restrike/qsa", with(Method::Qsa), restrike, 16),
         ("piano/restrike/exp", with(Method::Exp), restrike, 16),
         ("piano/restrike/imp", with(Method::Imp), restrike, 16),

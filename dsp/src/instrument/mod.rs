@@ -119,6 +119,12 @@ pub const PICKUP_GLIDE: f64 = 0.05;
 /// Most voices an instrument may have.
 pub const MAX_VOICES: usize = 128;
 
+/// Most piano voices that bring their partners onto their bridges in one control block when the
+/// pedal goes down after their strikes (each re-derives its coupling, about as costly as a
+/// strike): all 88 keys pedalled at once take 11 blocks of 64 samples, 15 ms at 48 kHz, instead of
+/// one block costing three times its duration.
+pub const PARTNER_SEEKS: usize = 8;
+
 /// Output scale of the piano (1/N): bridge force to full scale, before each key's voicing
 /// ([`voicing_gain`]), which sets the loudness (−41.5 LUFS for a key struck alone at velocity 80).
 pub const OUTPUT_SCALE: f64 = 0.016;
@@ -613,9 +619,10 @@ impl Instrument {
             .clamp(target.min(self.resonance), target.max(self.resonance));
         self.circuit.tune(self.resonance, self.sample_rate);
         self.partners.retune(&self.settings);
+        let mut seeks = PARTNER_SEEKS;
         for v in &mut self.voices {
             let sustained = self.sustain[usize::from(v.strike.channel)];
-            v.begin_block(&self.settings, sustained, len, self.now, Some(&self.partners));
+            v.begin_block(&self.settings, sustained, len, self.now, Some(&self.partners), &mut seeks);
         }
         // The pickup slides to a new position instead of jumping: its weights move a little in
         // each block, linearly across the block, never in one audible step.

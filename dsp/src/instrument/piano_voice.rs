@@ -24,7 +24,8 @@
 //! - **Partners.** With the sustain pedal down, the strings of the other keys whose modes meet
 //!   the key's partials ring with it on its bridge (docs/physics.md §14). A key struck with the
 //!   pedal down starts with them free; one struck before the pedal goes down gets them at the
-//!   first block with the pedal down and the felt off the strings, at rest on the bridge's line
+//!   first block with the pedal down and the felt off the strings (a few keys a block, see
+//!   [`PARTNER_SEEKS`](super::PARTNER_SEEKS)), at rest on the bridge's line
 //!   ([`UnisonCore::add_partners`]), their dampers lifting as the pedal's do. Lifting the pedal
 //!   lets their dampers down; they stay on the bridge until the key's next strike from silence.
 //! - **Release.** A voice is free again once its strings are silent: their energy (the hammer
@@ -428,8 +429,10 @@ impl PianoVoice {
         self.loudness
     }
 
-    /// Work at a control-block boundary: start a pending note, move the damper towards its
-    /// target for the coming `len` samples, release the voice once silent.
+    /// Work at a control-block boundary: start a pending note, bring the partners in if the pedal
+    /// went down after the strike (while `seeks`, the voices that may still do so in this block,
+    /// is above 0; it counts down), move the damper towards its target for the coming `len`
+    /// samples, release the voice once silent.
     pub fn begin_block(
         &mut self,
         settings: &Settings,
@@ -437,6 +440,7 @@ impl PianoVoice {
         len: usize,
         now: u64,
         partners: Option<&PartnerTable>,
+        seeks: &mut usize,
     ) {
         if !self.sounding && self.pending.is_none() {
             return;
@@ -461,9 +465,11 @@ impl PianoVoice {
         // Not while the felt may touch: the contact's coefficients would change under the solver.
         if sustained
             && !self.partners_sought
+            && *seeks > 0
             && !self.core.in_contact()
             && let Some(table) = partners
         {
+            *seeks -= 1;
             self.seek_partners(settings, table);
         }
         let span = len as f64 / fs;
@@ -553,7 +559,7 @@ mod tests {
         voice.play(Strike { channel: 0, key: 60, velocity: 0.7 }, &settings, 0);
         let mut out = [0.0; 64];
         for _ in 0..blocks {
-            voice.begin_block(&settings, false, 64, 0, None);
+            voice.begin_block(&settings, false, 64, 0, None, &mut 0);
             voice.render(&mut out);
         }
         (voice, settings)
@@ -578,15 +584,15 @@ mod tests {
         let (mut voice, settings) = struck(20);
         let mut twin = voice.clone();
         let (mut plain, mut faded) = ([0.0; 64], [0.0; 64]);
-        twin.begin_block(&settings, false, 64, 0, None);
+        twin.begin_block(&settings, false, 64, 0, None, &mut 0);
         twin.render(&mut plain);
         voice.reference_energy *= 1e-6;
-        voice.begin_block(&settings, false, 64, 0, None);
+        voice.begin_block(&settings, false, 64, 0, None, &mut 0);
         voice.render(&mut faded);
         for (i, (f, p)) in faded.iter().zip(&plain).enumerate() {
             assert_eq!(*f, p * (1.0 - i as f64 / 64.0), "sample {i}");
         }
-        voice.begin_block(&settings, false, 64, 0, None);
+        voice.begin_block(&settings, false, 64, 0, None, &mut 0);
         assert!(!voice.sounding);
         assert_eq!(voice.guard_trips(), 1);
         assert_eq!(voice.core.own_energy(), 0.0);
