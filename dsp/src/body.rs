@@ -52,6 +52,34 @@
 //! The steps run a few chunks of modes at a time across a run of samples, their coefficients and
 //! state held in registers, each sample's partial sum of the output added chunk after chunk in
 //! the order of the modes: the same bits on every instruction set.
+//!
+//! # A compact body: pressure from acceleration
+//!
+//! A body small against the wavelength (a guitar below a few hundred hertz) radiates as a
+//! monopole, whose far-field pressure follows the rate of change of its net volume velocity:
+//! `p = Σ_j r_j ẍ_j` ([`Heard::Acceleration`]), `P/F = Σ_j r_j (iω)²/(M_j(ω_j² − ω² + iη_jω_jω))`.
+//! Each sample's output is then the mean acceleration over the sample, `Σ_j r_j (v_j' − v_j)/Δt`,
+//! exact under the held force as the steps are.
+//!
+//! # The guitar's low-frequency function
+//!
+//! Christensen and Vistisen's two-mass model of the guitar: the top plate (effective mass `m_p`
+//! at the bridge, on its own spring) and the air in the sound hole (a piston of mass `m_h`),
+//! coupled by the cavity's air spring. Driven at the bridge, the plate's mobility has two
+//! resonances `ω₋`, `ω₊` and between them an antiresonance at the cavity's Helmholtz frequency
+//! `ω_h` (where the air in the hole, resonating, holds the plate still):
+//!
+//! ```text
+//! Y(ω) = iω (ω_h² − ω²) / (m_p (ω₋² − ω²)(ω₊² − ω²))
+//!      = Σ_± iω / (M_± (ω_±² − ω²)),   M_± = m_p (ω₊² − ω₋²) / |ω_h² − ω_±²|
+//! ```
+//!
+//! In mode `±` the hole's air moves against the plate by `−(A_p/A_h) ω_h²/(ω_h² − ω_±²)` of the
+//! plate's displacement, so the net volume the body sweeps is `A_p ω_±²/(ω_±² − ω_h²)` per unit of
+//! plate displacement (the hole's area cancels). That is each mode's weight, `r_± ∝ ω_±²/(ω_±² −
+//! ω_h²)`: the two modes' volumes cancel at low frequency, leaving `P/F ∝ ω⁴/((ω₋² − ω²)(ω₊² −
+//! ω²))` (lossless): the guitar's 24 dB per octave fall below its air resonance, a bass-reflex
+//! loudspeaker's, and a flat response above `ω₊`, where the plate moves as a mass.
 
 use crate::bridge::{BridgeMode, BridgeParams, SOUNDBOARD_BAND, SOUNDBOARD_CONDUCTANCE};
 use crate::string::simd::{Chunk, Isa, Kernel, LANES, Lanes, chunks, chunks_mut};
@@ -68,11 +96,22 @@ pub struct RadiatingMode {
     pub radiation: f64,
 }
 
+/// What of a body's motion a listener hears (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Heard {
+    /// `p = Σ r_j ẋ_j`: a large radiator, each mode heard by its radiated power.
+    Velocity,
+    /// `p = Σ r_j ẍ_j`: a compact source, a monopole's pressure.
+    Acceleration,
+}
+
 /// A body: its modes at the bridge and their radiation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BodyParams {
     /// The modes.
     pub modes: Vec<RadiatingMode>,
+    /// What the radiation weights multiply.
+    pub heard: Heard,
 }
 
 impl BodyParams {
@@ -93,24 +132,34 @@ impl BodyParams {
                 radiation: sign(j) * (efficiency(mode.frequency).clamp(0.0, 1.0) * mode.mass).sqrt(),
             })
             .collect();
-        let mut body = Self { modes };
-        let gain = body.mean_power_gain(band);
+        Self { modes, heard: Heard::Velocity }.normalized(band)
+    }
+
+    /// These modes with every radiation weight scaled so that the transmittance's mean power
+    /// gain over `band` (Hz) is 1.
+    fn normalized(mut self, band: (f64, f64)) -> Self {
+        let gain = self.mean_power_gain(band);
         if gain > 0.0 && gain.is_finite() {
             let g = 1.0 / gain.sqrt();
-            body.modes.iter_mut().for_each(|m| m.radiation *= g);
+            self.modes.iter_mut().for_each(|m| m.radiation *= g);
         }
-        body
+        self
     }
 
     /// The transmittance `P(ω)/F(ω)` at `frequency` (Hz): `(real, imaginary)`.
     pub fn response(&self, frequency: f64) -> (f64, f64) {
         let w = std::f64::consts::TAU * frequency;
-        self.modes.iter().fold((0.0, 0.0), |(re, im), m| {
+        let (re, im) = self.modes.iter().fold((0.0, 0.0), |(re, im), m| {
             let wj = std::f64::consts::TAU * m.mode.frequency;
             let (a, b) = (m.mode.mass * (wj * wj - w * w), m.mode.mass * m.mode.loss_factor * wj * w);
             let den = a * a + b * b;
             (re + m.radiation * w * b / den, im + m.radiation * w * a / den)
-        })
+        });
+        match self.heard {
+            Heard::Velocity => (re, im),
+            // Times iω.
+            Heard::Acceleration => (-w * im, w * re),
+        }
     }
 
     /// The transmittance's power gain `|P/F|²` averaged over `band` (Hz) on a logarithmic grid
@@ -135,6 +184,20 @@ impl BodyParams {
         let (low, high, _) = SOUNDBOARD_BAND;
         let board = BridgeParams::mean_value(SOUNDBOARD_CONDUCTANCE, (low, high, RADIATING_RATIO));
         Self::radiating(&board.modes, soundboard_radiation_efficiency, fixed_sign, (1000.0, 4000.0))
+    }
+
+    /// A guitar's body below its higher top-plate modes (module docs): Christensen and
+    /// Vistisen's two-mass model with their measured guitar's [`GUITAR_AIR`], [`GUITAR_HELMHOLTZ`],
+    /// [`GUITAR_TOP`], [`GUITAR_TOP_MASS`] and quality factors, heard as a monopole, its power gain 1
+    /// over 1–4 kHz (where it is flat: the output is in newtons, as the bridge force it replaces).
+    pub fn guitar() -> Self {
+        let w2 = |f: f64| (std::f64::consts::TAU * f).powi(2);
+        let (low, helmholtz, top) = (w2(GUITAR_AIR), w2(GUITAR_HELMHOLTZ), w2(GUITAR_TOP));
+        let modes = [(GUITAR_AIR, low, GUITAR_Q.0), (GUITAR_TOP, top, GUITAR_Q.1)].map(|(frequency, w, q)| {
+            let mass = GUITAR_TOP_MASS * (top - low) / (helmholtz - w).abs();
+            RadiatingMode { mode: BridgeMode { frequency, mass, loss_factor: 1.0 / q }, radiation: w / (w - helmholtz) }
+        });
+        Self { modes: modes.to_vec(), heard: Heard::Acceleration }.normalized((1000.0, 4000.0))
     }
 
     /// Check every mode.
@@ -164,6 +227,27 @@ pub fn fixed_sign(j: usize) -> f64 {
 /// the 0.01–0.05 modes/Hz Ege and Boutillon measured over 300–2,500 Hz.
 pub const RADIATING_RATIO: f64 = 1.04;
 
+/// The guitar's lower resonance (Hz): the air in the body, the sound hole's piston on the cavity's
+/// spring, moving with the top plate. Christensen and Vistisen, "Simple model for low-frequency
+/// guitar function", JASA 68(3), 1980, their Fig. 4's guitar (90–120 Hz across the guitars they
+/// measured).
+pub const GUITAR_AIR: f64 = 104.0;
+
+/// The Helmholtz frequency of the guitar's cavity with the top held still (Hz): the
+/// antiresonance of the plate's mobility between the two resonances. Christensen and Vistisen,
+/// Fig. 4 (122–135 Hz across their guitars).
+pub const GUITAR_HELMHOLTZ: f64 = 127.0;
+
+/// The guitar's upper resonance (Hz): the top plate's lowest mode, moving against the air.
+/// Christensen and Vistisen, Fig. 4 (170–250 Hz across their guitars).
+pub const GUITAR_TOP: f64 = 219.0;
+
+/// The top plate's effective mass at the bridge (kg). Christensen and Vistisen, Fig. 4.
+pub const GUITAR_TOP_MASS: f64 = 0.112;
+
+/// The quality factors of the lower and upper resonance. Christensen and Vistisen, Fig. 4.
+pub const GUITAR_Q: (f64, f64) = (29.0, 25.8);
+
 /// Area of a concert grand's soundboard (m²).
 pub const SOUNDBOARD_AREA: f64 = 1.8;
 
@@ -191,6 +275,11 @@ pub struct Body {
     beta2: Vec<f64>,
     /// `Re w`, `Im w` (N).
     w: [Vec<f64>; 2],
+    /// What the listener hears, the sample rate (Hz) and, heard as acceleration, the latest
+    /// `Σ r_j v_j` (what the next sample's mean acceleration is taken from).
+    heard: Heard,
+    sample_rate: f64,
+    last: f64,
     /// The vector unit the steps run on.
     isa: Isa,
 }
@@ -218,6 +307,9 @@ impl Body {
             gamma: [zeros(), zeros()],
             beta2: zeros(),
             w: [zeros(), zeros()],
+            heard: params.heard,
+            sample_rate,
+            last: 0.0,
             isa: Isa::detect(),
         };
         for (j, m) in kept.iter().enumerate() {
@@ -246,6 +338,7 @@ impl Body {
     /// Bring every mode to rest.
     pub fn reset(&mut self) {
         self.w.iter_mut().for_each(|w| w.fill(0.0));
+        self.last = 0.0;
     }
 
     /// Whether every mode is at rest (to `SILENT`).
@@ -256,7 +349,8 @@ impl Body {
     }
 
     /// Replace the bridge force in `io` (N, one value per sample) by the radiated signal
-    /// (module docs), sample by sample. A silent body given no force stays silent at no cost.
+    /// (module docs), sample by sample: for a body heard by its acceleration, each sample's
+    /// mean acceleration. A silent body given no force stays silent at no cost.
     pub fn process(&mut self, io: &mut [f64]) {
         if io.iter().all(|&f| f == 0.0) && self.is_silent() {
             self.reset();
@@ -274,6 +368,12 @@ impl Body {
         if !self.w.iter().all(|w| w.iter().all(|x| x.is_finite())) {
             self.reset();
             io.fill(0.0);
+            return;
+        }
+        if self.heard == Heard::Acceleration {
+            for y in io.iter_mut() {
+                (*y, self.last) = ((*y - self.last) * self.sample_rate, *y);
+            }
         }
     }
 }
@@ -353,15 +453,26 @@ mod tests {
     use super::*;
 
     /// A body's step is exact: a sine force (constant over each sample) drives it, and after
-    /// the start has died out the output's amplitude and phase at that frequency are the
-    /// transmittance's to 0.5 % of the body's mean gain (which is 1) up to 1 kHz at 48 kHz: the
-    /// hold, sampling the force at each sample's middle, is all that differs.
+    /// the start has died out the output's amplitude at that frequency is the transmittance's to
+    /// 0.5 % of the larger of the two and the body's mean gain (which is 1) up to 1 kHz at
+    /// 48 kHz, for the piano's soundboard (heard by its velocity) and the guitar (by its
+    /// acceleration, around its resonances): the hold, sampling the force at each sample's middle,
+    /// is all that differs.
     #[test]
     fn a_body_steps_to_its_transmittance() {
         let fs = 48_000.0;
-        let params = BodyParams::piano();
-        for f in [110.0, 262.0, 523.0, 1000.0] {
-            let mut body = Body::new(&params, fs);
+        let cases = [
+            (BodyParams::piano(), &[110.0, 262.0, 523.0, 1000.0][..]),
+            (BodyParams::guitar(), &[60.0, 104.0, 127.0, 219.0, 1000.0][..]),
+        ];
+        for (params, frequencies) in cases {
+            body_follows_its_transmittance(&params, frequencies, fs);
+        }
+    }
+
+    fn body_follows_its_transmittance(params: &BodyParams, frequencies: &[f64], fs: f64) {
+        for &f in frequencies {
+            let mut body = Body::new(params, fs);
             let n = 96_000;
             let w = std::f64::consts::TAU * f / fs;
             // Hold the force at the value at each sample's middle, so the hold's delay cancels.
@@ -380,6 +491,46 @@ mod tests {
             println!("{f} Hz: amplitude {got:.6} vs {want:.6}");
             assert!((got - want).abs() < 5e-3 * want.max(1.0), "{f} Hz: {got} vs {want}");
         }
+    }
+
+    /// The guitar is Christensen and Vistisen's two-mass model: its two modes' mobility at the
+    /// bridge vanishes at the Helmholtz frequency (within 0.1 Hz of 127 Hz, losses aside) and tends
+    /// to the top plate's mass above (the modes' inverse masses sum to `1/m_p`, to 1e-12); it
+    /// radiates as a bass-reflex box: the pressure falls 24 dB per octave below the air resonance
+    /// (10 to 20 Hz: 24 dB within 0.5 dB, the lossless model's 24.2) and is flat well above the
+    /// top's (power gain 1 over 1–4 kHz, and within 1 dB of it at 1 kHz, the lossless model's
+    /// +0.5 dB), with the two resonances standing above it (measured +18.4 and +30.3 dB: their
+    /// quality factors, 29 and 25.8).
+    #[test]
+    fn the_guitar_body_is_the_two_mass_model() {
+        let body = BodyParams::guitar();
+        body.validate().unwrap();
+        let inverse: f64 = body.modes.iter().map(|m| 1.0 / m.mode.mass).sum();
+        assert!((inverse * GUITAR_TOP_MASS - 1.0).abs() < 1e-12, "{inverse}");
+        let mobility = |f: f64| -> f64 {
+            let w = std::f64::consts::TAU * f;
+            body.modes
+                .iter()
+                .map(|m| w / (m.mode.mass * ((std::f64::consts::TAU * m.mode.frequency).powi(2) - w * w)))
+                .sum()
+        };
+        let zero =
+            (0..=400).map(|k| 125.0 + 0.01 * k as f64).min_by(|a, b| mobility(*a).abs().total_cmp(&mobility(*b).abs()));
+        let zero = zero.unwrap();
+        let db = |f: f64| {
+            let (re, im) = body.response(f);
+            10.0 * (re * re + im * im).log10()
+        };
+        let (octave, flat, air, top) = (db(20.0) - db(10.0), db(1000.0), db(GUITAR_AIR), db(GUITAR_TOP));
+        println!(
+            "mobility zero at {zero:.2} Hz; 10–20 Hz rises {octave:.2} dB; 1 kHz {flat:+.2} dB; \
+             resonances {air:+.1} and {top:+.1} dB"
+        );
+        assert!((zero - GUITAR_HELMHOLTZ).abs() < 0.1, "{zero}");
+        assert!((octave - 24.0).abs() < 0.5, "{octave}");
+        assert!(flat.abs() < 1.0, "{flat}");
+        assert!((body.mean_power_gain((1000.0, 4000.0)) - 1.0).abs() < 1e-12);
+        assert!(air > 6.0 && top > 6.0, "{air} {top}");
     }
 
     /// The piano body has power gain 1 over 1–4 kHz (its normalisation), and below 100 Hz the

@@ -68,11 +68,12 @@
 //! the controls do, since every vector used to distribute a force is the one used to project the
 //! motion it works on.
 
+use crate::body::{BodyParams, RadiatingMode};
 use crate::contact::{ContactProblem, ContactSolution, ContactSolver};
 use crate::control::{ControlSource, Ramp};
 use crate::exciter::{FingerParams, HandMotion, SlideHand, SlideParams, finger};
 use crate::scene::{Frame, OutputKind, Pickup, Scene};
-use crate::string::{GramVector, ModalString, StringEnergy, StringParams};
+use crate::string::{GramVector, ModalBank, ModalString, StringEnergy, StringParams};
 
 /// The slide scene's control inputs at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -103,8 +104,14 @@ const LEFT: usize = 1;
 const RIGHT: usize = 2;
 
 /// Slots of the contact vectors: contact `c` keeps the vector at its position at the block's
-/// start in slot `2c` and the one at the block's end in slot `2c + 1`.
-const SLOTS: usize = 6;
+/// start in slot `2c` and the one at the block's end in slot `2c + 1`; the last slot holds the
+/// lift `g` of a string whose end moves with a body ([`BRIDGE_SLOT`]).
+const SLOTS: usize = 7;
+
+/// The slot of the lift `g` (docs/physics.md §13.5), which belongs to "contact" [`BRIDGE`]: the
+/// bridge's acceleration acts on the string's modes along it.
+const BRIDGE_SLOT: usize = 6;
+const BRIDGE: usize = 3;
 
 /// The slot of contact `c`'s start (`end = false`) or end vector.
 #[inline(always)]
@@ -129,6 +136,8 @@ const fn contact(slot: usize) -> usize {
 struct Plan {
     touching: [bool; 3],
     moving: [bool; 3],
+    /// Whether the string's end moves with a body: the lift's slot is in use.
+    bridge: bool,
     /// The slots in use, in order: `slots[..count]`.
     slots: [usize; SLOTS],
     count: usize,
@@ -136,10 +145,10 @@ struct Plan {
 
 impl Plan {
     /// No contact at all (before the first block).
-    const NONE: Plan = Plan { touching: [false; 3], moving: [false; 3], slots: [0; SLOTS], count: 0 };
+    const NONE: Plan = Plan { touching: [false; 3], moving: [false; 3], bridge: false, slots: [0; SLOTS], count: 0 };
 
-    fn new(touching: [bool; 3], moving: [bool; 3]) -> Self {
-        let mut plan = Plan { touching, moving, slots: [0; SLOTS], count: 0 };
+    fn new(touching: [bool; 3], moving: [bool; 3], bridge: bool) -> Self {
+        let mut plan = Plan { touching, moving, bridge, slots: [0; SLOTS], count: 0 };
         for c in 0..3 {
             let ends: &[bool] = if !touching[c] {
                 &[]
@@ -152,6 +161,10 @@ impl Plan {
                 plan.slots[plan.count] = slot(c, end);
                 plan.count += 1;
             }
+        }
+        if bridge {
+            plan.slots[plan.count] = BRIDGE_SLOT;
+            plan.count += 1;
         }
         plan
     }
@@ -166,6 +179,9 @@ impl Plan {
     /// and end vectors of a moving contact, 1 for a contact held still.
     #[inline(always)]
     fn weight(&self, slot: usize, a: f64) -> f64 {
+        if slot == BRIDGE_SLOT {
+            return 1.0;
+        }
         match (slot % 2 == 1, self.moving[contact(slot)]) {
             (true, _) => a,
             (false, true) => 1.0 - a,
@@ -199,8 +215,12 @@ macro_rules! with_count {
                 const $v: usize = 5;
                 $body
             }
-            _ => {
+            6 => {
                 const $v: usize = 6;
+                $body
+            }
+            _ => {
+                const $v: usize = 7;
                 $body
             }
         }
@@ -218,8 +238,8 @@ struct ContactVectors {
     made_at: [f64; SLOTS],
     /// `θ_jk = h_jᵀ(C∘h_k)` between the slots of the current plan (m/N), both triangles.
     gram: [[f64; SLOTS]; SLOTS],
-    /// Window factors of the fingers (the slide has none).
-    windows: [Option<Vec<f64>>; 3],
+    /// Window factors of the fingers (the slide and the lift have none).
+    windows: [Option<Vec<f64>>; 4],
 }
 
 impl ContactVectors {
@@ -233,6 +253,7 @@ impl ContactVectors {
                 None,
                 Some(finger::window_factors(string, left.width)),
                 Some(finger::window_factors(string, right.width)),
+                None,
             ],
         }
     }
@@ -359,6 +380,100 @@ impl Elimination {
     }
 }
 
+/// A body at the string's far end (`x = L`, the bridge), coupled both ways (docs/physics.md
+/// §13.5): the string's end moves with the bridge, `u = v + b·x/L`, the body's modes move under
+/// the string's force on the bridge, and the bridge's acceleration is eliminated in closed form in
+/// each step, which only adds a rank-one term to the contacts' Gram matrix.
+#[derive(Debug, Clone)]
+struct BodyCoupling {
+    /// The body's modes (at the bridge), `e` (1 on each: `b = eᵀx`), `C∘e`, and each mode's
+    /// radiation weight `r_j` (what `Σ r_j ẍ_j` is heard as).
+    bank: ModalBank,
+    sole: Vec<f64>,
+    sole_gain: Vec<f64>,
+    radiation: Vec<f64>,
+    /// `C_Σ = eᵀ(C∘e)` (m/N).
+    compliance: f64,
+    /// The string's static share of the bridge's mass `ρAL/3` (kg) and stiffness `T/L` (N/m).
+    lift_mass: f64,
+    lift_stiffness: f64,
+    /// `(b^{n−1}, b^n)` (m), `(gᵀũ^{n−1}, gᵀũ^n)` (kg·m) and `(rᵀx^{n−1}, rᵀx^n)`.
+    b: (f64, f64),
+    lifted: (f64, f64),
+    heard: (f64, f64),
+    /// Whether the string's end moves with the body; else the end is held and the body rests.
+    on: bool,
+}
+
+impl BodyCoupling {
+    /// `body` at `string`'s sample rate, at rest and off. Allocates.
+    fn new(body: &BodyParams, string: &ModalString) -> Self {
+        let fs = string.sample_rate();
+        let kept: Vec<&RadiatingMode> = body.modes.iter().filter(|m| m.mode.frequency < 0.49 * fs).collect();
+        let mut bank = ModalBank::with_capacity(kept.len(), fs);
+        for m in &kept {
+            let omega0 = std::f64::consts::TAU * m.mode.frequency;
+            bank.push_oscillator(omega0, 0.5 * m.mode.loss_factor * omega0, m.mode.mass);
+        }
+        bank.finish();
+        let (mut sole, mut sole_gain, mut radiation) = (Vec::new(), Vec::new(), Vec::new());
+        for v in [&mut sole, &mut sole_gain, &mut radiation] {
+            bank.fit_vector(v);
+        }
+        for (j, m) in kept.iter().enumerate() {
+            sole[j] = 1.0;
+            sole_gain[j] = bank.input_gains()[j];
+            radiation[j] = m.radiation;
+        }
+        let compliance = bank.project(&sole, &sole_gain);
+        let p = string.params();
+        Self {
+            bank,
+            sole,
+            sole_gain,
+            radiation,
+            compliance,
+            lift_mass: p.linear_density * p.length / 3.0,
+            lift_stiffness: p.tension / p.length,
+            b: (0.0, 0.0),
+            lifted: (0.0, 0.0),
+            heard: (0.0, 0.0),
+            on: false,
+        }
+    }
+
+    /// Bring the body to rest (the string's end with it).
+    fn rest(&mut self) {
+        self.bank.reset();
+        self.b = (0.0, 0.0);
+        self.heard = (0.0, 0.0);
+    }
+
+    /// The energy of the body and of the string's motion with its end (J), the numerical
+    /// `H^{n−1/2}` of docs/physics.md §12.
+    fn energy(&self, dt: f64) -> f64 {
+        let (db, mean) = ((self.b.1 - self.b.0) / dt, 0.5 * (self.b.1 + self.b.0));
+        let cross = (self.lifted.1 - self.lifted.0) / dt * db;
+        self.bank.energy() + cross + 0.5 * self.lift_mass * db * db + 0.5 * self.lift_stiffness * mean * mean
+    }
+}
+
+/// One step's bridge, eliminated (docs/physics.md §13.5): the contacts' Gram matrix and
+/// projections with the bridge folded in, and how the bridge's acceleration and the force on it
+/// follow from the contact forces.
+#[derive(Debug, Clone, Copy)]
+struct BridgeStep {
+    theta: [[f64; 3]; 3],
+    z: [f64; 3],
+    /// `a = a₀ + Σ_ζ a_ζ F_ζ` (m/s²).
+    a0: f64,
+    a1: [f64; 3],
+    /// `f = Σ_ζ κ_ζ F_ζ − G₀ + (Θ − E) a` (N).
+    kappa: [f64; 3],
+    g0: f64,
+    theta_e: f64,
+}
+
 /// Parameters of a slide–string scene.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SlideStringParams {
@@ -397,6 +512,13 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> SlideString<S, C> {
         solver.start(y_prev, y_now);
         let initial_energy = core.energy() + solver.stored_energy(y_now, y_prev);
         Self { core, solver, controls, initial_energy }
+    }
+
+    /// The same scene with `body` at the string's far end, coupled both ways (docs/physics.md
+    /// §13.5); its output is then what the body radiates.
+    pub fn with_body(mut self, body: &BodyParams) -> Self {
+        self.core.attach_body(body, true);
+        self
     }
 
     /// The string.
@@ -488,6 +610,8 @@ pub struct SlideCore {
     control_work: f64,
     /// Contact force of the latest step (N).
     last_force: f64,
+    /// A body at the string's far end, if one is attached (docs/physics.md §13.5).
+    body: Option<BodyCoupling>,
     dt: f64,
 }
 
@@ -532,6 +656,7 @@ impl SlideCore {
             losses: 0.0,
             control_work: 0.0,
             last_force: 0.0,
+            body: None,
             dt: 1.0 / fs,
             string,
             sho,
@@ -551,6 +676,10 @@ impl SlideCore {
     /// Never allocates.
     pub fn rest(&mut self, controls: SlideControls) {
         self.string.reset();
+        if let Some(body) = &mut self.body {
+            body.rest();
+            body.lifted = (0.0, 0.0);
+        }
         self.sho.rest(controls.hand_height);
         self.start = controls;
         self.target = controls;
@@ -568,6 +697,41 @@ impl SlideCore {
         self.out_from = 0.0;
         self.glide = (0, 0);
         self.last_force = 0.0;
+    }
+
+    /// Attach `body` at the string's far end (the bridge, `x = L`), at rest, the string's end
+    /// moving with it if `on` (see [`set_body`](Self::set_body)). Call it on a core at rest,
+    /// before its first step. Allocates: call it before the audio thread runs.
+    pub fn attach_body(&mut self, body: &BodyParams, on: bool) {
+        let coupling = BodyCoupling::new(body, &self.string);
+        // The lift `g_i = ρA(−1)^{i+1}/β_i` (mode `i` from 1) and its gain `C∘g`.
+        let (string, v) = (&self.string, &mut self.vectors);
+        let rho = string.params().linear_density;
+        let (lift, gain) = (&mut v.shapes[BRIDGE_SLOT], &mut v.gains[BRIDGE_SLOT]);
+        lift.fill(0.0);
+        gain.fill(0.0);
+        for (i, &beta) in string.wavenumbers().iter().enumerate() {
+            let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+            lift[i] = sign * rho / beta;
+            gain[i] = lift[i] * string.input_gains()[i];
+        }
+        self.body = Some(BodyCoupling { on, ..coupling });
+        self.plan_block();
+        self.slide_jumped = false;
+    }
+
+    /// Couple the string's end to the attached body (`on`) or hold it still, and bring string,
+    /// body and slide to rest as [`rest`](Self::rest) does with `controls`. Never allocates.
+    pub fn set_body(&mut self, on: bool, controls: SlideControls) {
+        if let Some(body) = &mut self.body {
+            body.on = on;
+        }
+        self.rest(controls);
+    }
+
+    /// Whether the string's end moves with a body.
+    pub fn body_on(&self) -> bool {
+        self.body.as_ref().is_some_and(|b| b.on)
     }
 
     /// The string, for tests that need to put a state into it by hand (the carried
@@ -646,7 +810,8 @@ impl SlideCore {
         self.y_now > 0.0 || self.y_prev > 0.0
     }
 
-    /// String and slide energy of the current state (J), without the contact term.
+    /// String and slide energy of the current state (J), with the body's and the coupling's when
+    /// the string's end moves with one, without the contact term.
     pub fn energy(&self) -> f64 {
         self.energies().1
     }
@@ -655,7 +820,8 @@ impl SlideCore {
     /// without the contact term, from one pass over the modes.
     pub fn energies(&self) -> (f64, f64) {
         let (kinetic, string) = self.string.energies();
-        (kinetic, string + self.sho.energy(self.hand_prev, self.hand.at(self.k)))
+        let body = self.body.as_ref().filter(|b| b.on).map_or(0.0, |b| b.energy(self.dt));
+        (kinetic, string + body + self.sho.energy(self.hand_prev, self.hand.at(self.k)))
     }
 
     /// Work the controls have done on the string and the slide since the core was made (J):
@@ -718,7 +884,7 @@ impl SlideCore {
                 fresh[e] = Some(end[c]);
             }
         }
-        let plan = Plan::new(touching, moving);
+        let plan = Plan::new(touching, moving, self.body.as_ref().is_some_and(|b| b.on));
         self.plan = plan;
         if plan == was && fresh == [None; SLOTS] {
             if swapped {
@@ -773,7 +939,10 @@ impl SlideCore {
         let shapes = &self.vectors.shapes;
         let projections: [f64; V] = self.string.history(std::array::from_fn(|j| &shapes[slots[j]][..]));
         let (z, th) = self.contact_projections(slots, &controls, projections);
-        let jump = self.vector_change(slots, &controls.weights);
+        let levers = if self.plan.bridge { self.levers(slots, &controls.weights) } else { [0.0; 3] };
+        let bridge = self.plan.bridge.then(|| self.eliminate_bridge(slots, &controls.weights, z, th, levers));
+        let (z, th) = bridge.map_or(([z[SLIDE], z[LEFT], z[RIGHT]], th), |b| (b.z, b.theta));
+        let jump = self.vector_change(slots, &controls.weights, levers[SLIDE]);
         let fingers = Elimination::new(&th, z, controls.finger_forces, controls.gamma);
         let z_sho = self.sho.history(&controls.hand);
         let solution = self.solve(solver, &fingers, z_sho, jump);
@@ -781,9 +950,19 @@ impl SlideCore {
         let y_next = self.y_prev + solution.s;
         let s_f = [0, 1].map(|i| fingers.s0[i] + fingers.s1[i] * force);
         let (f, gamma) = (controls.finger_forces, controls.gamma);
-        // Modal force along each contact: the slide's F, each finger's F_φe + F_φR.
-        let along = [force, f[0] - gamma[0] * s_f[0], f[1] - gamma[1] * s_f[1]];
+        // Modal force along each contact: the slide's F, each finger's F_φe + F_φR, and the
+        // bridge's acceleration with its sign, along the lift.
+        let contacts = [force, f[0] - gamma[0] * s_f[0], f[1] - gamma[1] * s_f[1]];
+        let (accel, on_bridge) = bridge.map_or((0.0, 0.0), |b| {
+            let a = b.a0 + (0..3).map(|i| b.a1[i] * contacts[i]).sum::<f64>();
+            (a, (0..3).map(|i| b.kappa[i] * contacts[i]).sum::<f64>() - b.g0 + b.theta_e * a)
+        });
+        let along = [contacts[0], contacts[1], contacts[2], -accel];
         let (out_next, string_energy) = self.advance_string::<MONITOR, V>(slots, &controls.weights, along, projections);
+        let (heard, body_energy) = match bridge {
+            Some(_) => self.advance_body::<MONITOR>(on_bridge),
+            None => (0.0, StringEnergy::default()),
+        };
         let w_now = self.sho.position();
         let exchange = self.sho.advance(z_sho, force, &controls.hand);
         // The controls' work `Δt(P_H + Σ P_φ) − ½F J`, `Δt P_φ = F_φe s_φ/2` (docs/physics.md §7.5.3).
@@ -791,6 +970,9 @@ impl SlideCore {
         let mut output = self.kind.sample(self.out_now, out_next, self.dt);
         if self.glide.0 < self.glide.1 {
             output = self.glide_output(output);
+        }
+        if bridge.is_some() {
+            output = heard;
         }
         let mut frame = Frame {
             output,
@@ -804,13 +986,15 @@ impl SlideCore {
             work: solver.last_work(),
         };
         if MONITOR {
-            // `H^{n+1/2}` = string + SHO + contact, and the losses `Δt(Q_str + Q_o + Σ Q_φ)` with
-            // `Δt Q_φ = γ_φ s_φ²/2` (docs/physics.md §7.4).
+            // `H^{n+1/2}` = string + SHO + contact (+ body and coupling), and the losses
+            // `Δt(Q_str + Q_o + Σ Q_φ)` with `Δt Q_φ = γ_φ s_φ²/2` (docs/physics.md §7.4).
             let fingers = 0.5 * (gamma[0] * s_f[0] * s_f[0] + gamma[1] * s_f[1] * s_f[1]);
-            self.losses += string_energy.dissipated + fingers + exchange.dissipated;
+            self.losses += string_energy.dissipated + fingers + exchange.dissipated + body_energy.dissipated;
             let hand = &controls.hand;
-            frame.energy =
-                string_energy.stored + self.sho.energy(hand.now, hand.next) + solver.stored_energy(y_next, self.y_now);
+            frame.energy = string_energy.stored
+                + body_energy.stored
+                + self.sho.energy(hand.now, hand.next)
+                + solver.stored_energy(y_next, self.y_now);
             frame.losses = self.losses;
             frame.control_work = self.control_work;
         }
@@ -846,8 +1030,8 @@ impl SlideCore {
         slots: [usize; V],
         controls: &StepControls<V>,
         projections: [f64; V],
-    ) -> ([f64; 3], [[f64; 3]; 3]) {
-        let mut z = [0.0; 3];
+    ) -> ([f64; 4], [[f64; 3]; 3]) {
+        let mut z = [0.0; 4];
         for j in 0..V {
             z[contact(slots[j])] += controls.weights[j] * projections[j];
         }
@@ -866,7 +1050,7 @@ impl SlideCore {
     /// string under it differs from the carried `y^{n−1} + w_o^{n−1}` by `J`; zero once the vector
     /// has stayed put for two steps.
     #[inline(always)]
-    fn vector_change<const V: usize>(&mut self, slots: [usize; V], weights: &[f64; V]) -> f64 {
+    fn vector_change<const V: usize>(&mut self, slots: [usize; V], weights: &[f64; V], lever: f64) -> f64 {
         let (k, moving) = (self.k, self.plan.moving[SLIDE]);
         if (k == 0 && self.slide_jumped) || (k > 0 && moving) {
             self.slide_still = 0;
@@ -874,7 +1058,8 @@ impl SlideCore {
         if self.slide_still >= 2 {
             return 0.0;
         }
-        let mut under = 0.0;
+        // With a body, the string under the slide also rides on the bridge: `ℓ_o b^{n−1}`.
+        let mut under = self.body.as_ref().map_or(0.0, |body| lever * body.b.0);
         for j in 0..V {
             if contact(slots[j]) == SLIDE {
                 under += weights[j] * self.slide_state[slots[j] % 2][0];
@@ -914,7 +1099,7 @@ impl SlideCore {
         &mut self,
         slots: [usize; V],
         weights: &[f64; V],
-        along: [f64; 3],
+        along: [f64; 4],
         projections: [f64; V],
     ) -> (f64, StringEnergy) {
         let gains = &self.vectors.gains;
@@ -925,8 +1110,113 @@ impl SlideCore {
         } else {
             (self.string.advance(forces, &self.pickup), Default::default())
         };
-        self.track_slide(slots, projections, forces.map(|(_, force)| force));
+        let forces = forces.map(|(_, force)| force);
+        self.track_slide(slots, projections, forces);
+        if self.plan.bridge {
+            self.track_lift(slots, projections, forces);
+        }
         advanced
+    }
+
+    /// Move `(gᵀũ^{n−1}, gᵀũ^n)` on by the string update's own recursion, as
+    /// [`track_slide`](Self::track_slide) does for the slide's vectors (the lift's slot is the
+    /// plan's last).
+    #[inline(always)]
+    fn track_lift<const V: usize>(&mut self, slots: [usize; V], projections: [f64; V], forces: [f64; V]) {
+        let g = &self.vectors.gram[BRIDGE_SLOT];
+        let Some(body) = self.body.as_mut() else { return };
+        let mut next = body.lifted.0 - projections[V - 1];
+        for i in 0..V {
+            next += g[slots[i]] * forces[i];
+        }
+        body.lifted = (body.lifted.1, next);
+    }
+
+    /// The levers `ℓ_ζ = x_ζ/L` of the contacts at this step (docs/physics.md §13.5): where each
+    /// sits along the string, interpolated as its vector is.
+    #[inline(always)]
+    fn levers<const V: usize>(&self, slots: [usize; V], weights: &[f64; V]) -> [f64; 3] {
+        let per_length = 1.0 / self.string.params().length;
+        let mut levers = [0.0; 3];
+        for j in 0..V {
+            let c = contact(slots[j]);
+            if c < BRIDGE {
+                levers[c] += weights[j] * self.vectors.made_at[slots[j]] * per_length;
+            }
+        }
+        levers
+    }
+
+    /// Eliminate the bridge's acceleration (docs/physics.md §13.5 and §12): with the lift's
+    /// Gram entries `θ_gζ`, `θ_gg`, the body's free step and the coupling's static terms, the
+    /// acceleration is `a = a₀ + Σ_ζ a_ζ F_ζ`, and the contacts see `θ' = θ + (Δt²C_Σ/Δ)κκᵀ` and
+    /// `z' = z − 2ℓ(b^n − b^{n−1}) − Δt²κ a₀`, `κ_ζ = ℓ_ζ − θ_gζ/Δt²`.
+    #[inline(always)]
+    fn eliminate_bridge<const V: usize>(
+        &mut self,
+        slots: [usize; V],
+        weights: &[f64; V],
+        z: [f64; 4],
+        theta: [[f64; 3]; 3],
+        levers: [f64; 3],
+    ) -> BridgeStep {
+        let dt2 = self.dt * self.dt;
+        let g = &self.vectors.gram[BRIDGE_SLOT];
+        let mut theta_g = [0.0; 3];
+        for j in 0..V {
+            let c = contact(slots[j]);
+            if c < BRIDGE {
+                theta_g[c] += weights[j] * g[slots[j]];
+            }
+        }
+        let body = self.body.as_mut().expect("a plan with the bridge has a body");
+        let [body_history] = body.bank.history([&body.sole]);
+        let free = body.b.0 - body_history;
+        let (b, lifted) = (body.b, body.lifted);
+        let g0 = (2.0 * lifted.0 - z[BRIDGE] - 2.0 * lifted.1) / dt2 + body.lift_stiffness * b.1;
+        // `Θ − E`: the lift's inertia through the modes less the string's static mass and stiffness.
+        let theta_e = g[BRIDGE_SLOT] / dt2 - (body.lift_mass + 0.25 * body.lift_stiffness * dt2);
+        let c = body.compliance;
+        let delta = dt2 - c * theta_e;
+        let a0 = (free - 2.0 * b.1 + b.0 - c * g0) / delta;
+        let kappa: [f64; 3] = std::array::from_fn(|i| levers[i] - theta_g[i] / dt2);
+        let w = dt2 * c / delta;
+        BridgeStep {
+            theta: std::array::from_fn(|i| std::array::from_fn(|k| theta[i][k] + w * kappa[i] * kappa[k])),
+            z: std::array::from_fn(|i| z[i] - 2.0 * levers[i] * (b.1 - b.0) - dt2 * kappa[i] * a0),
+            a0,
+            a1: kappa.map(|k| c * k / delta),
+            kappa,
+            g0,
+            theta_e,
+        }
+    }
+
+    /// Step the body under the force `force` (N) the string and the contacts put on the bridge,
+    /// returning the radiated `Σ r_j ẍ_j` at this step and, with `MONITOR`, the energy of the
+    /// body and of the coupling at `n + 1/2` and what the body dissipated.
+    #[inline(always)]
+    fn advance_body<const MONITOR: bool>(&mut self, force: f64) -> (f64, StringEnergy) {
+        let dt = self.dt;
+        let body = self.body.as_mut().expect("a plan with the bridge has a body");
+        let forces = [(&body.sole_gain[..], force)];
+        let (b_next, mut energy) = if MONITOR {
+            let (b, stored, dissipated) = body.bank.advance_monitored(forces, &body.sole);
+            (b, StringEnergy { stored, dissipated })
+        } else {
+            (body.bank.advance_projecting(forces, &body.sole, []).0, StringEnergy::default())
+        };
+        let heard_next = body.bank.project_state(&body.radiation).1;
+        let heard = (heard_next - 2.0 * body.heard.1 + body.heard.0) / (dt * dt);
+        if MONITOR {
+            // The lift has moved on already: `lifted` holds `(gᵀũ^n, gᵀũ^{n+1})`.
+            let (db, mean) = ((b_next - body.b.1) / dt, 0.5 * (b_next + body.b.1));
+            let cross = (body.lifted.1 - body.lifted.0) / dt * db;
+            energy.stored += cross + 0.5 * body.lift_mass * db * db + 0.5 * body.lift_stiffness * mean * mean;
+        }
+        body.b = (body.b.1, b_next);
+        body.heard = (body.heard.1, heard_next);
+        (heard, energy)
     }
 
     /// Move the slide vectors' state projections on by the string update's own recursion,
