@@ -29,7 +29,7 @@ use crate::params::{ModeParam, QsaParams};
 use views::History;
 
 /// Editor window size (logical pixels).
-pub const SIZE: (f64, f64) = (1000.0, 750.0);
+pub const SIZE: (f64, f64) = (1000.0, 775.0);
 
 /// Width of the parameter sliders (logical pixels).
 const SLIDER_WIDTH: f32 = 100.0;
@@ -237,6 +237,7 @@ fn parameters(ui: &mut Ui, p: &QsaParams, setter: &ParamSetter) {
             row(ui, &p.slide.pluck_position, setter);
             row(ui, &p.slide.pickup_position, setter);
             row(ui, &p.slide.pickup_resonance, setter);
+            row(ui, &p.slide.body, setter);
         });
     });
 }

@@ -4,7 +4,7 @@
 //! mapped to the engine's [`Settings`] by [`ParamValues::settings`].
 //!
 //! Hosts see them in four groups, the editor's sections (VST3 units, CLAP modules): Engine
-//! (`mode` to `voices`), Piano (`hard` to `detune`), Slide (`slide` to `ptone`) and Output
+//! (`mode` to `voices`), Piano (`hard` to `detune`), Slide (`slide` to `sbody`) and Output
 //! (`gain`, `limit`, `width`), in the order of the table. `slide` and `hand` take CLAP polyphonic
 //! modulation: a per-note offset, in the parameter's units, added to the value for that note
 //! alone (the sum clamped to the range), where the parameter acts (`slide` when the slide does not
@@ -41,6 +41,7 @@
 //! | `pluck` | Pluck position | 0.5..=0.98 | 0.9 | [`Settings::pluck_position`] (fraction of the length) |
 //! | `pickup` | Pickup position | 0.5..=0.98 | 0.9 | [`Settings::pickup_position`] (fraction of the length) |
 //! | `ptone` | Pickup resonance | 1000..=10000 Hz | 3500 Hz | [`Settings::pickup_resonance`] (the loaded pickup's resonance) |
+//! | `sbody` | Guitar | Electric, Acoustic | Electric | [`Settings::slide_body`] (new notes) |
 //! | `gain` | Output gain | -36..=12 dB | 0 dB | [`Settings::gain`] (linear) |
 //! | `limit` | Safety limiter | on/off | on | [`Settings::limiter`] |
 //! | `width` | Stereo width | -100..=100 % | 60 % | [`Settings::stereo_width`] (×0.01; the piano's keys panned along the bridge) |
@@ -98,6 +99,17 @@ pub enum HandSourceParam {
     #[id = "polypress"]
     #[name = "Poly pressure"]
     PolyPressure,
+}
+
+/// Slide guitar body parameter (the options of `sbody`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Enum)]
+pub enum SlideBodyParam {
+    /// The electric guitar: the string's end held, heard through a magnetic pickup.
+    #[id = "electric"]
+    Electric,
+    /// The acoustic guitar: the string's end on its body.
+    #[id = "acoustic"]
+    Acoustic,
 }
 
 /// Polyphonic modulation id of `slide` (nice-plug's `with_poly_modulation_id`).
@@ -345,6 +357,8 @@ param_group! {
         pickup_position: FloatParam = "pickup",
         /// The loaded pickup's resonance (Hz).
         pickup_resonance: FloatParam = "ptone",
+        /// The guitar new notes sound on: electric (the pickup) or acoustic.
+        body: EnumParam<SlideBodyParam> = "sbody",
     }
 }
 
@@ -449,6 +463,7 @@ mod tests {
                         "mode" => (ModeParam::variants(), ModeParam::ids()),
                         "solver" => (SolverParam::variants(), SolverParam::ids()),
                         "handsrc" => (HandSourceParam::variants(), HandSourceParam::ids()),
+                        "sbody" => (SlideBodyParam::variants(), SlideBodyParam::ids()),
                         _ => panic!("{id}: a choice without its enum here"),
                     };
                     assert_eq!(names, options.iter().map(|(_, name)| *name).collect::<Vec<_>>(), "{id}");

@@ -70,6 +70,7 @@ DOCUMENTED = {
     "pluck_position": "Pluck position",
     "pickup_position": "Pickup position",
     "pickup_resonance_hz": "Pickup resonance",
+    "guitar": "Guitar",
     "output_gain_db": "Output gain",
     "safety_limiter": "Safety limiter",
     "stereo_width": "Stereo width",

@@ -980,10 +980,11 @@ fn parameters_are_grouped_and_slide_and_hand_are_polyphonic() {
 #[test]
 fn choice_parameters_name_every_value() {
     let mut p = Plugin::at_48k(&release_bundle(), &[]);
-    let choices: [(&str, &[&str]); 5] = [
+    let choices: [(&str, &[&str]); 6] = [
         ("mode", &["Piano", "Slide"]),
         ("solver", &["QSA", "EXP", "IMP"]),
         ("handsrc", &["Parameter", "Mod wheel", "Channel pressure", "Poly pressure"]),
+        ("sbody", &["Electric", "Acoustic"]),
         ("follow", &["Off", "On"]),
         ("limit", &["Off", "On"]),
     ];
@@ -1011,7 +1012,7 @@ fn choice_parameters_name_every_value() {
 /// switches by index, everything else through the plugin's own text-to-value conversion of the
 /// number in the unit it shows (`gain` in dB), as a host's text entry does.
 fn preset_clap_value(p: &mut Plugin, id: &str, plain: f32) -> f64 {
-    if ["mode", "solver", "handsrc", "follow", "limit"].contains(&id) {
+    if ["mode", "solver", "handsrc", "sbody", "follow", "limit"].contains(&id) {
         return f64::from(plain);
     }
     let text = if id == "gain" { format!("{}", 20.0 * plain.log10()) } else { format!("{plain}") };

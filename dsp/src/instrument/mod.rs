@@ -48,8 +48,10 @@
 //! - the piano's voices, each panned by its key's place along the bridge
 //!   ([`pan_gains`], `Settings::stereo_width`), sum into a left and a right bridge force, each
 //!   radiated through the soundboard ([`crate::body`]), then scaled by [`OUTPUT_SCALE`];
-//! - the slide guitar's voices sum, centred, through the pickup's circuit
-//!   ([`crate::pickup`]), scaled by [`SLIDE_SCALE`].
+//! - the slide guitar's voices sum, centred: on the electric guitar through the pickup's circuit
+//!   ([`crate::pickup`]), scaled by [`SLIDE_SCALE`]; on the acoustic guitar
+//!   (`Settings::slide_body`), what the body their strings end on radiates, scaled by
+//!   [`ACOUSTIC_SCALE`]. A note keeps the guitar it was plucked on.
 //!
 //! [`Instrument::set_raw_output`] gives the dry signals instead, centred. Both then pass the
 //! output stage ([`OutputStage`]): the gain, smoothed over a few milliseconds, and the safety
@@ -93,7 +95,7 @@ pub use piano_voice::{
 pub use presets::{
     CATEGORIES, FACTORY_PRESETS, Preset, PresetError, factory_presets, find_preset, load_factory_presets, parse_preset,
 };
-pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, hammer_speed};
+pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody, hammer_speed};
 pub use slide_voice::{
     ChannelState, HAND_ACCELERATION, HAND_SPEED, OPEN_KEY, PICKUP_APERTURE, PLUCK_TIME, REST_FORCE, SLIDE_SPEED,
     SlideVoice, TRAIL,
@@ -137,6 +139,11 @@ pub const OUTPUT_SCALE: f64 = 0.016;
 /// (D3, the slide pressed) measures −34 LUFS over 2 s and peaks near 0.1: a little louder than a
 /// piano key at the same velocity, as a guitar plays fewer notes at once.
 pub const SLIDE_SCALE: f64 = 0.06;
+
+/// Output scale of the acoustic slide guitar: what the body radiates (in newtons of bridge force
+/// above a kilohertz, [`crate::body::BodyParams::guitar`]) to full scale, set so that the note
+/// [`SLIDE_SCALE`] is set by measures the same loudness on either guitar.
+pub const ACOUSTIC_SCALE: f64 = 0.033;
 
 /// A note or controller event, as MIDI delivers them.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -271,8 +278,8 @@ pub struct Instrument {
     /// The piano's soundboard radiating the left and right channels' bridge forces.
     boards: [Body; 2],
     /// One control block of the piano's bridge forces, left and right, and of the slide
-    /// guitar's pickup signal.
-    buses: [Vec<f64>; 3],
+    /// guitars' signals: the pickup's and the acoustic body's.
+    buses: [Vec<f64>; 4],
     /// The slide guitar's pickup circuit, and the resonance it is tuned to now (Hz).
     circuit: PickupCircuit,
     resonance: f64,
@@ -308,7 +315,7 @@ impl Instrument {
             scratch: vec![0.0; MAX_BLOCK],
             partners: PartnerTable::new(sample_rate, &settings),
             boards: [(); 2].map(|_| Body::new(&BodyParams::piano(), sample_rate)),
-            buses: [(); 3].map(|_| vec![0.0; MAX_BLOCK]),
+            buses: [(); 4].map(|_| vec![0.0; MAX_BLOCK]),
             circuit: PickupCircuit::new(settings.pickup_resonance, sample_rate),
             resonance: settings.pickup_resonance,
             raw: false,
@@ -563,11 +570,12 @@ impl Instrument {
             }
             let len = (self.settings.block - self.in_block).min(n - done);
             let scratch = &mut self.scratch[..len];
-            let [bus_l, bus_r, bus_s] = &mut self.buses;
-            let (bus_l, bus_r, bus_s) = (&mut bus_l[..len], &mut bus_r[..len], &mut bus_s[..len]);
-            bus_l.fill(0.0);
-            bus_r.fill(0.0);
-            bus_s.fill(0.0);
+            let [bus_l, bus_r, bus_s, bus_a] = &mut self.buses;
+            let (bus_l, bus_r) = (&mut bus_l[..len], &mut bus_r[..len]);
+            let (bus_s, bus_a) = (&mut bus_s[..len], &mut bus_a[..len]);
+            for bus in [&mut *bus_l, &mut *bus_r, &mut *bus_s, &mut *bus_a] {
+                bus.fill(0.0);
+            }
             let width = if self.raw { 0.0 } else { self.settings.stereo_width };
             for voice in self.voices.iter_mut().filter(|v| v.sounding) {
                 voice.render(scratch);
@@ -577,7 +585,11 @@ impl Instrument {
             }
             for voice in self.slides.iter_mut().filter(|v| v.sounding) {
                 voice.render(scratch);
-                bus_s.iter_mut().zip(scratch.iter()).for_each(|(b, x)| *b += x);
+                let bus = match voice.body {
+                    SlideBody::Pickup => &mut *bus_s,
+                    SlideBody::Acoustic => &mut *bus_a,
+                };
+                bus.iter_mut().zip(scratch.iter()).for_each(|(b, x)| *b += x);
             }
             if !self.raw {
                 self.boards[0].process(bus_l);
@@ -585,11 +597,12 @@ impl Instrument {
                 self.circuit.process(bus_s);
             }
             let (l, r) = (&mut left[done..done + len], &mut right[done..done + len]);
-            for (((l, r), (pl, pr)), s) in
-                l.iter_mut().zip(r.iter_mut()).zip(bus_l.iter().zip(bus_r.iter())).zip(bus_s.iter())
+            for (((l, r), (pl, pr)), (s, a)) in
+                l.iter_mut().zip(r.iter_mut()).zip(bus_l.iter().zip(bus_r.iter())).zip(bus_s.iter().zip(bus_a.iter()))
             {
-                *l = (pl * OUTPUT_SCALE + s * SLIDE_SCALE) as f32;
-                *r = (pr * OUTPUT_SCALE + s * SLIDE_SCALE) as f32;
+                let slide = s * SLIDE_SCALE + a * ACOUSTIC_SCALE;
+                *l = (pl * OUTPUT_SCALE + slide) as f32;
+                *r = (pr * OUTPUT_SCALE + slide) as f32;
             }
             self.output.process(l, r, self.settings.limiter);
             done += len;

@@ -15,7 +15,7 @@
 use crate::contact::Method;
 use crate::instrument::MAX_VOICES;
 use crate::instrument::notes::NoteParam;
-use crate::instrument::settings::{HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings};
+use crate::instrument::settings::{HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody};
 
 /// The editor section (host group: VST3 unit, CLAP module) that shows a parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -142,6 +142,9 @@ const SOLVERS: [Method; 3] = [Method::Qsa, Method::Exp, Method::Imp];
 const HAND_SOURCES: [HandSource; 4] =
     [HandSource::Parameter, HandSource::ModWheel, HandSource::ChannelPressure, HandSource::PolyPressure];
 
+/// The slide guitar's bodies of `sbody`, in option order.
+const SLIDE_BODIES: [SlideBody; 2] = [SlideBody::Pickup, SlideBody::Acoustic];
+
 /// The option of `options` at plain value (index) `plain`, clamped to the list.
 fn pick<T: Copy, const N: usize>(options: [T; N], plain: f32) -> T {
     options[(plain.max(0.0) as usize).min(N - 1)]
@@ -177,7 +180,7 @@ const fn float(min: f32, max: f32, default: f32, unit: &'static str, scale: Scal
 }
 
 /// Every parameter, in display order (the groups in the order Engine, Piano, Slide, Output).
-pub const PARAMETERS: [ParamSpec; 30] = [
+pub const PARAMETERS: [ParamSpec; 31] = [
     ParamSpec {
         id: "mode",
         name: "Mode",
@@ -460,6 +463,15 @@ pub const PARAMETERS: [ParamSpec; 30] = [
         put: |v, x| v.pickup_resonance = x,
     },
     ParamSpec {
+        id: "sbody",
+        name: "Guitar",
+        group: Group::Slide,
+        kind: ParamKind::Choice { options: &[("electric", "Electric"), ("acoustic", "Acoustic")], default: 0 },
+        maps_to: "[`Settings::slide_body`] (new notes)",
+        get: |v| index(SLIDE_BODIES, v.slide_body),
+        put: |v, x| v.slide_body = pick(SLIDE_BODIES, x),
+    },
+    ParamSpec {
         id: "gain",
         name: "Output gain",
         group: Group::Output,
@@ -693,6 +705,8 @@ pub struct ParamValues {
     pub pickup_position: f32,
     /// `ptone` (Hz).
     pub pickup_resonance: f32,
+    /// `sbody`.
+    pub slide_body: SlideBody,
     /// `gain` (linear).
     pub gain: f32,
     /// `limit`.
@@ -732,6 +746,7 @@ impl Default for ParamValues {
             pluck_position: 0.0,
             pickup_position: 0.0,
             pickup_resonance: 0.0,
+            slide_body: SlideBody::Pickup,
             gain: 0.0,
             limiter: false,
             stereo_width: 0.0,
@@ -792,6 +807,7 @@ impl ParamValues {
             pluck_position: f(self.pluck_position),
             pickup_position: f(self.pickup_position),
             pickup_resonance: f(self.pickup_resonance),
+            slide_body: self.slide_body,
             gain: f(self.gain),
             limiter: self.limiter,
             stereo_width: f(self.stereo_width) * 0.01,
@@ -801,7 +817,8 @@ impl ParamValues {
 
     /// Set parameter `id` from text ([`ParamSpec::parse`]): numbers in the parameter's unit
     /// (`gain` in dB, like the plugin shows it), `on`/`off` for switches, option ids for the
-    /// choices (`piano`/`slide`, `qsa`/`exp`/`imp`, `param`/`modwheel`/`chanpress`/`polypress`).
+    /// choices (`piano`/`slide`, `qsa`/`exp`/`imp`, `param`/`modwheel`/`chanpress`/`polypress`,
+    /// `electric`/`acoustic`).
     pub fn set(&mut self, id: &str, value: &str) -> Result<(), ParamError> {
         let spec = param_spec(id).ok_or_else(|| ParamError::UnknownId(id.to_owned()))?;
         let shown = spec.parse(value).map_err(|expected| ParamError::BadValue {
@@ -856,7 +873,7 @@ mod tests {
         let released = [
             "mode", "solver", "segs", "nb", "voices", "hard", "hmass", "strike", "damp", "bright", "damper", "detune",
             "slide", "follow", "glide", "bend", "hand", "handsrc", "smass", "hstiff", "hdamp", "fdamp", "kappa",
-            "alpha", "pluck", "pickup", "ptone", "gain", "limit", "width",
+            "alpha", "pluck", "pickup", "ptone", "sbody", "gain", "limit", "width",
         ];
         assert_eq!(PARAM_IDS, released);
     }
@@ -868,6 +885,7 @@ mod tests {
         let d = Settings::default();
         assert_eq!((s.mode, s.method, s.segments, s.block), (d.mode, d.method, d.segments, d.block));
         assert_eq!((s.follow_key, s.hand_source, s.limiter), (d.follow_key, d.hand_source, d.limiter));
+        assert_eq!(s.slide_body, d.slide_body);
         let pairs = [
             (s.hardness, d.hardness),
             (s.hammer_mass, d.hammer_mass),
@@ -953,12 +971,13 @@ mod tests {
                 "mode" => "slide",
                 "solver" => "imp",
                 "handsrc" => "modwheel",
+                "sbody" => "acoustic",
                 "follow" | "limit" => "off",
                 _ => "2",
             };
             p.set(id, value).unwrap_or_else(|e| panic!("{id}: {e}"));
         }
-        assert_eq!(p.mode, Mode::Slide);
+        assert_eq!((p.mode, p.slide_body), (Mode::Slide, SlideBody::Acoustic));
         assert!((p.gain - 10f32.powf(0.1)).abs() < 1e-6, "gain is given in dB");
         assert!(matches!(p.set("kapa", "1"), Err(ParamError::UnknownId(_))));
         assert!(p.set("hard", "nan").is_err());

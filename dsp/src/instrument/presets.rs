@@ -28,7 +28,7 @@ pub const CATEGORIES: [&str; 4] = ["Paper", "Piano", "Slide", "Contact"];
 
 /// The factory presets as `(id, TOML text)`, embedded at compile time from `presets/<id>.toml`,
 /// in the order the editor lists them (by category, then as here).
-pub const FACTORY_PRESETS: [(&str, &str); 20] = [
+pub const FACTORY_PRESETS: [(&str, &str); 21] = [
     ("fig5-hammer", include_str!("../../../presets/fig5-hammer.toml")),
     ("fig5-hammer-imp", include_str!("../../../presets/fig5-hammer-imp.toml")),
     ("soft-hammer", include_str!("../../../presets/soft-hammer.toml")),
@@ -43,6 +43,7 @@ pub const FACTORY_PRESETS: [(&str, &str); 20] = [
     ("bottleneck", include_str!("../../../presets/bottleneck.toml")),
     ("lap-steel", include_str!("../../../presets/lap-steel.toml")),
     ("dobro-rattle", include_str!("../../../presets/dobro-rattle.toml")),
+    ("acoustic-slide", include_str!("../../../presets/acoustic-slide.toml")),
     ("parked-slide", include_str!("../../../presets/parked-slide.toml")),
     ("modwheel-slide", include_str!("../../../presets/modwheel-slide.toml")),
     ("stiff-slide", include_str!("../../../presets/stiff-slide.toml")),

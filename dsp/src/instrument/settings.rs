@@ -32,6 +32,18 @@ pub enum HandSource {
     PolyPressure,
 }
 
+/// What the slide guitar's listener hears.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SlideBody {
+    /// An electric guitar: the string's velocity under a magnetic pickup, through its circuit
+    /// ([`crate::pickup`]).
+    #[default]
+    Pickup,
+    /// An acoustic guitar: the string ends on the guitar's body, which it drives and which
+    /// drains it, and the body radiates ([`crate::body::BodyParams::guitar`]).
+    Acoustic,
+}
+
 /// Lowest and highest hand height a controller maps to (m): lifted at 0, pressed at full.
 pub const HAND_RANGE: (f64, f64) = (2e-3, -2e-3);
 
@@ -104,6 +116,9 @@ pub struct Settings {
     /// Resonance of the pickup loaded by its cable (Hz), 1 kHz..=10 kHz
     /// ([`crate::pickup::PickupCircuit`]).
     pub pickup_resonance: f64,
+    /// The slide guitar's body: a magnetic pickup or an acoustic body. New notes take the one in
+    /// force; sounding ones keep theirs.
+    pub slide_body: SlideBody,
     /// Slide contact stiffness κ (N/m^α), 1e6..=1e13.
     pub slide_kappa: f64,
     /// Slide contact exponent α, 1..=3.
@@ -142,6 +157,7 @@ impl Default for Settings {
             pluck_position: 0.9,
             pickup_position: 0.9,
             pickup_resonance: 3500.0,
+            slide_body: SlideBody::Pickup,
             slide_kappa: 1e9,
             slide_alpha: 1.5,
         }
@@ -188,6 +204,7 @@ impl Settings {
             pluck_position: clamp(self.pluck_position, 0.5, 0.98, d.pluck_position),
             pickup_position: clamp(self.pickup_position, 0.5, 0.98, d.pickup_position),
             pickup_resonance: clamp(self.pickup_resonance, 1000.0, 10_000.0, d.pickup_resonance),
+            slide_body: self.slide_body,
             slide_kappa: clamp(self.slide_kappa, 1e6, 1e13, d.slide_kappa),
             slide_alpha: clamp(self.slide_alpha, 1.0, 3.0, d.slide_alpha),
         }

@@ -47,12 +47,13 @@
 //! and counted ([`SlideVoice::guard_trips`]): a last line of defence that the tests and sweeps
 //! check never fires.
 
+use crate::body::BodyParams;
 use crate::contact::{Method, PowerLaw};
 use crate::control::Live;
 use crate::exciter::SlideParams;
 use crate::instrument::notes::NoteParam;
 use crate::instrument::piano_voice::{GUARD_FACTOR, GuardFade, RELEASE_ENERGY, Strike};
-use crate::instrument::settings::{HAND_RANGE, HandSource, Settings};
+use crate::instrument::settings::{HAND_RANGE, HandSource, Settings, SlideBody};
 use crate::instrument::solvers::Solvers;
 use crate::preset::slide_guitar;
 use crate::scene::{OutputKind, Pickup, SlideControls, SlideCore, SlideStringParams};
@@ -171,6 +172,9 @@ pub struct SlideVoice {
     reference_energy: f64,
     /// Recent peak of the string's kinetic energy (J), decaying with a 50 ms time constant.
     motion: f64,
+    /// The guitar the current note sounds on: its string's end held and heard through the pickup,
+    /// or on the acoustic body.
+    pub body: SlideBody,
 }
 
 impl SlideVoice {
@@ -203,8 +207,10 @@ impl SlideVoice {
             },
         };
         let law = PowerLaw::new(settings.slide_kappa, settings.slide_alpha).expect("clamped settings give a valid law");
+        let mut core = SlideCore::new(string, &params, rest, rest);
+        core.attach_body(&BodyParams::guitar(), false);
         Self {
-            core: SlideCore::new(string, &params, rest, rest),
+            core,
             solvers: Solvers::new(law),
             live: Live(rest),
             length,
@@ -231,6 +237,7 @@ impl SlideVoice {
             pluck: None,
             reference_energy: f64::MIN_POSITIVE,
             motion: 0.0,
+            body: SlideBody::Pickup,
         }
     }
 
@@ -253,6 +260,11 @@ impl SlideVoice {
         (self.poly_pressure, self.tuning, self.slide_offset, self.hand_offset) = (0.0, 0.0, 0.0, 0.0);
         if legato && self.sounding {
             return;
+        }
+        // A note from silence on another guitar: the string is moved onto (or off) the body.
+        if !self.sounding && self.body != settings.slide_body {
+            self.body = settings.slide_body;
+            self.rest_lifted();
         }
         if !self.sounding {
             self.glided = self.keys_and_bends(settings, &ChannelState::default());
@@ -373,7 +385,7 @@ impl SlideVoice {
         self.live.0 = lifted;
         self.hand = lifted.hand_height;
         self.hand_velocity = 0.0;
-        self.core.rest(lifted);
+        self.core.set_body(self.body == SlideBody::Acoustic, lifted);
     }
 
     /// Work at a control-block boundary: move the controls on for the coming `len` samples and
@@ -465,7 +477,8 @@ impl SlideVoice {
     }
 
     /// Render `out.len()` samples of string velocity at the pickup (m/s, see
-    /// [`SLIDE_SCALE`](crate::instrument::SLIDE_SCALE)). A voice the guard
+    /// [`SLIDE_SCALE`](crate::instrument::SLIDE_SCALE)) or, on the acoustic body, of what the
+    /// body radiates ([`ACOUSTIC_SCALE`](crate::instrument::ACOUSTIC_SCALE)). A voice the guard
     /// has caught fades out linearly over its block; a non-finite sample silences it at once, and
     /// the samples rendered with it are silent.
     pub fn render(&mut self, out: &mut [f64]) {
