@@ -10,7 +10,7 @@ use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use qsa_dsp::contact::Method;
-use qsa_dsp::instrument::{Event, Instrument, Mode, NoteParam, NoteTarget, STEAL_TIME, Settings};
+use qsa_dsp::instrument::{Event, Instrument, Mode, NoteParam, NoteTarget, STEAL_TIME, Settings, SlideBody};
 use qsa_dsp::preset::key_frequency;
 use qsa_tests::{CLICK_DB, click_strength, fundamental, seeded_rng, spectral_peak};
 use rand::RngExt;
@@ -552,9 +552,16 @@ fn mpe_voices_glide_independently() {
 }
 
 /// Slide mode renders the same for any host buffer size and allocates nothing while playing
-/// (per-note expression included).
+/// (per-note expression included), on the electric and on the acoustic guitar, and while the
+/// guitar changes between notes.
 #[test]
 fn slide_mode_is_buffer_invariant_and_allocation_free() {
+    for body in [SlideBody::Pickup, SlideBody::Acoustic] {
+        slide_mode_is_buffer_invariant_and_allocation_free_on(body);
+    }
+}
+
+fn slide_mode_is_buffer_invariant_and_allocation_free_on(body: SlideBody) {
     let score: Score = vec![
         (0, on(52, 0.7)),
         (3_000, Event::PitchBend { channel: 0, value: 0.5 }),
@@ -563,7 +570,7 @@ fn slide_mode_is_buffer_invariant_and_allocation_free() {
         (12_000, Event::ModWheel { channel: 0, value: 0.3 }),
         (15_000, off(57)),
     ];
-    let settings = Settings { mode: Mode::Slide, block: 32, ..Default::default() };
+    let settings = Settings { mode: Mode::Slide, block: 32, slide_body: body, ..Default::default() };
     let reference = play(&mut Instrument::new(FS, 4, settings), &score, 19_200, || 19_200);
     for size in [1usize, 32, 512] {
         let out = play(&mut Instrument::new(FS, 4, settings), &score, 19_200, || size);
@@ -588,6 +595,10 @@ fn slide_mode_is_buffer_invariant_and_allocation_free() {
             }
             if i % 11 == 0 {
                 s.handle(off(45 + (i % 13) as u8));
+            }
+            if i % 37 == 0 {
+                let other = if i % 74 == 0 { SlideBody::Acoustic } else { SlideBody::Pickup };
+                s.set_settings(&Settings { slide_body: other, ..settings });
             }
             s.process(&mut left, &mut right);
         }

@@ -9,7 +9,8 @@
 //! - `slide-phrase/nb{1,8,64}`: the slide phrase with control blocks of 1, 8 and 64 samples;
 //! - `piano/16-voices/{64,512}` and `slide/16-voices/{64,512}`: the instrument engine (the
 //!   plugin's process path) at 48 kHz with 16 keys from C3 to C6 played together, pedal down,
-//!   rendered in 64- and 512-sample calls;
+//!   rendered in 64- and 512-sample calls; `slide/16-voices/64/acoustic` the slide notes on the
+//!   acoustic guitar (each string on its copy of the body);
 //! - `piano/c4`: one C4 voice of the instrument at 48 kHz; its line says how many such voices fit
 //!   in real time on one core (`1/rtf`, rounded down);
 //! - `piano/88-keys`: all 88 keys (A0 to C8) struck together, pedal down, 48 kHz: the whole
@@ -50,7 +51,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use qsa_dsp::contact::{Method, SolverSettings};
-use qsa_dsp::instrument::{Event, Instrument, Mode, Settings};
+use qsa_dsp::instrument::{Event, Instrument, Mode, Settings, SlideBody};
 use qsa_dsp::scene::Scene;
 use qsa_dsp::scene_file::{Sampling, SceneDescription, SceneJob, build, parse_scene};
 use qsa_dsp::string::ModalString;
@@ -540,6 +541,7 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
     let c4 = vec![60u8];
     let piano = Settings { mode: Mode::Piano, ..Settings::default() };
     let slide = Settings { mode: Mode::Slide, ..Settings::default() };
+    let acoustic = Settings { slide_body: SlideBody::Acoustic, ..slide };
     let once = |keys| Performance { keys, restrike: None, late_pedal: None };
     // Every 120 calls of 16 samples: 40 ms, 50 strikes in 2 s.
     let restrike = Performance { keys: &sixteen, restrike: Some((120, 6)), late_pedal: None };
@@ -552,6 +554,7 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
         ("piano/16-voices/512", piano, once(&sixteen), 512),
         ("slide/16-voices/64", slide, once(&sixteen), 64),
         ("slide/16-voices/512", slide, once(&sixteen), 512),
+        ("slide/16-voices/64/acoustic", acoustic, once(&sixteen), 64),
         ("piano/88-keys", piano, once(&all), 64),
         ("piano/88-keys/late-pedal", piano, late_pedal, 64),
         ("piano/restrike/qsa", with(Method::Qsa), restrike, 16),
