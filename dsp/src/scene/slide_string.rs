@@ -67,6 +67,22 @@
 //! `Δt P_φ = F_φe s_φ/2`: `H^{n+1/2} + losses − control work` is constant to rounding whatever
 //! the controls do, since every vector used to distribute a force is the one used to project the
 //! motion it works on.
+//!
+//! # A body at the bridge (docs/physics.md §13.5)
+//!
+//! With a body attached ([`SlideCore::attach_body`]) the string's far end moves with it,
+//! `u = v + b·x/L`, as the piano's strings end on their bridge (`crate::scene::UnisonCore`): the
+//! lift `g` on the modes (in its own vector slot), a lever `ℓ_ζ = x_ζ/L` on each contact, and the
+//! string's static share of the bridge's mass and stiffness. Eliminating the bridge's
+//! acceleration `a = a₀ + Σ_ζ (C_Σκ_ζ/Δ)F_ζ`, `κ_ζ = ℓ_ζ − θ_gζ/Δt²`, leaves the step above with
+//!
+//! ```text
+//! θ'_ζξ = θ_ζξ + (Δt²C_Σ/Δ) κ_ζ κ_ξ,   z'_ζ = z_ζ − 2ℓ_ζ(b^n − b^{n−1}) − Δt² κ_ζ a₀
+//! ```
+//!
+//! in place of `θ` and `z`; after the solve the string takes `−a` along `C∘g` and the body the
+//! force `Σ_ζ κ_ζ F_ζ − G₀ + (Θ − E)a`. `H` gains the body's energy and the coupling's terms, and
+//! the output is what the body radiates.
 
 use crate::body::{BodyParams, RadiatingMode};
 use crate::contact::{ContactProblem, ContactSolution, ContactSolver};
