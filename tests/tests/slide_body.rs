@@ -6,13 +6,14 @@
 use qsa_dsp::body::BodyParams;
 use qsa_dsp::contact::{NewtonSolver, PowerLaw, QsaSolver, QuadSpline};
 use qsa_dsp::control::Breakpoints;
-use qsa_dsp::instrument::{Event, Instrument, Mode, Settings, SlideBody};
+use qsa_dsp::instrument::SlideBody;
 use qsa_dsp::preset::slide_guitar;
 use qsa_dsp::scene::{Frame, Scene, SlideString};
 use qsa_dsp::scene_file::SlideAutomation;
 use qsa_dsp::string::ModalString;
 use qsa_tests::seeded_rng;
 use xtask::loudness::integrated_lufs;
+use xtask::realism::slide_note;
 use xtask::report::gestures::{self, Trajectory};
 
 /// The worst `|H + losses − work − H0|` over the run, relative to the largest energy.
@@ -152,24 +153,6 @@ fn the_body_drains_the_partials_on_its_resonances() {
         let (with, without, _) = rates(partial, (0.1, 1.4));
         assert!((with - without).abs() < 1.0, "partial {partial}: {with} {without}");
     }
-}
-
-/// One slide note of `key` at velocity 80 held for 2 s on `body` at 48 kHz, limiter off.
-fn slide_note(body: SlideBody, key: u8, change_to: Option<SlideBody>) -> Vec<f32> {
-    let settings = Settings { mode: Mode::Slide, slide_body: body, limiter: false, ..Settings::default() };
-    let mut p = Instrument::new(REALISM_FS, 4, settings);
-    p.handle(Event::NoteOn { channel: 0, key, velocity: 80.0 / 127.0 });
-    let n = (2.0 * REALISM_FS) as usize;
-    let (mut l, mut r) = (vec![0.0f32; n], vec![0.0f32; n]);
-    for (k, (a, b)) in l.chunks_mut(256).zip(r.chunks_mut(256)).enumerate() {
-        if k == 40
-            && let Some(other) = change_to
-        {
-            p.set_settings(&Settings { slide_body: other, ..settings });
-        }
-        p.process(a, b);
-    }
-    l
 }
 
 /// The acoustic guitar is voiced as the electric: D3 at velocity 80 (the note

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use plotters::prelude::*;
-use qsa_dsp::instrument::{Event, Instrument, Settings, hammer_speed};
+use qsa_dsp::instrument::{Event, Instrument, Mode, Settings, SlideBody, hammer_speed};
 use qsa_dsp::preset::{key_frequency, piano_note};
 
 /// Sample rate of every measurement (Hz).
@@ -205,6 +205,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     inharmonicity(&dir.join("inharmonicity.png"))?;
     let decays = decays(&dir.join("decay.png"))?;
     let sympathy = sympathetic(&dir.join("sympathetic.png"))?;
+    let guitars = acoustic(&dir.join("acoustic.png"))?;
     let scales = [("pp", 40u8), ("mf", 80), ("ff", 120)].map(|(name, velocity)| (name, scale(velocity)));
     // One gain for all three, the fortissimo scale peaking at −1 dBFS: the dynamics stay audible.
     let peak = scales.iter().flat_map(|s| s.1.iter()).fold(0.0f64, |m, x| m.max(x.abs()));
@@ -215,7 +216,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
         crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scaled))
             .map_err(|e| e.to_string())?;
     }
-    let text = readme(&envelopes, &contacts, &decays, &sympathy);
+    let text = readme(&envelopes, &contacts, &decays, &sympathy, &guitars);
     let path = args.root.join("docs/report/realism.md");
     std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     writeln!(out, "{}", serde_json::json!({ "written": path.display().to_string() })).map_err(|e| e.to_string())
@@ -502,6 +503,73 @@ fn sympathetic(path: &Path) -> Result<Sympathy, String> {
     Ok(rows)
 }
 
+/// A slide note of `key` at velocity 80 held 2 s on the guitar `body`, at [`FS`] with the limiter
+/// off, the guitar changed to `change_to` 0.21 s in if given (a sounding note keeps its own): the
+/// left channel.
+pub fn slide_note(body: SlideBody, key: u8, change_to: Option<SlideBody>) -> Vec<f32> {
+    let settings = Settings { mode: Mode::Slide, slide_body: body, limiter: false, ..Settings::default() };
+    let mut guitar = Instrument::new(FS, 4, settings);
+    guitar.handle(Event::NoteOn { channel: 0, key, velocity: 80.0 / 127.0 });
+    let n = (2.0 * FS) as usize;
+    let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
+    for (k, (l, r)) in left.chunks_mut(256).zip(right.chunks_mut(256)).enumerate() {
+        if k == 40
+            && let Some(other) = change_to
+        {
+            guitar.set_settings(&Settings { slide_body: other, ..settings });
+        }
+        guitar.process(l, r);
+    }
+    left
+}
+
+/// The slide guitar's notes A2–C5, each its integrated loudness (LUFS) on the electric and on the
+/// acoustic guitar: `(key, electric, acoustic)`.
+type Guitars = Vec<(u8, f64, f64)>;
+
+fn acoustic(path: &Path) -> Result<Guitars, String> {
+    let lufs = |body, key| crate::loudness::integrated_lufs(&slide_note(body, key, None), FS);
+    let rows: Guitars = (45..=72u8).map(|k| (k, lufs(SlideBody::Pickup, k), lufs(SlideBody::Acoustic, k))).collect();
+    let (low, high) = rows
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| (lo.min(r.1).min(r.2), hi.max(r.1).max(r.2)));
+    let root = BitMapBackend::new(path, (960, 520)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("Slide notes at velocity 80 on the two guitars", ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(60)
+        .build_cartesian_2d(44.5f64..72.5f64, (low - 3.0)..(high + 3.0))
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc("key (MIDI): 45 A2, the open string; 57 A3, on the top's 219 Hz resonance")
+        .y_desc("integrated loudness over 2 s (LUFS)")
+        .draw()
+        .map_err(|e| e.to_string())?;
+    for (label, color, pick) in [
+        ("electric: the pickup and its circuit", BLUE, (|r: &(u8, f64, f64)| r.1) as fn(&(u8, f64, f64)) -> f64),
+        ("acoustic: the string on the body, coupled both ways", RED, |r| r.2),
+    ] {
+        let points = rows.iter().map(move |r| (f64::from(r.0), pick(r)));
+        chart
+            .draw_series(LineSeries::new(points, color.stroke_width(2)))
+            .map_err(|e| e.to_string())?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())?;
+    Ok(rows)
+}
+
 /// C4 to C5 (C major) at MIDI `velocity`, a note every 0.3 s held 0.28 s, the last held 1.5 s,
 /// at [`crate::examples::RATE`]: what a listener hears, centred (stereo width 0).
 fn scale(velocity: u8) -> Vec<f64> {
@@ -532,7 +600,13 @@ fn scale(velocity: u8) -> Vec<f64> {
     left.into_iter().map(f64::from).collect()
 }
 
-fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay], sympathy: &Sympathy) -> String {
+fn readme(
+    envelopes: &[Envelope],
+    contacts: &[Contact],
+    decays: &[Decay],
+    sympathy: &Sympathy,
+    guitars: &Guitars,
+) -> String {
     let spread = Settings::default().unison_detune;
     let at = |levels: &[f64], span| -decay_rate(levels, span);
     let mut rows = String::new();
@@ -559,6 +633,8 @@ fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay], sympat
         .collect::<Vec<_>>()
         .join(", ");
     let c7_measured = MEASURED_CONTACT.iter().find(|m| m.0 == 96).map_or(f64::NAN, |m| m.2);
+    let d3 = guitars.iter().find(|r| r.0 == 50).copied().unwrap_or((50, f64::NAN, f64::NAN));
+    let loudest = guitars.iter().copied().fold((0, f64::NAN, f64::NEG_INFINITY), |m, r| if r.2 > m.2 { r } else { m });
     format!(
         "# How the piano compares with real grands\n\n\
          Written by `cargo xtask realism` (`xtask/src/realism.rs`); the model is in docs/physics.md §12, the \
@@ -599,9 +675,17 @@ fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay], sympat
          the amplitude of their difference at each key's pitch (what the pedal adds: the partner strings \
          ringing, and C3's partials giving up the energy they take, docs/physics.md §14), beside C3 alone. \
          The pedal adds most where C3's partials meet other keys' strings: {sympathy_rows}.\n\n\
+         ## The acoustic slide guitar\n\n\
+         ![the two guitars](realism/acoustic.png)\n\n\
+         Each slide note A2–C5 plucked at velocity 80, the slide pressed, measured over 2 s. On the acoustic \
+         guitar the string ends on Christensen and Vistisen's measured body (docs/physics.md §13.5), which it \
+         drives and which drains it. D3 measures {:.1} LUFS on the electric guitar and {:.1} on the acoustic \
+         (the two are voiced alike there). The acoustic's loudest note is {} ({:+.1} LU against its D3), on \
+         the top's resonance, which also drains it soonest. The model has no plate modes above that \
+         resonance, so the notes around it stand out more than on a real guitar.\n\n\
          ## Not shown yet\n\n\
          Each key has its own copy of the soundboard and of its partners, so keys played together do not \
-         ring through one bridge. The slide guitar's acoustic body is not modelled.\n",
+         ring through one bridge.\n",
         hammer_speed(0.6),
         PROMPT.0,
         PROMPT.1,
@@ -613,5 +697,9 @@ fn readme(envelopes: &[Envelope], contacts: &[Contact], decays: &[Decay], sympat
         contact(96),
         b(36),
         b(60),
+        d3.1,
+        d3.2,
+        name_of(loudest.0),
+        loudest.2 - d3.2,
     )
 }
