@@ -124,8 +124,8 @@ const HAMMER_MASSES: [(f64, f64); 5] =
 /// §8.2), and the guideline's shape carries them across the keyboard.
 const HAMMER_SCALE: f64 = 3.0 * 2.97e-3 / (11.5e-3 + (10.2e-3 - 11.5e-3) * (60.0 - 42.0) / (64.0 - 42.0));
 
-/// The whole hammer's mass of MIDI key `key` (kg): [`HAMMER_MASSES`] joined by straight lines,
-/// constant beyond A0 and C8, scaled by [`HAMMER_SCALE`].
+/// The whole hammer's mass of MIDI key `key` (kg): `HAMMER_MASSES` joined by straight lines,
+/// constant beyond A0 and C8, scaled by `HAMMER_SCALE`.
 pub fn hammer_mass(key: u8) -> f64 {
     HAMMER_SCALE * strike_weight(key)
 }
