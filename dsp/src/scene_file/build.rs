@@ -16,9 +16,10 @@ use super::error::SceneError;
 use super::mass_barrier::MassBarrierDescription;
 use super::parse::SceneDescription;
 use super::string_scenes::{HammerStringDescription, SlideStringDescription};
+use crate::body::BodyParams;
 use crate::contact::{ContactSolver, SolverSettings, WithSolver};
-use crate::control::Fixed;
-use crate::scene::{Frame, HammerString, MassBarrier, Scene, SlideString, SlideStringParams};
+use crate::control::{ControlSource, Fixed};
+use crate::scene::{Frame, HammerString, MassBarrier, Scene, SlideControls, SlideString, SlideStringParams};
 use crate::string::{ModalString, StringParams};
 
 /// What to do with a scene once it is built.
@@ -190,10 +191,21 @@ impl<J: SceneJob> WithSolver for Described<'_, SlideStringDescription, J> {
         let run = self.run;
         if d.controls.is_constant() {
             let fixed = Fixed(d.controls.at_time(0.0));
-            run.job.run(SlideString::new(string, &params, solver, fixed), run.samples, segments)
+            run.job.run(on_body(SlideString::new(string, &params, solver, fixed), &d.body), run.samples, segments)
         } else {
             let controls = SlideAutomation::new(d.controls.lanes.clone(), run.fs);
-            run.job.run(SlideString::new(string, &params, solver, controls), run.samples, segments)
+            run.job.run(on_body(SlideString::new(string, &params, solver, controls), &d.body), run.samples, segments)
         }
+    }
+}
+
+/// `scene` with its string's far end on `body`, if one is given.
+fn on_body<S: ContactSolver, C: ControlSource<SlideControls>>(
+    scene: SlideString<S, C>,
+    body: &Option<BodyParams>,
+) -> SlideString<S, C> {
+    match body {
+        Some(body) => scene.with_body(body),
+        None => scene,
     }
 }

@@ -58,7 +58,13 @@
 //! [[automation]]               # piecewise linear, held before the first and after the last point
 //! target = "slide.position"    # any of the six names above
 //! points = [[0.0, 0.2], [1.0, 0.3]]   # [time (s), value], times strictly increasing
+//!
+//! [body]                       # optional: the string's far end on an acoustic body, coupled both
+//! kind = "guitar"              # ways; the output is then what it radiates (no output.kind/position)
 //! ```
+//!
+//! `kind = "guitar"` is Christensen and Vistisen's measured two-mass guitar
+//! ([`BodyParams::guitar`], docs/physics.md §13.5).
 
 use serde::Deserialize;
 
@@ -68,6 +74,7 @@ use super::tables::{
     Common, ContactTable, Head, OutputTable, SolverTable, common, finite, fraction, non_negative, positive, required,
     unity, yes,
 };
+use crate::body::BodyParams;
 use crate::control::Breakpoints;
 use crate::exciter::{FingerParams, HammerParams, SlideParams};
 use crate::preset::{chaigne_askenfelt_c4, piano_note, slide_guitar};
@@ -104,6 +111,8 @@ pub struct SlideStringDescription {
     pub params: SlideStringParams,
     /// Control inputs.
     pub controls: SlideAutomation,
+    /// The body the string's far end rests on, if any (its output is then what the body radiates).
+    pub body: Option<BodyParams>,
 }
 
 impl SlideStringDescription {
@@ -353,6 +362,23 @@ pub(super) struct SlideStringFile {
     automation: Vec<AutomationEntry>,
     #[serde(default)]
     output: StringOutputTable,
+    body: Option<BodyTable>,
+}
+
+/// `[body]` of a slide-string scene.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BodyTable {
+    kind: String,
+}
+
+impl BodyTable {
+    fn params(&self) -> Result<BodyParams, SceneError> {
+        match self.kind.as_str() {
+            "guitar" => Ok(BodyParams::guitar()),
+            other => Err(SceneError::invalid("body.kind", format!("unknown body \"{other}\" (one of: guitar)"))),
+        }
+    }
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -475,8 +501,15 @@ impl SlideStringFile {
         }
         let controls = self.controls(string.length, common.sample_rate)?;
         let pickup = self.output.pickup(OutputKind::Displacement)?;
+        let body = self.body.as_ref().map(BodyTable::params).transpose()?;
+        if body.is_some() && (self.output.kind.is_some() || self.output.position.is_some()) {
+            return Err(SceneError::invalid(
+                "output",
+                String::from("a string on a body is heard through the body: leave out output.kind and output.position"),
+            ));
+        }
         let params = SlideStringParams { string, slide, left, right, block: block as usize, pickup };
-        Ok(SlideStringDescription { common, params, controls })
+        Ok(SlideStringDescription { common, params, controls, body })
     }
 
     fn controls(&self, length: f64, sample_rate: u32) -> Result<SlideAutomation, SceneError> {

@@ -101,7 +101,7 @@ fn slide(description: &SceneDescription) -> Result<CaseScene, ReportError> {
     // The error is measured on the string's displacement at the pickup (the shipped scene
     // listens to its velocity, as a magnetic pickup does).
     let params = SlideStringParams { pickup: Pickup { kind: OutputKind::Displacement, ..d.params.pickup }, ..d.params };
-    let excerpt = SlideStringDescription { common: d.common, params, controls: controls.clone() };
+    let excerpt = SlideStringDescription { common: d.common, params, controls: controls.clone(), body: None };
     Ok(CaseScene {
         setup: Setup::Slide(params, controls),
         law: d.common.law,

@@ -124,6 +124,7 @@ impl CaseScene {
                 common,
                 params: *params,
                 controls: controls.clone(),
+                body: None,
             }),
         }
     }

@@ -528,7 +528,7 @@ fn slide_string(id: String, law: PowerLaw, fs: u32, segments: usize, d: SlideDra
         law,
         output: OutputOptions { normalize: true, gain: 1.0 },
     };
-    let v_ref = SlideStringDescription { common, params, controls: controls.clone() }.default_v_ref();
+    let v_ref = SlideStringDescription { common, params, controls: controls.clone(), body: None }.default_v_ref();
     let about = format!(
         "{}, {}, slide {:.3e} kg, k_H {:.3e} N/m, r_H {:.3e} kg/s, x_o {:.3} L, fingers {:.3}/{:.3} N, N_b {}, hand {:.3e} m/s to -{:.3e} m",
         d.string.as_ref().map_or("the preset's string".to_owned(), string_about),
