@@ -307,12 +307,6 @@ fn plot(path: &Path, rows: &[KeyLoudness]) -> Result<(), String> {
             .label(format!("velocity {velocity}, before voicing"))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], light.stroke_width(1)));
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::LowerLeft)
-        .draw()
-        .map_err(|e| e.to_string())?;
+    crate::report::plot::legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
     root.present().map_err(|e| e.to_string())
 }

@@ -257,13 +257,7 @@ fn envelopes(path: &Path) -> Result<Vec<Envelope>, String> {
             .label(label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(width)));
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(|e| e.to_string())?;
+    crate::report::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     root.present().map_err(|e| e.to_string())?;
     Ok(rows)
 }
@@ -322,13 +316,7 @@ fn contacts(path: &Path) -> Result<Vec<Contact>, String> {
         .map_err(|e| e.to_string())?
         .label("measured on grands (docs/physics.md §8.4)")
         .legend(|(x, y)| Circle::new((x + 10, y), 4, GREEN.filled()));
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(|e| e.to_string())?;
+    crate::report::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     root.present().map_err(|e| e.to_string())?;
     Ok(rows)
 }
@@ -373,13 +361,7 @@ fn inharmonicity(path: &Path) -> Result<(), String> {
             .label(format!("measured: {source}"))
             .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(|e| e.to_string())?;
+    crate::report::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     root.present().map_err(|e| e.to_string())
 }
 
@@ -434,13 +416,7 @@ fn decays(path: &Path) -> Result<Vec<Decay>, String> {
             .label(label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(|e| e.to_string())?;
+    crate::report::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     root.present().map_err(|e| e.to_string())?;
     Ok(rows)
 }
@@ -492,13 +468,7 @@ fn sympathetic(path: &Path) -> Result<Sympathy, String> {
         .map_err(|e| e.to_string())?
         .label("C3 with the pedal up")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE.stroke_width(2)));
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::LowerLeft)
-        .draw()
-        .map_err(|e| e.to_string())?;
+    crate::report::plot::legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
     root.present().map_err(|e| e.to_string())?;
     Ok(rows)
 }
@@ -559,13 +529,7 @@ fn acoustic(path: &Path) -> Result<Guitars, String> {
             .label(label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(|e| e.to_string())?;
+    crate::report::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     root.present().map_err(|e| e.to_string())?;
     Ok(rows)
 }

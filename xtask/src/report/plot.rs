@@ -320,3 +320,18 @@ pub fn trajectories(path: &Path, study: &Fig4Study) -> Result<(), ReportError> {
         Ok(())
     })
 }
+
+/// Draw `chart`'s series labels at `position` in a nearly opaque white box with a black border:
+/// the legend of the realism and loudness pictures.
+pub fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> Result<(), String> {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .position(position)
+        .draw()
+        .map_err(|e| e.to_string())
+}
