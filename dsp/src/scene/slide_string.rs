@@ -859,6 +859,7 @@ impl SlideCore {
     /// to the current positions and touching set.
     fn plan_block(&mut self) {
         let (start, end) = (self.start.positions(), self.target.positions());
+        let bridge = self.body_on();
         let touching = [true, self.start.left_force != 0.0 || self.target.left_force != 0.0, {
             self.start.right_force != 0.0 || self.target.right_force != 0.0
         }];
@@ -900,7 +901,7 @@ impl SlideCore {
                 fresh[e] = Some(end[c]);
             }
         }
-        let plan = Plan::new(touching, moving, self.body.as_ref().is_some_and(|b| b.on));
+        let plan = Plan::new(touching, moving, bridge);
         self.plan = plan;
         if plan == was && fresh == [None; SLOTS] {
             if swapped {
@@ -983,13 +984,14 @@ impl SlideCore {
         let exchange = self.sho.advance(z_sho, force, &controls.hand);
         // The controls' work `Δt(P_H + Σ P_φ) − ½F J`, `Δt P_φ = F_φe s_φ/2` (docs/physics.md §7.5.3).
         self.control_work += -0.5 * force * jump + exchange.supplied + 0.5 * (f[0] * s_f[0] + f[1] * s_f[1]);
-        let mut output = self.kind.sample(self.out_now, out_next, self.dt);
-        if self.glide.0 < self.glide.1 {
-            output = self.glide_output(output);
-        }
-        if bridge.is_some() {
-            output = heard;
-        }
+        let output = if bridge.is_some() {
+            heard
+        } else if self.glide.0 < self.glide.1 {
+            let output = self.kind.sample(self.out_now, out_next, self.dt);
+            self.glide_output(output)
+        } else {
+            self.kind.sample(self.out_now, out_next, self.dt)
+        };
         let mut frame = Frame {
             output,
             displacement: w_now,
