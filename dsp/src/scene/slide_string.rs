@@ -458,10 +458,11 @@ impl BodyCoupling {
         }
     }
 
-    /// Bring the body to rest (the string's end with it).
+    /// Bring the body to rest, with the string (whose projection on the lift is then 0).
     fn rest(&mut self) {
         self.bank.reset();
         self.b = (0.0, 0.0);
+        self.lifted = (0.0, 0.0);
         self.heard = (0.0, 0.0);
     }
 
@@ -694,7 +695,6 @@ impl SlideCore {
         self.string.reset();
         if let Some(body) = &mut self.body {
             body.rest();
-            body.lifted = (0.0, 0.0);
         }
         self.sho.rest(controls.hand_height);
         self.start = controls;
@@ -984,13 +984,12 @@ impl SlideCore {
         let exchange = self.sho.advance(z_sho, force, &controls.hand);
         // The controls' work `Δt(P_H + Σ P_φ) − ½F J`, `Δt P_φ = F_φe s_φ/2` (docs/physics.md §7.5.3).
         self.control_work += -0.5 * force * jump + exchange.supplied + 0.5 * (f[0] * s_f[0] + f[1] * s_f[1]);
-        let output = if bridge.is_some() {
-            heard
-        } else if self.glide.0 < self.glide.1 {
-            let output = self.kind.sample(self.out_now, out_next, self.dt);
-            self.glide_output(output)
-        } else {
-            self.kind.sample(self.out_now, out_next, self.dt)
+        let output = match bridge {
+            Some(_) => heard,
+            None => {
+                let output = self.kind.sample(self.out_now, out_next, self.dt);
+                if self.glide.0 < self.glide.1 { self.glide_output(output) } else { output }
+            }
         };
         let mut frame = Frame {
             output,

@@ -105,21 +105,23 @@ impl ModalBank {
         if self.modes == self.capacity() {
             return false;
         }
-        let c = Coefficients::new(p, q, 1.0 / self.sample_rate, mass);
-        self.coef_a.push(c.a);
-        self.coef_b.push(c.b);
-        self.coef_c.push(c.c);
-        self.stiffness.push(c.stiffness);
-        self.resistance.push(c.resistance);
-        self.own_p.push(p);
-        self.own_q.push(q);
-        self.own_stiffness.push(c.stiffness);
-        self.mass.push(mass);
-        self.u_prev.push(0.0);
-        self.u_now.push(0.0);
-        self.history.push(0.0);
+        let m = self.modes;
+        for v in self.arrays_mut() {
+            v.push(0.0);
+        }
+        self.set_mode(m, p, q, mass);
         self.modes += 1;
         true
+    }
+
+    /// Make entry `j` of every array the mode of recursion `(P, Q)` and modal mass `mass` (kg),
+    /// at rest.
+    fn set_mode(&mut self, j: usize, p: f64, q: f64, mass: f64) {
+        let c = Coefficients::new(p, q, 1.0 / self.sample_rate, mass);
+        (self.coef_a[j], self.coef_b[j], self.coef_c[j]) = (c.a, c.b, c.c);
+        (self.stiffness[j], self.resistance[j], self.own_stiffness[j]) = (c.stiffness, c.resistance, c.stiffness);
+        (self.own_p[j], self.own_q[j], self.mass[j]) = (p, q, mass);
+        (self.u_prev[j], self.u_now[j], self.history[j]) = (0.0, 0.0, 0.0);
     }
 
     /// Drop the padding so that modes can be appended.
@@ -168,19 +170,13 @@ impl ModalBank {
         let at = at.min(self.modes);
         let wanted = modes.end.min(string.modes()).saturating_sub(modes.start);
         let count = wanted.min(self.capacity() - self.modes);
-        let (m, dt) = (self.modes, 1.0 / self.sample_rate);
+        let m = self.modes;
         for v in self.arrays_mut() {
             v.resize(m + count, 0.0);
             v.copy_within(at..m, at + count);
         }
         for (k, i) in (modes.start..modes.start + count).enumerate() {
-            let (p, q, mass) = (string.own_p[i], string.own_q[i], string.modal_mass);
-            let c = Coefficients::new(p, q, dt, mass);
-            let j = at + k;
-            (self.coef_a[j], self.coef_b[j], self.coef_c[j]) = (c.a, c.b, c.c);
-            (self.stiffness[j], self.resistance[j], self.own_stiffness[j]) = (c.stiffness, c.resistance, c.stiffness);
-            (self.own_p[j], self.own_q[j], self.mass[j]) = (p, q, mass);
-            (self.u_prev[j], self.u_now[j], self.history[j]) = (0.0, 0.0, 0.0);
+            self.set_mode(at + k, string.own_p[i], string.own_q[i], string.modal_mass);
         }
         self.modes += count;
         self.history_ready = false;
