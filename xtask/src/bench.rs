@@ -72,6 +72,32 @@ pub struct BenchArgs {
     /// Also write docs/report/bench.md and the table in README.md (needs every case).
     #[arg(long)]
     pub write: bool,
+    /// Run the kernels on this vector unit or a narrower one, as a CPU without the wider units
+    /// would (`avx` is what an AVX2 machine runs); the widest this CPU has by default.
+    #[arg(long, value_enum)]
+    pub isa: Option<IsaArg>,
+}
+
+/// A vector unit named on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum IsaArg {
+    /// 512-bit registers.
+    Avx512,
+    /// 256-bit registers (AVX and AVX2 machines).
+    Avx,
+    /// No vector intrinsics.
+    Portable,
+}
+
+impl IsaArg {
+    fn isa(self) -> qsa_dsp::string::Isa {
+        use qsa_dsp::string::Isa;
+        match self {
+            IsaArg::Avx512 => Isa::Avx512,
+            IsaArg::Avx => Isa::Avx,
+            IsaArg::Portable => Isa::Portable,
+        }
+    }
 }
 
 /// One line of the bench report.
@@ -501,8 +527,11 @@ fn string_modes(params: &qsa_dsp::string::StringParams, fs: u32) -> usize {
 
 /// Run every case, printing one JSON line each.
 pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, BenchError> {
-    if args.write && !args.filter.is_empty() {
-        return Err(BenchError::Write("--write documents every case; drop --filter".into()));
+    if args.write && (!args.filter.is_empty() || args.isa.is_some()) {
+        return Err(BenchError::Write("--write documents every case on this CPU; drop --filter and --isa".into()));
+    }
+    if let Some(isa) = args.isa {
+        qsa_dsp::string::Isa::cap(isa.isa());
     }
     let hammer = load(&args.scenes, "fig5-hammer-c4.toml")?;
     let slide = load(&args.scenes, "slide-phrase.toml")?;

@@ -15,6 +15,8 @@
 
 #![allow(unsafe_code)]
 
+use std::sync::atomic::{AtomicU8, Ordering};
+
 /// Modes per chunk; per-mode arrays are padded to a multiple of it.
 pub const LANES: usize = 8;
 
@@ -95,19 +97,42 @@ pub enum Isa {
     Portable,
 }
 
+/// The widest unit [`Isa::detect`] may return, as [`Isa::rank`] ([`Isa::cap`]).
+static WIDEST: AtomicU8 = AtomicU8::new(u8::MAX);
+
 impl Isa {
-    /// The widest unit this CPU has.
+    /// The widest unit this CPU has, within [`Isa::cap`].
     pub fn detect() -> Isa {
+        let widest = WIDEST.load(Ordering::Relaxed);
         #[cfg(target_arch = "x86_64")]
         {
-            if std::arch::is_x86_feature_detected!("avx512f") {
+            if Isa::Avx512.rank() <= widest && std::arch::is_x86_feature_detected!("avx512f") {
                 return Isa::Avx512;
             }
-            if std::arch::is_x86_feature_detected!("avx") {
+            if Isa::Avx.rank() <= widest && std::arch::is_x86_feature_detected!("avx") {
                 return Isa::Avx;
             }
         }
+        let _ = widest;
         Isa::Portable
+    }
+
+    /// From now on, [`Isa::detect`] returns `widest` or a narrower unit: strings and bodies built
+    /// afterwards run as on a CPU without the wider ones (the bench measures an AVX2 machine's
+    /// speed on an AVX-512 one this way; the results are the same bits on every unit).
+    pub fn cap(widest: Isa) {
+        WIDEST.store(widest.rank(), Ordering::Relaxed);
+    }
+
+    /// Order by width: portable 0, AVX 1, AVX-512 2.
+    fn rank(self) -> u8 {
+        match self {
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => 2,
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx => 1,
+            Isa::Portable => 0,
+        }
     }
 
     /// Every unit this CPU can run, widest first (for tests that compare them).
