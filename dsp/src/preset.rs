@@ -19,9 +19,11 @@
 //!   (extrapolated, clamped to [1e-5, 0.05]); `EI = B T L²/π²`;
 //! - tension `T = 670 N` for every key, and `ρA = T/(2L f_flex)²` with `f_flex = f0/√(1 + B)`, so
 //!   that the first partial `f_flex √(1 + B)` is exactly `f0`, as a tuner would set it;
-//! - damping, per-mode law `σ_i = b1 + b3 ω0_i²`: b1 log-linear through 0.25, 1.1, 9.17 s⁻¹
-//!   (the C2/C4/C7 values of the second Chaigne–Askenfelt variant), b3 log-linear through
-//!   6.25e-9, 6.25e-9, 2.6e-10 s (Part I);
+//! - damping, per-mode law `σ_i = b1 + b3 ω0_i²`: the string's own losses, Chaigne and
+//!   Askenfelt's Part I values, b1 = 0.5 s⁻¹ on every key and b3 log-linear through 6.25e-9,
+//!   6.25e-9, 2.6e-10 s at C2, C4, C7. What a string loses into the soundboard is not in them:
+//!   the instrument's strings end on a moving bridge that drains them (docs/physics.md §12), and
+//!   with it the fundamentals of C2–C4 ring as long as a measured grand's (§12.7);
 //! - the whole hammer's mass ([`hammer_mass`]) piecewise linear through a concert grand's strike
 //!   weights, from 12.4 g at A0 to 5.8 g at C8, shared among the key's strings; felt stiffness κ (one string's
 //!   share) log-linear through 4e8, 4.5e9, 1e12 N/m^α, clamped to [1e8, 1e13]; exponent α linear
@@ -178,10 +180,7 @@ pub fn piano_note(key: u8) -> PianoNote {
             tension,
             linear_density,
             bending_stiffness: b * tension * length * length / std::f64::consts::PI.powi(2),
-            damping: Damping::PerMode {
-                b1: log_through(k, [0.25, 1.1, 9.17]),
-                b3: log_through(k, [6.25e-9, 6.25e-9, 2.6e-10]),
-            },
+            damping: Damping::PerMode { b1: 0.5, b3: log_through(k, [6.25e-9, 6.25e-9, 2.6e-10]) },
         },
         hammer_mass: hammer_mass(key.min(127)) / unison_strings(key.min(127)) as f64,
         kappa: log_through(k, [4e8, 4.5e9, 1e12]).clamp(1e8, 1e13),

@@ -22,7 +22,7 @@
 //! | `hard` | Hardness | 0.1..=10× | 1× | [`Settings::hardness`] |
 //! | `hmass` | Hammer mass | 0.25..=4× | 1× | [`Settings::hammer_mass`] |
 //! | `strike` | Strike position | 0.25..=2.5× | 1× | [`Settings::strike_position`] |
-//! | `damp` | String damping | 0.1..=10× | 1× | [`Settings::damping`] |
+//! | `damp` | String damping | 0.1..=20× | 1× | [`Settings::damping`] |
 //! | `bright` | Brightness | 0..=4× | 1× | [`Settings::brightness`] (inharmonicity) |
 //! | `damper` | Damper | 1..=500 1/s | 60 1/s | [`Settings::damper_rate`] |
 //! | `detune` | Unison detune | 0..=20 ct | 2.5 ct | [`Settings::unison_detune`] (spread of each unison, cents) |

@@ -375,19 +375,19 @@ fn plain_playing_stays_well_below_the_click_threshold() {
     assert!(v.ratio < THRESHOLD / 3.0, "{:.1} dB at {:.4} s", v.db(), v.at);
 }
 
-/// The threshold from above: a step of 15 % of the local RMS (−16.5 dB) added to a sustained
+/// The threshold from above: a step of 20 % of the local RMS (−14.0 dB) added to a sustained
 /// piano note is found, where it is.
 #[test]
-fn a_step_of_fifteen_percent_of_the_signal_is_found() {
+fn a_step_of_twenty_percent_of_the_signal_is_found() {
     let acts = vec![(0, Act::Midi(Event::NoteOn { channel: 0, key: 60, velocity: 0.6 }))];
     let (mut out, attacks) = render(&acts, 1.0);
     let at = 24_000;
     let rms = (out[at - 2400..at].iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / 2400.0).sqrt();
     for x in &mut out[at..] {
-        *x += (0.15 * rms) as f32;
+        *x += (0.2 * rms) as f32;
     }
     let v = worst_click(&out, &attacks);
-    println!("step of 15 % of {rms:.2e} at 0.5 s: {:.1} dB at {:.4} s", v.db(), v.at);
+    println!("step of 20 % of {rms:.2e} at 0.5 s: {:.1} dB at {:.4} s", v.db(), v.at);
     assert!(v.ratio > THRESHOLD, "{:.1} dB", v.db());
     assert!((v.at - 0.5).abs() < 0.002, "found at {} s", v.at);
 }

@@ -110,8 +110,9 @@ fn a_fortissimo_ten_note_chord_stays_below_full_scale_at_the_default_gain() {
     }
 }
 
-/// With the gain at +12 dB, 32 voices struck fortissimo reach far beyond full scale; the safety
-/// limiter holds every sample at its ceiling (−0.1 dBFS), and switched off it lets them through.
+/// With the gain at its top, +12 dB, 32 voices struck fortissimo reach well beyond full scale
+/// (+5.6 dBFS); the safety limiter holds every sample at its ceiling (−0.1 dBFS), and switched
+/// off it lets them through.
 #[test]
 fn the_safety_limiter_holds_thirty_two_fortissimo_voices_below_full_scale() {
     let keys: Vec<u8> = (36..68).collect();
@@ -134,7 +135,7 @@ fn the_safety_limiter_holds_thirty_two_fortissimo_voices_below_full_scale() {
     };
     let (limited, open) = (peak(true), peak(false));
     println!("32 voices at +12 dB: peak {open:.2} without the limiter, {limited:.4} with it");
-    assert!(open > 2.0, "the case must overload without the limiter: {open}");
+    assert!(open > 1.5, "the case must overload without the limiter: {open}");
     assert!(limited <= CEILING + 1e-7, "limited peak {limited}");
     assert!(limited > 0.9 * CEILING, "the limiter holds the peak at its ceiling, not far below: {limited}");
 }

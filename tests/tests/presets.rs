@@ -154,7 +154,7 @@ fn every_preset_renders_a_phrase_finite_and_below_12_dbfs() {
 
 /// The piano presets differ as their descriptions say, on a held C4: bright above dark and steel
 /// above cotton in spectral centroid (first 0.3 s), felt below the Fig. 5 hammer; the concert
-/// grand rings longer than the upright, and the paper's soft-hammer example (damping ×7.3) dies
+/// grand rings longer than the upright, and the paper's soft-hammer example (damping ×16, η0 = 8 1/s at C4) dies
 /// far sooner than the Fig. 5 string.
 #[test]
 fn piano_presets_differ_in_brightness_and_decay_as_described() {

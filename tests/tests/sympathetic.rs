@@ -8,9 +8,9 @@ use xtask::realism::{FS, held_with_pedal, level_near as level};
 /// C3 held with the pedal down against the same C3 with the pedal up: the difference is what the
 /// other keys' free strings add (and what C3's own partials give up to them). Over 1–3 s it is at
 /// least 15 dB stronger at the pitch of each of C4, G4, C5 and E5 (C3's 2nd to 5th partials) than
-/// at the pitch of its upper neighbour, whose partials C3 does not meet (measured 35.8, 41.7, 37.8
-/// and 20.3 dB); and each of those strings is heard: its part is at most 30 dB below everything
-/// the piano sounds at that pitch (measured 7.3, 11.8, 7.4 and −7.2 dB: the partner and the
+/// at the pitch of its upper neighbour, whose partials C3 does not meet (measured 33.7, 43.0, 43.5
+/// and 17.2 dB); and each of those strings is heard: its part is at most 30 dB below everything
+/// the piano sounds at that pitch (measured −0.7, 5.7, 2.2 and −8.8 dB: the partner and the
 /// partial it shares beat).
 #[test]
 fn c3_sets_the_strings_of_its_partials_ringing() {
@@ -30,8 +30,8 @@ fn c3_sets_the_strings_of_its_partials_ringing() {
 /// The pedal pressed 0.25 s after C3 is struck (the usual legato pedalling) still sets the
 /// strings of its partials ringing: against the pedal up, over 1–3 s, the difference is at least
 /// 15 dB stronger at the pitch of each of C4, G4 and C5 than at its upper neighbour's (measured
-/// 37.2, 43.6 and 38.1 dB), and within 6 dB of what the pedal down from the strike gives them
-/// (measured +1.1, −1.1 and −0.1 dB): the partials have lost little by then, and the partners'
+/// 34.7, 43.1 and 42.4 dB), and within 6 dB of what the pedal down from the strike gives them
+/// (measured +0.2, −1.1 and +0.9 dB): the partials have lost little by then, and the partners'
 /// dampers lift within the damper's time constant (10 ms).
 #[test]
 fn the_pedal_pressed_after_the_strike_sets_the_partners_ringing() {

@@ -31,7 +31,7 @@ pub const SAMPLE_RATE: f64 = 48_000.0;
 pub const VELOCITIES: [u8; 3] = [40, 80, 120];
 
 /// Loudness every key has after voicing at MIDI velocity 80 (LUFS)...
-pub const TARGET_LUFS_AT_80: f64 = -41.5;
+pub const TARGET_LUFS_AT_80: f64 = -46.0;
 
 /// ...and its rise per step of MIDI velocity (LU): the middle register's own dynamic range (C4
 /// rises 9 LU from velocity 40 to 80 and 8.5 LU from 80 to 120), at a level where the loudest

@@ -135,6 +135,29 @@ pub const MEASURED_B: [(u8, f64, f64, &str); 6] = [
     (108, 2.6e-2, 3.1e-2, "Rigaud et al. 2013"),
 ];
 
+/// Published decay times of a grand's fundamental: `(key, T60 with the pedal up, T60 with the
+/// pedal down)` (s). Lehtonen, Penttinen, Rauhala & Välimäki, JASA 122(3), 2007, Table III (one
+/// grand; the table's D5 and C6 rows were not read).
+pub const MEASURED_T60: [(u8, f64, f64); 3] = [(36, 9.3, 14.8), (48, 10.0, 14.3), (60, 10.3, 17.0)];
+
+/// Decay times listeners do not tell from a reference, as fractions of it: 75 % to 140 %
+/// (Tolonen & Järveläinen, "Perceptual study of decay parameters in plucked string synthesis",
+/// AES 109th Convention, 2000, preprint 5205: a time constant 25 % shorter or 40 % longer was not
+/// heard; the tolerance Lehtonen et al. judge the pedal's effect by).
+pub const T60_TOLERANCE: (f64, f64) = (0.75, 1.40);
+
+/// The span over which a fundamental's whole decay is fitted (s).
+pub const WHOLE: (f64, f64) = (0.05, 6.0);
+
+/// T60 of `key`'s fundamental (s): struck at velocity 0.7 and held, the pedal down from the strike
+/// or never ([`held_with_pedal`]), 60 dB over the least-squares decay rate of its level over
+/// [`WHOLE`] (one rate for both stages, as a T60 read off a recorded tone).
+pub fn fundamental_t60(key: u8, pedal: bool) -> f64 {
+    let out = held_with_pedal(key, pedal.then_some(0.0), WHOLE.1 + 0.5);
+    let levels = partial_levels(&out, piano_note(key).string.partial(1));
+    -60.0 / decay_rate(&levels, WHOLE)
+}
+
 /// Published contact durations: `(key, speed (m/s), low (ms), high (ms), source)`.
 pub const MEASURED_CONTACT: [(u8, f64, f64, f64, &str); 3] = [
     (24, MEZZO_FORTE, 4.0, 5.0, "Askenfelt & Jansson 1990: 4–5 ms at C1"),
@@ -204,6 +227,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let contacts = contacts(&dir.join("contact.png"))?;
     inharmonicity(&dir.join("inharmonicity.png"))?;
     let decays = decays(&dir.join("decay.png"))?;
+    let t60 = MEASURED_T60.map(|m| (m, fundamental_t60(m.0, false), fundamental_t60(m.0, true)));
     let sympathy = sympathetic(&dir.join("sympathetic.png"))?;
     let guitars = acoustic(&dir.join("acoustic.png"))?;
     let scales = [("pp", 40u8), ("mf", 80), ("ff", 120)].map(|(name, velocity)| (name, scale(velocity)));
@@ -216,7 +240,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
         crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scaled))
             .map_err(|e| e.to_string())?;
     }
-    let text = readme(&envelopes, &contacts, &decays, &sympathy, &guitars);
+    let text = readme(&envelopes, &contacts, &decays, &t60, &sympathy, &guitars);
     let path = args.root.join("docs/report/realism.md");
     std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     writeln!(out, "{}", serde_json::json!({ "written": path.display().to_string() })).map_err(|e| e.to_string())
@@ -365,21 +389,22 @@ fn inharmonicity(path: &Path) -> Result<(), String> {
     root.present().map_err(|e| e.to_string())
 }
 
-/// Decay rates (dB/s) per key: `(key, [(prompt, aftersound); 2])` for partials 1 and 2.
-type Decay = (u8, [(f64, f64); 2]);
+/// Decay rates (dB/s) per key: `(key, [(prompt, aftersound); 2], whole)` for partials 1 and 2,
+/// and partial 1's whole decay over [`WHOLE`].
+type Decay = (u8, [(f64, f64); 2], f64);
 
 fn decays(path: &Path) -> Result<Vec<Decay>, String> {
     let spread = Settings::default().unison_detune;
     let rows: Vec<Decay> = (24..=96u8)
         .step_by(3)
         .map(|k| {
-            let out = held_note(k, 0.6, spread, 5.0);
+            let out = held_note(k, 0.6, spread, WHOLE.1 + 0.5);
             let note = piano_note(k).string;
             let rates = [1, 2].map(|p| {
                 let levels = partial_levels(&out, note.partial(p));
                 (-decay_rate(&levels, PROMPT), -decay_rate(&levels, AFTERSOUND))
             });
-            (k, rates)
+            (k, rates, -decay_rate(&partial_levels(&out, note.partial(1)), WHOLE))
         })
         .collect();
     let top = rows.iter().flat_map(|r| r.1.iter().flat_map(|p| [p.0, p.1])).fold(1.0, f64::max);
@@ -416,6 +441,17 @@ fn decays(path: &Path) -> Result<Vec<Decay>, String> {
             .label(label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
     }
+    let whole: Vec<(f64, f64)> = rows.iter().map(|r| (f64::from(r.0), r.2)).filter(|&(_, v)| v > 0.5).collect();
+    chart
+        .draw_series(LineSeries::new(whole, BLACK.stroke_width(2)))
+        .map_err(|e| e.to_string())?
+        .label(format!("partial 1, whole decay ({}–{} s)", WHOLE.0, WHOLE.1))
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
+    chart
+        .draw_series(MEASURED_T60.iter().map(|m| Circle::new((f64::from(m.0), 60.0 / m.1), 5, BLACK.filled())))
+        .map_err(|e| e.to_string())?
+        .label("measured: a grand's fundamental, 60 dB / T60 (Lehtonen et al. 2007)")
+        .legend(|(x, y)| Circle::new((x + 10, y), 4, BLACK.filled()));
     crate::report::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     root.present().map_err(|e| e.to_string())?;
     Ok(rows)
@@ -564,10 +600,14 @@ fn scale(velocity: u8) -> Vec<f64> {
     left.into_iter().map(f64::from).collect()
 }
 
+/// A published T60 row beside the model's: `((key, up, down), model up, model down)` (s).
+type T60Row = ((u8, f64, f64), f64, f64);
+
 fn readme(
     envelopes: &[Envelope],
     contacts: &[Contact],
     decays: &[Decay],
+    t60: &[T60Row],
     sympathy: &Sympathy,
     guitars: &Guitars,
 ) -> String {
@@ -583,6 +623,18 @@ fn readme(
             at(levels, PROMPT) / at(levels, AFTERSOUND)
         );
     }
+    let t60_rows: String = t60
+        .iter()
+        .map(|&((key, up, down), model_up, model_down)| {
+            format!(
+                "| {} | {up:.1} | {model_up:.1} | {:.0} % | {down:.1} | {model_down:.1} | {:.2} | {:.2} |\n",
+                name_of(key),
+                100.0 * model_up / up,
+                down / up,
+                model_down / model_up
+            )
+        })
+        .collect();
     let contact = |key: u8| contacts.iter().find(|c| c.0 == key).map_or(f64::NAN, |c| c.1);
     let crossover = contacts.iter().find(|c| c.1 * 1e-3 * key_frequency(c.0) >= 1.0).map_or(0, |c| c.0);
     let two_stage = decays.iter().filter(|d| d.1[1].0 >= 2.0 * d.1[1].1).count();
@@ -614,9 +666,18 @@ fn readme(
          | partial | unison | prompt sound (dB/s) | aftersound (dB/s) | ratio |\n|---|---|---|---|---|\n{rows}\n\
          ## Decay rates against key\n\n\
          ![decay rates](realism/decay.png)\n\n\
-         Every third key from C1 to C7: the second partial's prompt sound decays at least twice as fast as its \
-         aftersound on {two_stage} of {} keys. Per-key decay measurements of a grand were found only for C2–C4, \
-         so this picture has no published points yet.\n\n\
+         Every third key from C1 to C7, struck at velocity 0.6 and held: the second partial's prompt sound decays \
+         at least twice as fast as its aftersound on {two_stage} of {} keys. The black line is the fundamental's \
+         whole decay, one least-squares rate over {}–{} s, as a T60 is read off a recorded tone; the dots are a \
+         grand's measured fundamentals (Lehtonen et al., JASA 122(3), 2007, Table III; their D5 and C6 rows were \
+         not read). Struck at velocity 0.7 and held, with the pedal up and with it down from the strike:\n\n\
+         | key | T60 measured, pedal up (s) | model (s) | model / measured | T60 measured, pedal down (s) | model (s) | pedal's lengthening, measured | model |\n\
+         |---|---|---|---|---|---|---|---|\n{t60_rows}\n\
+         With the pedal up every model T60 lies within 75–140 % of the measured one, the range in which \
+         listeners do not tell decay times apart (Tolonen & Järveläinen, AES 109th Convention, 2000). The \
+         pedal's lengthening (the last two columns) is not the measured one. A likely cause: each key's partners ring as in-phase unisons, \
+         the motion the bridge drains fastest, with no aftersound of their own in which the energy they take \
+         from the struck strings could linger (docs/physics.md §12.7, §14).\n\n\
          ## Contact duration against key\n\n\
          ![contact duration](realism/contact.png)\n\n\
          The hammer's first contact with its strings (±21 µs), at 2.5 m/s and 5 m/s. At mezzo-forte it lasts \
@@ -656,6 +717,8 @@ fn readme(
         AFTERSOUND.0,
         AFTERSOUND.1,
         decays.len(),
+        WHOLE.0,
+        WHOLE.1,
         contact(24),
         contact(60),
         contact(96),

@@ -128,7 +128,7 @@ pub const MAX_VOICES: usize = 128;
 pub const PARTNER_SEEKS: usize = 8;
 
 /// Output scale of the piano (1/N): bridge force to full scale, before each key's voicing
-/// ([`voicing_gain`]), which sets the loudness (−41.5 LUFS for a key struck alone at velocity 80).
+/// ([`voicing_gain`]), which sets the loudness (−46.0 LUFS for a key struck alone at velocity 80).
 pub const OUTPUT_SCALE: f64 = 0.016;
 
 /// Output scale of the slide guitar (s/m): string velocity at the pickup to full scale. The

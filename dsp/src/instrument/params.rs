@@ -260,7 +260,7 @@ pub const PARAMETERS: [ParamSpec; 31] = [
         id: "damp",
         name: "String damping",
         group: Group::Piano,
-        kind: ratio(0.1, 10.0, Scale::Skewed(-1.5)),
+        kind: ratio(0.1, 20.0, Scale::Skewed(-1.5)),
         maps_to: "[`Settings::damping`]",
         get: |v| v.damping,
         put: |v, x| v.damping = x,

@@ -70,7 +70,7 @@ pub struct Settings {
     /// Striking position relative to the per-note value, 0.25..=2.5 (the result is kept in
     /// 0.02..=0.5 of the length).
     pub strike_position: f64,
-    /// String damping (b1 and b3 of the per-mode law) relative to the per-note value, 0.1..=10.
+    /// String damping (b1 and b3 of the per-mode law) relative to the per-note value, 0.1..=20.
     pub damping: f64,
     /// Inharmonicity B relative to the per-note value, 0..=4 (0 is a flexible string).
     pub brightness: f64,
@@ -182,7 +182,7 @@ impl Settings {
             hardness: clamp(self.hardness, 0.1, 10.0, d.hardness),
             hammer_mass: clamp(self.hammer_mass, 0.25, 4.0, d.hammer_mass),
             strike_position: clamp(self.strike_position, 0.25, 2.5, d.strike_position),
-            damping: clamp(self.damping, 0.1, 10.0, d.damping),
+            damping: clamp(self.damping, 0.1, 20.0, d.damping),
             brightness: clamp(self.brightness, 0.0, 4.0, d.brightness),
             unison_detune: clamp(self.unison_detune, 0.0, 20.0, d.unison_detune),
             damper_rate: clamp(self.damper_rate, 1.0, 500.0, d.damper_rate),
