@@ -325,3 +325,32 @@ mod x86 {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cap makes `detect` return that unit or a narrower one the CPU has, and lifting it (the
+    /// widest cap) gives the widest again; `available` is not capped.
+    #[test]
+    fn a_cap_limits_detect_to_that_unit_or_narrower() {
+        let widest = Isa::detect();
+        let all = Isa::available();
+        Isa::cap(Isa::Portable);
+        let capped = Isa::detect();
+        #[cfg(target_arch = "x86_64")]
+        Isa::cap(Isa::Avx512);
+        #[cfg(not(target_arch = "x86_64"))]
+        Isa::cap(Isa::Portable);
+        assert_eq!(capped, Isa::Portable);
+        assert_eq!(Isa::detect(), widest);
+        assert_eq!(Isa::available(), all);
+        #[cfg(target_arch = "x86_64")]
+        if all.contains(&Isa::Avx) {
+            Isa::cap(Isa::Avx);
+            let avx = Isa::detect();
+            Isa::cap(Isa::Avx512);
+            assert_eq!(avx, Isa::Avx);
+        }
+    }
+}
