@@ -7,7 +7,8 @@
 //!   the published measurements of docs/physics.md §8.4.
 //! - **Inharmonicity** `B` against key beside the grands measured by Lehtonen et al. and Rigaud
 //!   et al.
-//! - **Decay rates** of the first two partials against key, prompt sound and aftersound.
+//! - **Decay rates** of the first two partials against key, prompt sound and aftersound, and the
+//!   fundamental's T60 beside a measured grand's at C2–C4 with the pedal up and down.
 //! - **Sympathetic resonance**: what the pedal adds to C3 at each key's pitch.
 //! - **A scale at three dynamics**: C4 to C5 at velocities 40, 80 and 120, mono 16-bit WAV.
 //!
@@ -710,7 +711,8 @@ fn readme(
          resonance, so the notes around it stand out more than on a real guitar.\n\n\
          ## Not shown yet\n\n\
          Each key has its own copy of the soundboard and of its partners, so keys played together do not \
-         ring through one bridge.\n",
+         ring through one bridge. Decay times above C4 have no measured grand beside them, and the string \
+         scale is the rule's, not a measured grand's (docs/physics.md §8.2).\n",
         hammer_speed(0.6),
         PROMPT.0,
         PROMPT.1,
