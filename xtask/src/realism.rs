@@ -676,9 +676,8 @@ fn readme(
          |---|---|---|---|---|---|---|---|\n{t60_rows}\n\
          With the pedal up every model T60 lies within 75–140 % of the measured one, the range in which \
          listeners do not tell decay times apart (Tolonen & Järveläinen, AES 109th Convention, 2000). The \
-         pedal's lengthening (the last two columns) is not the measured one. A likely cause: each key's partners ring as in-phase unisons, \
-         the motion the bridge drains fastest, with no aftersound of their own in which the energy they take \
-         from the struck strings could linger (docs/physics.md §12.7, §14).\n\n\
+         pedal's lengthening (the last two columns) is not the measured one, for a reason not yet found \
+         (docs/physics.md §12.7, §14).\n\n\
          ## Contact duration against key\n\n\
          ![contact duration](realism/contact.png)\n\n\
          The hammer's first contact with its strings (±21 µs), at 2.5 m/s and 5 m/s. At mezzo-forte it lasts \
