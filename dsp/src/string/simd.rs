@@ -103,9 +103,9 @@ static WIDEST: AtomicU8 = AtomicU8::new(u8::MAX);
 impl Isa {
     /// The widest unit this CPU has, within [`Isa::cap`].
     pub fn detect() -> Isa {
-        let widest = WIDEST.load(Ordering::Relaxed);
         #[cfg(target_arch = "x86_64")]
         {
+            let widest = WIDEST.load(Ordering::Relaxed);
             if Isa::Avx512.rank() <= widest && std::arch::is_x86_feature_detected!("avx512f") {
                 return Isa::Avx512;
             }
@@ -113,7 +113,6 @@ impl Isa {
                 return Isa::Avx;
             }
         }
-        let _ = widest;
         Isa::Portable
     }
 
