@@ -401,11 +401,9 @@ fn decays(path: &Path) -> Result<Vec<Decay>, String> {
         .map(|k| {
             let out = held_note(k, 0.6, spread, WHOLE.1 + 0.5);
             let note = piano_note(k).string;
-            let rates = [1, 2].map(|p| {
-                let levels = partial_levels(&out, note.partial(p));
-                (-decay_rate(&levels, PROMPT), -decay_rate(&levels, AFTERSOUND))
-            });
-            (k, rates, -decay_rate(&partial_levels(&out, note.partial(1)), WHOLE))
+            let levels = [1, 2].map(|p| partial_levels(&out, note.partial(p)));
+            let rates = levels.each_ref().map(|l| (-decay_rate(l, PROMPT), -decay_rate(l, AFTERSOUND)));
+            (k, rates, -decay_rate(&levels[0], WHOLE))
         })
         .collect();
     let top = rows.iter().flat_map(|r| r.1.iter().flat_map(|p| [p.0, p.1])).fold(1.0, f64::max);
@@ -674,7 +672,7 @@ fn readme(
          not read). Struck at velocity 0.7 and held, with the pedal up and with it down from the strike:\n\n\
          | key | T60 measured, pedal up (s) | model (s) | model / measured | T60 measured, pedal down (s) | model (s) | pedal's lengthening, measured | model |\n\
          |---|---|---|---|---|---|---|---|\n{t60_rows}\n\
-         With the pedal up every model T60 lies within 75–140 % of the measured one, the range in which \
+         With the pedal up every model T60 lies within {:.0}–{:.0} % of the measured one, the range in which \
          listeners do not tell decay times apart (Tolonen & Järveläinen, AES 109th Convention, 2000). The \
          pedal's lengthening (the last two columns) is not the measured one, for a reason not yet found \
          (docs/physics.md §12.7, §14).\n\n\
@@ -720,6 +718,8 @@ fn readme(
         decays.len(),
         WHOLE.0,
         WHOLE.1,
+        100.0 * T60_TOLERANCE.0,
+        100.0 * T60_TOLERANCE.1,
         contact(24),
         contact(60),
         contact(96),
