@@ -674,8 +674,10 @@ fn readme(
          |---|---|---|---|---|---|---|---|\n{t60_rows}\n\
          With the pedal up every model T60 lies within {:.0}–{:.0} % of the measured one, the range in which \
          listeners do not tell decay times apart (Tolonen & Järveläinen, AES 109th Convention, 2000). The \
-         pedal's lengthening (the last two columns) is not the measured one, for a reason not yet found \
-         (docs/physics.md §12.7, §14).\n\n\
+         pedal's lengthening (the last two columns) is not the measured one. Two things stand in its way \
+         (docs/physics.md §12.7): the strings' own loss alone keeps every partial decaying at 4.34 dB/s or faster (a T60 of \
+         13.8 s; a fit across beats reads a little longer), short of every measured pedal-down T60, and a partner tuned almost exactly to a partial forms with it a motion that barely \
+         moves the bridge, so its energy is not heard.\n\n\
          ## Contact duration against key\n\n\
          ![contact duration](realism/contact.png)\n\n\
          The hammer's first contact with its strings (±21 µs), at 2.5 m/s and 5 m/s. At mezzo-forte it lasts \
