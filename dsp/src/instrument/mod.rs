@@ -89,8 +89,8 @@ pub use partners::{
     MAX_PARTNER_MODES, PARTNER_BAND, PARTNER_KEYS, PARTNER_TOLERANCE_CENTS, PartnerTable, STRIKING_PARTIALS,
 };
 pub use piano_voice::{
-    DAMPER_UPDATE, DAMPER_WIDTH, GUARD_FACTOR, PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike,
-    damper_shares,
+    DAMPER_UPDATE, DAMPER_WIDTH, FIRST_UNDAMPED_KEY, GUARD_FACTOR, PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME,
+    Strike, damper_shares, has_damper,
 };
 pub use presets::{
     CATEGORIES, FACTORY_PRESETS, Preset, PresetError, factory_presets, find_preset, load_factory_presets, parse_preset,

@@ -9,7 +9,8 @@
 //!   relative speed of the two, as a hammer flying free from the action does. The QSA fit spans
 //!   the hammer's kinetic energy plus the string's energy: all the energy there is, so no
 //!   compression the contact can reach lies beyond the fit's last knot.
-//! - **Damper.** Note-off lets the damper down unless the sustain pedal holds it. A damper is a
+//! - **Damper.** Note-off lets the damper down unless the sustain pedal holds it, on every key
+//!   below [`FIRST_UNDAMPED_KEY`]: the top strings have none and ring on. A damper is a
 //!   felt pad pressing along the string beside the strike point ([`DAMPER_WIDTH`] long): a
 //!   distributed dashpot, whose share of mode `i` is the mean of `sin²(β_i x)` under the pad.
 //!   Every mode decays at `σ_i + D·g_i`, with `g_i` that mean over mode 1's, so the damper takes
@@ -105,6 +106,17 @@ pub const STEAL_TIME: f64 = 0.005;
 
 /// Length of a damper's felt pad along the string (m), from the strike point towards the bridge.
 pub const DAMPER_WIDTH: f64 = 0.025;
+
+/// The lowest key (MIDI) whose strings have no damper: E6, as on Steinway grands, whose dampers
+/// end a semitone lower (docs/physics.md §6.5). A grand's shortest strings ring only a few
+/// seconds, leave no room for a damper's head, and ring in sympathy with the keys below; makers
+/// leave the top 18 to 21 keys undamped.
+pub const FIRST_UNDAMPED_KEY: u8 = 88;
+
+/// Whether MIDI key `key` has a damper (docs/physics.md §6.5).
+pub fn has_damper(key: u8) -> bool {
+    key < FIRST_UNDAMPED_KEY
+}
 
 /// Shortest interval between updates of the string's coefficients while a damper moves (s): the
 /// rates change smoothly, so recomputing them every ~0.7 ms (32 samples at 44.1 kHz) is enough,
@@ -473,7 +485,8 @@ impl PianoVoice {
             self.seek_partners(settings, table);
         }
         let span = len as f64 / fs;
-        let target = if self.key_down || sustained { 0.0 } else { settings.damper_rate };
+        let damped = !(self.key_down || sustained) && has_damper(self.strike.key);
+        let target = if damped { settings.damper_rate } else { 0.0 };
         self.damper += (target - self.damper) * (1.0 - (-span / settings.damper_time).exp());
         if (target - self.damper).abs() <= 1e-3 * target.max(1.0) {
             self.damper = target;
