@@ -4,7 +4,8 @@
 //! With the sustain pedal down every damper is off its strings, and a struck key's partials set
 //! ringing the strings of the keys whose partials they meet: striking C3 sounds C4, G4, C5 and E5
 //! (its 2nd to 5th partials meet their 1st), and C2 and F1 below (its 1st meets their 2nd and
-//! 3rd). Each key carries those strings on its own soundboard, coupled exactly as its unison is
+//! 3rd). With the pedal up, those of them without a damper (from E6 up) still ring. Each key
+//! carries those strings on its own soundboard, coupled exactly as its unison is
 //! (`crate::scene::UnisonCore`, "Sympathetic partners"): a partner is a key's unison moving in
 //! phase, the motion a bridge drives, as one string of the unison's mass and tension, with its
 //! lowest [`PARTNER_MODES`] modes up to the highest one a partial of the struck key meets.

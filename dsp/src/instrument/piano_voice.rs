@@ -23,15 +23,17 @@
 //!   change the string's coefficients, never its state ([`ModalString::set_extra_decay`]), so the
 //!   sound dies away continuously however fast the damper lands.
 //! - **Partners.** With the sustain pedal down, the strings of the other keys whose modes meet
-//!   the key's partials ring with it on its bridge (docs/physics.md §14). A key struck with the
-//!   pedal down starts with them free; one struck before the pedal goes down gets them at the
-//!   first block with the pedal down and the felt off the strings (a few keys a block, see
+//!   the key's partials ring with it on its bridge (docs/physics.md §14); with it up, those of
+//!   them without a damper. A key struck with the pedal down starts with them all free; one struck
+//!   before the pedal goes down gets those with a damper at the first block with the pedal down
+//!   and the felt off the strings (a few keys a block, see
 //!   [`PARTNER_SEEKS`](super::PARTNER_SEEKS)), at rest on the bridge's line
 //!   ([`UnisonCore::add_partners`]), their dampers lifting as the pedal's do. Lifting the pedal
 //!   lets their dampers down; they stay on the bridge until the key's next strike from silence.
-//! - **Release.** A voice is free again once its strings are silent: their energy (the hammer
-//!   flying off and the bridge's slowest modes do not count) below [`RELEASE_ENERGY`] of its latest
-//!   strike's, with the hammer flying away (a silent string cannot reach it). The energy here and
+//! - **Release.** A voice is free again once its strings are silent: their energy and its
+//!   partners' (the hammer flying off and the bridge's slowest modes do not count) below
+//!   [`RELEASE_ENERGY`] of its latest strike's, with the hammer flying away (a silent string cannot
+//!   reach it). The partners count, since those without dampers ring on after the key's release. The energy here and
 //!   in the guard (which counts the bridge too) is weighed with its own modal stiffnesses
 //!   ([`ModalString::own_energy`]): the scheme's numerical energy depends on the decay rates, so
 //!   a damper landing would make it jump although the string has not moved.
@@ -147,11 +149,47 @@ pub fn damper_shares(string: &ModalString, position: f64, out: &mut Vec<f64>) {
     out.extend(string.wavenumbers().iter().map(|&beta| (mean(beta) / first).max(1.0)));
 }
 
-/// The strings of `key`'s partners in `table` and how many there are.
-fn partner_strings(table: &PartnerTable, key: u8) -> ([(&ModalString, usize); MAX_PARTNERS], usize) {
-    let mut picks = [(0, 0); MAX_PARTNERS];
-    let count = table.pick(key, &mut picks);
-    (std::array::from_fn(|j| (table.string(picks[j].0), picks[j].1)), count)
+/// `key`'s partners in `table` whose dampers are off: every one with the pedal down (`pedal`), else
+/// those without a damper.
+#[derive(Debug)]
+struct PartnerList<'a> {
+    /// `(string, modes)` of each partner.
+    strings: [(&'a ModalString, usize); MAX_PARTNERS],
+    /// Whether each partner has a damper (which the pedal lifts and lets down).
+    damped: [bool; MAX_PARTNERS],
+    count: usize,
+}
+
+impl<'a> PartnerList<'a> {
+    /// The partners ringing with a key struck with the pedal down or up, in the table's order.
+    fn at_strike(table: &'a PartnerTable, key: u8, pedal: bool) -> Self {
+        let (picks, count) = Self::picks(table, key);
+        let keep = |&(i, _): &(usize, usize)| pedal || !has_damper(PartnerTable::key(i));
+        Self::of(table, picks[..count].iter().copied().filter(keep))
+    }
+
+    /// The partners a key struck with the pedal up gains once the pedal goes down: those with a
+    /// damper (it has the others from the strike).
+    fn with_pedal_later(table: &'a PartnerTable, key: u8) -> Self {
+        let (picks, count) = Self::picks(table, key);
+        Self::of(table, picks[..count].iter().copied().filter(|&(i, _)| has_damper(PartnerTable::key(i))))
+    }
+
+    fn picks(table: &PartnerTable, key: u8) -> ([(usize, usize); MAX_PARTNERS], usize) {
+        let mut picks = [(0, 0); MAX_PARTNERS];
+        let count = table.pick(key, &mut picks);
+        (picks, count)
+    }
+
+    fn of(table: &'a PartnerTable, picks: impl Iterator<Item = (usize, usize)>) -> Self {
+        let mut list = Self { strings: [(table.string(0), 0); MAX_PARTNERS], damped: [false; MAX_PARTNERS], count: 0 };
+        for (i, modes) in picks.take(MAX_PARTNERS) {
+            list.strings[list.count] = (table.string(i), modes);
+            list.damped[list.count] = has_damper(PartnerTable::key(i));
+            list.count += 1;
+        }
+        list
+    }
 }
 
 /// One piano voice.
@@ -186,6 +224,8 @@ pub struct PianoVoice {
     partner_since: f64,
     /// Whether the voice has looked for partners since its strike (it has them if any were found).
     partners_sought: bool,
+    /// Which of the core's partners have a damper (the others ring whatever the pedal does).
+    partner_damped: [bool; MAX_PARTNERS],
     /// The damper's share of each mode relative to the fundamental, `g_i` (module docs).
     damper_shape: Vec<f64>,
     /// Scratch: the extra decay rate of each mode (1/s).
@@ -238,6 +278,7 @@ impl PianoVoice {
             partner_applied: 0.0,
             partner_since: 0.0,
             partners_sought: false,
+            partner_damped: [false; MAX_PARTNERS],
             since_update: 0.0,
             reference_energy: 0.0,
             position: note.strike_position,
@@ -294,20 +335,25 @@ impl PianoVoice {
             };
             let max_frequency = settings.max_frequency.min(0.5 * fs);
             // The per-note rule and the clamped settings always give a valid unison.
-            // Partners ring only from a key struck with the pedal down: under their dampers
-            // they would barely move, and cost as much.
+            // Partners ring only while their dampers are off: all of them from a key struck with
+            // the pedal down, those without a damper from one struck with it up. Under their
+            // dampers they would barely move, and cost as much.
             let retuned = match partners {
-                Some((table, true)) => {
-                    let (strings, count) = partner_strings(table, strike.key);
-                    self.core.retune_with_partners(&unison, max_frequency, position, &strings[..count])
+                Some((table, pedal)) => {
+                    let list = PartnerList::at_strike(table, strike.key, pedal);
+                    self.partner_damped = list.damped;
+                    self.core.retune_with_partners(&unison, max_frequency, position, &list.strings[..list.count])
                 }
-                _ => self.core.retune(&unison, max_frequency, position),
+                None => {
+                    self.partner_damped = [false; MAX_PARTNERS];
+                    self.core.retune(&unison, max_frequency, position)
+                }
             };
             if retuned.is_err() {
                 return;
             }
             self.partners_sought = matches!(partners, Some((_, true)));
-            // Partners start free: a key struck with the pedal up has none to damp.
+            // Partners start free: a key struck with the pedal up has only undamped ones.
             self.partner_damper = 0.0;
             self.partner_applied = 0.0;
             self.shape_damper(position);
@@ -337,16 +383,20 @@ impl PianoVoice {
         self.started = now;
     }
 
-    /// With the pedal down, the partners of a key struck with it up join its bridge, at rest
-    /// where their dampers held them, their dampers lifting as the pedal's do.
+    /// With the pedal down, the damped partners of a key struck with it up join its bridge
+    /// (beside the undamped ones it has), at rest where their dampers held them, their dampers
+    /// lifting as the pedal's do.
     fn seek_partners(&mut self, settings: &Settings, table: &PartnerTable) {
         self.partners_sought = true;
-        let (strings, count) = partner_strings(table, self.strike.key);
-        if self.core.add_partners(&strings[..count]) > 0 {
+        let list = PartnerList::with_pedal_later(table, self.strike.key);
+        let had = self.core.partners();
+        let added = self.core.add_partners(&list.strings[..list.count]);
+        if added > 0 {
+            self.partner_damped[had..had + added].fill(true);
             self.partner_damper = settings.damper_rate;
             self.partner_applied = settings.damper_rate;
             self.partner_since = 0.0;
-            self.core.set_partner_decay(settings.damper_rate);
+            self.core.set_partner_decay(settings.damper_rate, &self.partner_damped);
         }
     }
 
@@ -369,7 +419,7 @@ impl PianoVoice {
         self.extra.clear();
         self.extra.resize(self.core.modes(), STEAL_RATE);
         self.core.set_extra_decay(&self.extra, STEAL_RATE);
-        self.core.set_partner_decay(STEAL_RATE);
+        self.core.set_partner_decay(STEAL_RATE, &[true; MAX_PARTNERS]);
         self.partner_applied = f64::NAN;
         self.applied = f64::NAN;
     }
@@ -507,13 +557,13 @@ impl PianoVoice {
             self.partner_damper = target;
         }
         self.partner_since += span;
-        if self.core.partners() > 0
+        if self.partner_damped[..self.core.partners()].contains(&true)
             && self.partner_damper != self.partner_applied
             && (self.partner_since >= DAMPER_UPDATE || self.partner_damper == target)
         {
             self.partner_since = 0.0;
             self.partner_applied = self.partner_damper;
-            self.core.set_partner_decay(self.partner_damper);
+            self.core.set_partner_decay(self.partner_damper, &self.partner_damped);
         }
         let string_energy = self.core.own_energy();
         // The guard: with no source but the hammer, the string never holds more than the strike's
@@ -522,8 +572,10 @@ impl PianoVoice {
         if !(string_energy <= GUARD_FACTOR * self.reference_energy) {
             self.guard_fade.start(len);
         }
-        // A silent unison cannot reach a hammer flying away from it.
-        let silent = self.core.strings_energy() < RELEASE_ENERGY * self.reference_energy;
+        // A silent unison cannot reach a hammer flying away from it. The partners count: those
+        // without dampers ring on after the key's own strings fall silent, and feed them.
+        let ringing = self.core.strings_energy() + self.core.partners_energy();
+        let silent = ringing < RELEASE_ENERGY * self.reference_energy;
         if self.core.hammer_leaving() && silent {
             self.sounding = false;
         }
