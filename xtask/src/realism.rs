@@ -205,6 +205,48 @@ pub fn held_with_pedal(key: u8, pedal: Option<f64>, seconds: f64) -> Vec<f64> {
     left.into_iter().map(f64::from).collect()
 }
 
+/// Key `key` struck at velocity 0.7 with the pedal down from the strike (`pedal`) or never, let
+/// go after `release` s, the pedal (if down) lifted after `lift` s: `seconds` of the dry output,
+/// centred (as [`held_with_pedal`]).
+pub fn played(key: u8, pedal: bool, release: f64, lift: f64, seconds: f64) -> Vec<f64> {
+    let mut piano = Instrument::new(FS, 8, Settings { limiter: false, stereo_width: 0.0, ..Settings::default() });
+    piano.set_raw_output(true);
+    if pedal {
+        piano.handle(Event::Sustain { channel: 0, down: true });
+    }
+    piano.handle(Event::NoteOn { channel: 0, key, velocity: 0.7 });
+    let n = (seconds * FS) as usize;
+    let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
+    const BLOCK: usize = 64;
+    let (release, lift) = ((release * FS) as usize / BLOCK, (lift * FS) as usize / BLOCK);
+    for (k, (l, r)) in left.chunks_mut(BLOCK).zip(right.chunks_mut(BLOCK)).enumerate() {
+        if k == release {
+            piano.handle(Event::NoteOff { channel: 0, key });
+        }
+        if k == lift && pedal {
+            piano.handle(Event::Sustain { channel: 0, down: false });
+        }
+        piano.process(l, r);
+    }
+    left.into_iter().map(f64::from).collect()
+}
+
+/// The strings without dampers that C5's 3rd and 4th partials meet: G6 and C7.
+pub const UNDAMPED_PARTNERS: [u8; 2] = [91, 96];
+
+/// C5 struck with the pedal up and let go after 0.2 s, its own strings silenced by their damper:
+/// how much louder it still sounds 0.5–1.5 s later at the pitch of each of
+/// [`UNDAMPED_PARTNERS`] than at its upper neighbour's (dB), what the strings without dampers
+/// add (docs/physics.md §14).
+pub fn undamped_ring() -> [(u8, f64); 2] {
+    let out = played(72, false, 0.2, f64::INFINITY, 1.5);
+    let from = (0.5 * FS) as usize;
+    UNDAMPED_PARTNERS.map(|key| {
+        let (on, beside) = (level_near(&out, from, key_frequency(key)), level_near(&out, from, key_frequency(key + 1)));
+        (key, 20.0 * (on / beside).log10())
+    })
+}
+
 pub fn amplitude_at(x: &[f64], from: usize, frequency: f64) -> f64 {
     let w = std::f64::consts::TAU * frequency / FS;
     let (s, c) = x[from..].iter().enumerate().fold((0.0, 0.0), |(s, c), (n, &v)| {
@@ -230,6 +272,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let decays = decays(&dir.join("decay.png"))?;
     let t60 = MEASURED_T60.map(|m| (m, fundamental_t60(m.0, false), fundamental_t60(m.0, true)));
     let sympathy = sympathetic(&dir.join("sympathetic.png"))?;
+    let undamped = undamped_ring();
     let guitars = acoustic(&dir.join("acoustic.png"))?;
     let scales = [("pp", 40u8), ("mf", 80), ("ff", 120)].map(|(name, velocity)| (name, scale(velocity)));
     // One gain for all three, the fortissimo scale peaking at −1 dBFS: the dynamics stay audible.
@@ -241,7 +284,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
         crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scaled))
             .map_err(|e| e.to_string())?;
     }
-    let text = readme(&envelopes, &contacts, &decays, &t60, &sympathy, &guitars);
+    let text = readme(&envelopes, &contacts, &decays, &t60, (&sympathy, undamped), &guitars);
     let path = args.root.join("docs/report/realism.md");
     std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     writeln!(out, "{}", serde_json::json!({ "written": path.display().to_string() })).map_err(|e| e.to_string())
@@ -607,7 +650,7 @@ fn readme(
     contacts: &[Contact],
     decays: &[Decay],
     t60: &[T60Row],
-    sympathy: &Sympathy,
+    (sympathy, undamped): (&Sympathy, [(u8, f64); 2]),
     guitars: &Guitars,
 ) -> String {
     let spread = Settings::default().unison_detune;
@@ -645,6 +688,11 @@ fn readme(
         .map(|&(key, name)| {
             format!("{name} {:.1} dB above {}", 20.0 * (added(key) / added(key + 1)).log10(), name_of(key + 1))
         })
+        .collect::<Vec<_>>()
+        .join(", ");
+    let undamped_rows = undamped
+        .iter()
+        .map(|&(key, db)| format!("{} {db:.1} dB above {}", name_of(key), name_of(key + 1)))
         .collect::<Vec<_>>()
         .join(", ");
     let c7_measured = MEASURED_CONTACT.iter().find(|m| m.0 == 96).map_or(f64::NAN, |m| m.2);
@@ -699,7 +747,10 @@ fn readme(
          C3 struck at velocity 0.7 and held 3 s, with the pedal down and with it up (dry, centred); over 1–3 s, \
          the amplitude of their difference at each key's pitch (what the pedal adds: the partner strings \
          ringing, and C3's partials giving up the energy they take, docs/physics.md §14), beside C3 alone. \
-         The pedal adds most where C3's partials meet other keys' strings: {sympathy_rows}.\n\n\
+         The pedal adds most where C3's partials meet other keys' strings: {sympathy_rows}. With the pedal up \
+         the strings without dampers, from E6 up (docs/physics.md §6.5), still ring: C5 let go after 0.2 s, its own \
+         strings silenced, still sounds 0.5–1.5 s later where its 3rd and 4th partials meet them: \
+         {undamped_rows}.\n\n\
          ## The acoustic slide guitar\n\n\
          ![the two guitars](realism/acoustic.png)\n\n\
          Each slide note A2–C5 plucked at velocity 80, the slide pressed, measured over 2 s. On the acoustic \
