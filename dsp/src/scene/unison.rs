@@ -953,10 +953,20 @@ mod tests {
     const FS: f64 = 48_000.0;
 
     fn c4_unison(strings: usize, detune: [f64; 3], bridge: &BridgeParams) -> UnisonCore {
+        c4_unison_with(strings, detune, bridge, &[])
+    }
+
+    /// [`c4_unison`] ringing with `partners` from the strike.
+    fn c4_unison_with(
+        strings: usize,
+        detune: [f64; 3],
+        bridge: &BridgeParams,
+        partners: &[(&ModalString, usize)],
+    ) -> UnisonCore {
         let c4 = chaigne_askenfelt_c4();
         let params = UnisonParams { string: c4.string, strings, detune };
         let mut core = UnisonCore::new(200, bridge, FS).unwrap();
-        core.retune(&params, f64::INFINITY, c4.strike_position).unwrap();
+        core.retune_with_partners(&params, f64::INFINITY, c4.strike_position, partners).unwrap();
         let mass = c4.hammer_mass * strings as f64;
         core.strike(&HammerParams { mass, velocity: 3.5, position: c4.strike_position, gap: 2e-4 });
         core
@@ -1019,19 +1029,7 @@ mod tests {
     fn partner_strings_ring_from_the_key_and_keep_the_energy_balance() {
         let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
         let (c5, g5) = (partner(72), partner(79));
-        let keyed = || {
-            let c4 = chaigne_askenfelt_c4();
-            let params = UnisonParams { string: c4.string, strings: 3, detune: [-1.0, 0.2, 0.8] };
-            let mut core = UnisonCore::new(200, &board, FS).unwrap();
-            core.retune_with_partners(&params, f64::INFINITY, c4.strike_position, &[(&c5, 4), (&g5, 3)]).unwrap();
-            core.strike(&HammerParams {
-                mass: 3.0 * c4.hammer_mass,
-                velocity: 3.5,
-                position: c4.strike_position,
-                gap: 2e-4,
-            });
-            core
-        };
+        let keyed = || c4_unison_with(3, [-1.0, 0.2, 0.8], &board, &[(&c5, 4), (&g5, 3)]);
         let y_ref = law(3).compression_at_energy(0.5 * 3.0 * 2.97e-3 * 3.5 * 3.5);
         let qsa = || QsaSolver::new(QuadSpline::new(law(3), y_ref, 6).unwrap());
         let n = 48_000;
@@ -1074,15 +1072,7 @@ mod tests {
         let y_ref = law(3).compression_at_energy(0.5 * 3.0 * 2.97e-3 * 3.5 * 3.5);
         let solver = || QsaSolver::new(QuadSpline::new(law(3), y_ref, 6).unwrap());
         for from_strike in [&[][..], &[(&c7, 2)][..]] {
-            let unison = || {
-                let c4 = chaigne_askenfelt_c4();
-                let params = UnisonParams { string: c4.string, strings: 3, detune: [-1.0, 0.2, 0.8] };
-                let mut core = UnisonCore::new(200, &board, FS).unwrap();
-                core.retune_with_partners(&params, f64::INFINITY, c4.strike_position, from_strike).unwrap();
-                let mass = c4.hammer_mass * 3.0;
-                core.strike(&HammerParams { mass, velocity: 3.5, position: c4.strike_position, gap: 2e-4 });
-                core
-            };
+            let unison = || c4_unison_with(3, [-1.0, 0.2, 0.8], &board, from_strike);
             let (mut slow, mut fast) = (HammerUnison::new(unison(), solver()), HammerUnison::new(unison(), solver()));
             let (before, after) = (12_032, 36_032);
             let mut frames = vec![Frame::default(); before + after];
