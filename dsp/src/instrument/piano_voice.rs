@@ -163,30 +163,27 @@ struct PartnerList<'a> {
 impl<'a> PartnerList<'a> {
     /// The partners ringing with a key struck with the pedal down or up, in the table's order.
     fn at_strike(table: &'a PartnerTable, key: u8, pedal: bool) -> Self {
-        let (picks, count) = Self::picks(table, key);
-        let keep = |&(i, _): &(usize, usize)| pedal || !has_damper(PartnerTable::key(i));
-        Self::of(table, picks[..count].iter().copied().filter(keep))
+        Self::those(table, key, |damped| pedal || !damped)
     }
 
     /// The partners a key struck with the pedal up gains once the pedal goes down: those with a
     /// damper (it has the others from the strike).
     fn with_pedal_later(table: &'a PartnerTable, key: u8) -> Self {
-        let (picks, count) = Self::picks(table, key);
-        Self::of(table, picks[..count].iter().copied().filter(|&(i, _)| has_damper(PartnerTable::key(i))))
+        Self::those(table, key, |damped| damped)
     }
 
-    fn picks(table: &PartnerTable, key: u8) -> ([(usize, usize); MAX_PARTNERS], usize) {
+    /// `key`'s partners in `table`, in its order, that `keep` keeps given whether each has a damper.
+    fn those(table: &'a PartnerTable, key: u8, keep: impl Fn(bool) -> bool) -> Self {
         let mut picks = [(0, 0); MAX_PARTNERS];
         let count = table.pick(key, &mut picks);
-        (picks, count)
-    }
-
-    fn of(table: &'a PartnerTable, picks: impl Iterator<Item = (usize, usize)>) -> Self {
         let mut list = Self { strings: [(table.string(0), 0); MAX_PARTNERS], damped: [false; MAX_PARTNERS], count: 0 };
-        for (i, modes) in picks.take(MAX_PARTNERS) {
-            list.strings[list.count] = (table.string(i), modes);
-            list.damped[list.count] = has_damper(PartnerTable::key(i));
-            list.count += 1;
+        for &(i, modes) in &picks[..count] {
+            let damped = has_damper(PartnerTable::key(i));
+            if keep(damped) {
+                list.strings[list.count] = (table.string(i), modes);
+                list.damped[list.count] = damped;
+                list.count += 1;
+            }
         }
         list
     }
