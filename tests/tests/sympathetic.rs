@@ -1,9 +1,11 @@
 //! Sympathetic resonance (docs/physics.md §14): with the sustain pedal down, a struck key's
 //! partials set ringing, through the bridge, the strings of the keys whose partials they meet,
-//! and not their neighbours; with it up, those of them that have no damper.
+//! and not their neighbours; with it up, those of them that have no damper or whose keys are held
+//! down.
 
+use qsa_dsp::instrument::Event;
 use qsa_dsp::preset::key_frequency as hz;
-use xtask::realism::{FS, held_with_pedal, level_near as level, played, undamped_ring};
+use xtask::realism::{FS, held_ring, held_with_pedal, level_near as level, performed, played, undamped_ring};
 
 /// C3 held with the pedal down against the same C3 with the pedal up: the difference is what the
 /// other keys' free strings add (and what C3's own partials give up to them). Over 1–3 s it is at
@@ -79,4 +81,71 @@ fn lifting_the_pedal_damps_only_the_partners_with_dampers() {
     let (c6, c7) = (drop(84), drop(96));
     println!("across the lift: C6 falls {c6:.1} dB, C7 {c7:.1} dB");
     assert!(c6 - c7 >= 30.0, "C6 {c6:.1} dB, C7 {c7:.1} dB");
+}
+
+/// A key held down has its damper off, so its strings ring with the partials of a key struck
+/// with the pedal up: C3 struck and let go after 0.2 s, with C4 or G4 held down (pressed as
+/// softly as MIDI can, before C3 or 0.1 s after it), still sounds 0.5–1.5 s later at the held
+/// key's pitch (C3's 2nd and 3rd partials), at least 15 dB above the pitch a semitone higher, as
+/// for the pedal (measured 32.1 and 33.9 dB, pressed before or after). With C♯4
+/// held, whose strings no partial of C3 meets, what C3 adds there is at least 60 dB below what it
+/// adds at C4's pitch with C4 held (measured: nothing; C3's voice ends as it would alone).
+#[test]
+fn a_held_key_rings_with_the_partials_of_a_staccato_note() {
+    for press in [0.0, 0.1] {
+        let rings = held_ring(press);
+        let c4 = rings[0].1;
+        for (key, on, beside) in rings {
+            if key == 61 {
+                let below = 20.0 * (c4 / on).log10();
+                println!("pressed {press} s after C3, key {key} held: {below:.1} dB below C4's ring");
+                assert!(below >= 60.0, "key {key}: {below:.1} dB");
+            } else {
+                let selective = 20.0 * (on / beside).log10();
+                println!("pressed {press} s after C3, key {key} held: {selective:.1} dB above key {}'s pitch", key + 1);
+                assert!(selective >= 15.0, "key {key}: {selective:.1} dB");
+            }
+        }
+    }
+}
+
+/// Letting a held key go lets its damper down on its strings as a partner too: C3 struck and let
+/// go after 0.2 s with C4 held down (pressed as softly as MIDI can), C4 let go after 1 s or held
+/// on. Between 0.5–1 s and 1.3–2.3 s, what C3 adds at C4's pitch falls at least 30 dB more when
+/// C4 is let go than when it is held (measured: 179.9 dB, C3's voice ending, against 13.7 dB).
+#[test]
+fn letting_a_held_key_go_damps_its_strings_as_a_partner() {
+    let c3 =
+        [(0.0, Event::NoteOn { channel: 0, key: 48, velocity: 0.7 }), (0.2, Event::NoteOff { channel: 0, key: 48 })];
+    let fall = |c4: &[(f64, Event)]| {
+        let (both, only) = (performed(&[c4, &c3[..]].concat(), 2.3), performed(c4, 2.3));
+        let added: Vec<f64> = both.iter().zip(&only).map(|(b, o)| b - o).collect();
+        let (before, after) = (&added[..(1.0 * FS) as usize], &added[(1.3 * FS) as usize..]);
+        20.0 * (level(before, (0.5 * FS) as usize, hz(60)) / level(after, 0, hz(60))).log10()
+    };
+    let press = (0.0, Event::NoteOn { channel: 0, key: 60, velocity: 1.0 / 127.0 });
+    let (let_go, held) = (fall(&[press, (1.0, Event::NoteOff { channel: 0, key: 60 })]), fall(&[press]));
+    println!("across C4's release: {let_go:.1} dB let go, {held:.1} dB held");
+    assert!(let_go - held >= 30.0, "let go {let_go:.1} dB, held {held:.1} dB");
+}
+
+/// A held key keeps its strings free when the pedal lifts: C3 struck with the pedal down and C4
+/// held down (pressed as softly as MIDI can), C3 let go after 0.1 s, the pedal lifted after 1 s.
+/// Between 0.3–1 s and 1.3–2.3 s what C3 adds at the pitch of G4 (a partner whose damper falls
+/// with the pedal, and none of whose modes C4's strings share) falls at least 30 dB more than at
+/// C4's (one whose key holds its damper off) (measured: G4 falls 56.5 dB, to where C4's ring leaks
+/// into its pitch; C4 6.4 dB).
+#[test]
+fn lifting_the_pedal_leaves_the_held_keys_strings_ringing() {
+    let pedal = [(0.0, Event::Sustain { channel: 0, down: true }), (1.0, Event::Sustain { channel: 0, down: false })];
+    let c4 = [(0.0, Event::NoteOn { channel: 0, key: 60, velocity: 1.0 / 127.0 })];
+    let c3 =
+        [(0.0, Event::NoteOn { channel: 0, key: 48, velocity: 0.7 }), (0.1, Event::NoteOff { channel: 0, key: 48 })];
+    let (both, only) = (performed(&[&pedal[..], &c4, &c3].concat(), 2.3), performed(&[&pedal[..], &c4].concat(), 2.3));
+    let added: Vec<f64> = both.iter().zip(&only).map(|(b, o)| b - o).collect();
+    let (before, after) = (&added[..(1.0 * FS) as usize], &added[(1.3 * FS) as usize..]);
+    let drop = |key: u8| 20.0 * (level(before, (0.3 * FS) as usize, hz(key)) / level(after, 0, hz(key))).log10();
+    let (c4, g4) = (drop(60), drop(67));
+    println!("across the lift: G4 falls {g4:.1} dB, C4 {c4:.1} dB");
+    assert!(g4 - c4 >= 30.0, "G4 {g4:.1} dB, C4 {c4:.1} dB");
 }

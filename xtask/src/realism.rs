@@ -183,52 +183,69 @@ const PURPLE: RGBColor = RGBColor(148, 103, 189);
 /// seconds after the strike (at 0, just before it) or never (`None`): the dry output, centred
 /// (what `tests/tests/sympathetic.rs` compares).
 pub fn held_with_pedal(key: u8, pedal: Option<f64>, seconds: f64) -> Vec<f64> {
-    let mut piano = Instrument::new(FS, 8, Settings { limiter: false, stereo_width: 0.0, ..Settings::default() });
-    piano.set_raw_output(true);
-    let pedal_at = pedal.map(|t| (t.max(0.0) * FS) as usize);
-    if pedal_at == Some(0) {
-        piano.handle(Event::Sustain { channel: 0, down: true });
-    }
-    piano.handle(Event::NoteOn { channel: 0, key, velocity: 0.7 });
-    let n = (seconds * FS) as usize;
-    let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
-    const BLOCK: usize = 128;
-    for (k, (l, r)) in left.chunks_mut(BLOCK).zip(right.chunks_mut(BLOCK)).enumerate() {
-        if let Some(at) = pedal_at
-            && at > 0
-            && (k * BLOCK..(k + 1) * BLOCK).contains(&at)
-        {
-            piano.handle(Event::Sustain { channel: 0, down: true });
-        }
-        piano.process(l, r);
-    }
-    left.into_iter().map(f64::from).collect()
+    let strike = (0.0, Event::NoteOn { channel: 0, key, velocity: 0.7 });
+    let events = match pedal.map(|t| t.max(0.0)) {
+        Some(t) if (t * FS) as usize == 0 => vec![(0.0, Event::Sustain { channel: 0, down: true }), strike],
+        Some(t) => vec![strike, (t, Event::Sustain { channel: 0, down: true })],
+        None => vec![strike],
+    };
+    performed_in(128, &events, seconds)
 }
 
 /// Key `key` struck at velocity 0.7 with the pedal down from the strike (`pedal`) or never, let
 /// go after `release` s, the pedal (if down) lifted after `lift` s: `seconds` of the dry output,
 /// centred (as [`held_with_pedal`]).
 pub fn played(key: u8, pedal: bool, release: f64, lift: f64, seconds: f64) -> Vec<f64> {
+    let mut events =
+        vec![(0.0, Event::NoteOn { channel: 0, key, velocity: 0.7 }), (release, Event::NoteOff { channel: 0, key })];
+    if pedal {
+        events.insert(0, (0.0, Event::Sustain { channel: 0, down: true }));
+        events.push((lift, Event::Sustain { channel: 0, down: false }));
+    }
+    performed(&events, seconds)
+}
+
+/// `seconds` of the piano's dry output, centred, playing `events`, each at its time (s), in
+/// 64-sample blocks: an event takes effect at the start of the block it falls in, in the order
+/// given.
+pub fn performed(events: &[(f64, Event)], seconds: f64) -> Vec<f64> {
+    performed_in(64, events, seconds)
+}
+
+/// [`performed`] in blocks of `block` samples.
+fn performed_in(block: usize, events: &[(f64, Event)], seconds: f64) -> Vec<f64> {
     let mut piano = Instrument::new(FS, 8, Settings { limiter: false, stereo_width: 0.0, ..Settings::default() });
     piano.set_raw_output(true);
-    if pedal {
-        piano.handle(Event::Sustain { channel: 0, down: true });
-    }
-    piano.handle(Event::NoteOn { channel: 0, key, velocity: 0.7 });
     let n = (seconds * FS) as usize;
     let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
-    const BLOCK: usize = 64;
-    let (release, lift) = ((release * FS) as usize / BLOCK, (lift * FS) as usize / BLOCK);
-    for (k, (l, r)) in left.chunks_mut(BLOCK).zip(right.chunks_mut(BLOCK)).enumerate() {
-        if k == release {
-            piano.handle(Event::NoteOff { channel: 0, key });
-        }
-        if k == lift && pedal {
-            piano.handle(Event::Sustain { channel: 0, down: false });
+    for (k, (l, r)) in left.chunks_mut(block).zip(right.chunks_mut(block)).enumerate() {
+        for (_, event) in events.iter().filter(|(at, _)| (at * FS) as usize / block == k) {
+            piano.handle(*event);
         }
         piano.process(l, r);
     }
     left.into_iter().map(f64::from).collect()
+}
+
+/// The keys held down in [`held_ring`]: C4 and G4, whose strings C3's 2nd and 3rd partials meet,
+/// and C♯4, whose strings no partial of C3 meets.
+pub const HELD_KEYS: [u8; 3] = [60, 67, 61];
+
+/// C3 struck with the pedal up and let go after 0.2 s, with each of [`HELD_KEYS`] held down,
+/// pressed at velocity 1/127 (as softly as MIDI can) `press` s after C3 (0: just before it): what
+/// C3 adds to the held key's own sound 0.5–1.5 s after its strike, its own strings silenced by
+/// their damper, as `(held key, amplitude at its pitch, amplitude a semitone above)` (N;
+/// docs/physics.md §14).
+pub fn held_ring(press: f64) -> [(u8, f64, f64); 3] {
+    let c3 =
+        [(0.0, Event::NoteOn { channel: 0, key: 48, velocity: 0.7 }), (0.2, Event::NoteOff { channel: 0, key: 48 })];
+    let from = (0.5 * FS) as usize;
+    HELD_KEYS.map(|key| {
+        let held = [(press.max(0.0), Event::NoteOn { channel: 0, key, velocity: 1.0 / 127.0 })];
+        let (both, only) = (performed(&[&held[..], &c3[..]].concat(), 1.5), performed(&held, 1.5));
+        let added: Vec<f64> = both.iter().zip(&only).map(|(b, o)| b - o).collect();
+        (key, level_near(&added, from, key_frequency(key)), level_near(&added, from, key_frequency(key + 1)))
+    })
 }
 
 /// The strings without dampers that C5's 3rd and 4th partials meet: G6 and C7.
@@ -273,6 +290,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let t60 = MEASURED_T60.map(|m| (m, fundamental_t60(m.0, false), fundamental_t60(m.0, true)));
     let sympathy = sympathetic(&dir.join("sympathetic.png"))?;
     let undamped = undamped_ring();
+    let held = held_ring(0.0);
     let guitars = acoustic(&dir.join("acoustic.png"))?;
     let scales = [("pp", 40u8), ("mf", 80), ("ff", 120)].map(|(name, velocity)| (name, scale(velocity)));
     // One gain for all three, the fortissimo scale peaking at −1 dBFS: the dynamics stay audible.
@@ -284,7 +302,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
         crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scaled))
             .map_err(|e| e.to_string())?;
     }
-    let text = readme(&envelopes, &contacts, &decays, &t60, (&sympathy, undamped), &guitars);
+    let text = readme(&envelopes, &contacts, &decays, &t60, (&sympathy, undamped, held), &guitars);
     let path = args.root.join("docs/report/realism.md");
     std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     writeln!(out, "{}", serde_json::json!({ "written": path.display().to_string() })).map_err(|e| e.to_string())
@@ -650,7 +668,7 @@ fn readme(
     contacts: &[Contact],
     decays: &[Decay],
     t60: &[T60Row],
-    (sympathy, undamped): (&Sympathy, [(u8, f64); 2]),
+    (sympathy, undamped, held): (&Sympathy, [(u8, f64); 2], [(u8, f64, f64); 3]),
     guitars: &Guitars,
 ) -> String {
     let spread = Settings::default().unison_detune;
@@ -695,6 +713,19 @@ fn readme(
         .map(|&(key, db)| format!("{} {db:.1} dB above {}", name_of(key), name_of(key + 1)))
         .collect::<Vec<_>>()
         .join(", ");
+    let held_rows = held
+        .iter()
+        .map(|&(key, on, beside)| match on > 0.0 {
+            true => format!(
+                "with {0} held, {0} {1:.1} dB above {2}",
+                name_of(key),
+                20.0 * (on / beside).log10(),
+                name_of(key + 1)
+            ),
+            false => format!("with {} held, whose strings none of C3's partials meet, nothing", name_of(key)),
+        })
+        .collect::<Vec<_>>()
+        .join("; ");
     let c7_measured = MEASURED_CONTACT.iter().find(|m| m.0 == 96).map_or(f64::NAN, |m| m.2);
     let d3 = guitars.iter().find(|r| r.0 == 50).copied().unwrap_or((50, f64::NAN, f64::NAN));
     let loudest = guitars.iter().copied().fold((0, f64::NAN, f64::NEG_INFINITY), |m, r| if r.2 > m.2 { r } else { m });
@@ -750,7 +781,8 @@ fn readme(
          The pedal adds most where C3's partials meet other keys' strings: {sympathy_rows}. With the pedal up \
          the strings without dampers, from E6 up (docs/physics.md §6.5), still ring: C5 let go after 0.2 s, its own \
          strings silenced, still sounds 0.5–1.5 s later where its 3rd and 4th partials meet them: \
-         {undamped_rows}.\n\n\
+         {undamped_rows}. So do the strings of a key held down, whose damper its key lifts: C3 let go after 0.2 s, \
+         with another key pressed just before it at velocity 1/127 and held, adds over the same span {held_rows}.\n\n\
          ## The acoustic slide guitar\n\n\
          ![the two guitars](realism/acoustic.png)\n\n\
          Each slide note A2–C5 plucked at velocity 80, the slide pressed, measured over 2 s. On the acoustic \

@@ -89,8 +89,8 @@ pub use partners::{
     MAX_PARTNER_MODES, PARTNER_BAND, PARTNER_KEYS, PARTNER_TOLERANCE_CENTS, PartnerTable, STRIKING_PARTIALS,
 };
 pub use piano_voice::{
-    DAMPER_UPDATE, DAMPER_WIDTH, FIRST_UNDAMPED_KEY, GUARD_FACTOR, PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME,
-    Strike, damper_shares, has_damper,
+    DAMPER_UPDATE, DAMPER_WIDTH, Dampers, FIRST_UNDAMPED_KEY, GUARD_FACTOR, PianoVoice, RELEASE_ENERGY, STEAL_RATE,
+    STEAL_TIME, Strike, damper_shares, has_damper,
 };
 pub use presets::{
     CATEGORIES, FACTORY_PRESETS, Preset, PresetError, factory_presets, find_preset, load_factory_presets, parse_preset,
@@ -501,22 +501,27 @@ impl Instrument {
         }
     }
 
+    /// The piano keys held down, whatever their channel, one bit per MIDI key.
+    fn held_keys(&self) -> u128 {
+        self.voices.iter().filter_map(PianoVoice::held_key).fold(0, |held, key| held | 1 << (key & 127))
+    }
+
     /// Strike `strike` on a piano voice; the index of the voice that took it.
     fn note_on(&mut self, strike: Strike) -> Option<usize> {
         let now = self.now;
-        let pedal = self.sustain[usize::from(strike.channel & 15)];
+        let dampers = Dampers { pedal: self.sustain[usize::from(strike.channel & 15)], held: self.held_keys() };
         // The same key again: strike the same string.
         if let Some(i) = self.voices.iter().position(|v| v.upcoming_key() == Some(strike.key)) {
             let v = &mut self.voices[i];
             if v.fading() {
                 v.steal(strike, self.sample_rate, now);
             } else {
-                v.play_with(strike, &self.settings, now, Some((&self.partners, pedal)));
+                v.play_with(strike, &self.settings, now, Some((&self.partners, dampers)));
             }
             return Some(i);
         }
         if let Some(i) = self.voices.iter().position(|v| !v.sounding && !v.fading()) {
-            self.voices[i].play_with(strike, &self.settings, now, Some((&self.partners, pedal)));
+            self.voices[i].play_with(strike, &self.settings, now, Some((&self.partners, dampers)));
             return Some(i);
         }
         // Steal the least audible voice: the quietest output over its latest block.
@@ -633,9 +638,10 @@ impl Instrument {
         self.circuit.tune(self.resonance, self.sample_rate);
         self.partners.retune(&self.settings);
         let mut seeks = PARTNER_SEEKS;
+        let held = self.held_keys();
         for v in &mut self.voices {
-            let sustained = self.sustain[usize::from(v.strike.channel)];
-            v.begin_block(&self.settings, sustained, len, self.now, Some(&self.partners), &mut seeks);
+            let dampers = Dampers { pedal: self.sustain[usize::from(v.strike.channel)], held };
+            v.begin_block(&self.settings, dampers, len, self.now, Some(&self.partners), &mut seeks);
         }
         // The pickup slides to a new position instead of jumping: its weights move a little in
         // each block, linearly across the block, never in one audible step.

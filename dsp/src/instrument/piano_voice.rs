@@ -22,14 +22,15 @@
 //!   with time constant `damper_time` as the felt settles (towards 0 as it lifts). The rates
 //!   change the string's coefficients, never its state ([`ModalString::set_extra_decay`]), so the
 //!   sound dies away continuously however fast the damper lands.
-//! - **Partners.** With the sustain pedal down, the strings of the other keys whose modes meet
-//!   the key's partials ring with it on its bridge (docs/physics.md §14); with it up, those of
-//!   them without a damper. A key struck with the pedal down starts with them all free; one struck
-//!   before the pedal goes down gets those with a damper at the first block with the pedal down
-//!   and the felt off the strings (a few keys a block, see
-//!   [`PARTNER_SEEKS`](super::PARTNER_SEEKS)), at rest on the bridge's line
-//!   ([`UnisonCore::add_partners`]), their dampers lifting as the pedal's do. Lifting the pedal
-//!   lets their dampers down; they stay on the bridge until the key's next strike from silence.
+//! - **Partners.** The strings of the other keys whose modes meet the key's partials ring with
+//!   it on its bridge while their dampers are off (docs/physics.md §14, [`Dampers`]): all of them
+//!   with the sustain pedal down; with it up, those of the keys held down and those without a
+//!   damper. A key starts with those free at its strike; the others join once their dampers lift
+//!   (the pedal goes down, or their keys), at the first block with the felt off the strings (a
+//!   few keys a block, see [`PARTNER_SEEKS`](super::PARTNER_SEEKS)), at rest on the bridge's line
+//!   ([`UnisonCore::add_partners`]), their dampers lifting as the pedal's do. Lifting the pedal,
+//!   or letting their keys go, lets their dampers down; they stay on the bridge until the key's
+//!   next strike from silence.
 //! - **Release.** A voice is free again once its strings are silent: their energy and its
 //!   partners' (the hammer flying off and the bridge's slowest modes do not count) below
 //!   [`RELEASE_ENERGY`] of its latest strike's, with the hammer flying away (a silent string cannot
@@ -120,6 +121,36 @@ pub fn has_damper(key: u8) -> bool {
     key < FIRST_UNDAMPED_KEY
 }
 
+/// Which keys' strings are free of their dampers: every key's with the sustain pedal down, else
+/// those of the keys held down and of the keys without a damper.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Dampers {
+    /// Whether the sustain pedal is down.
+    pub pedal: bool,
+    /// The keys held down, one bit per MIDI key (bit `k` for key `k`).
+    pub held: u128,
+}
+
+impl Dampers {
+    /// The keys from [`FIRST_UNDAMPED_KEY`] up, one bit per MIDI key.
+    const UNDAMPED: u128 = u128::MAX << FIRST_UNDAMPED_KEY;
+
+    /// The keys whose strings are free, one bit per MIDI key.
+    pub fn lifted(&self) -> u128 {
+        if self.pedal { u128::MAX } else { self.held | Self::UNDAMPED }
+    }
+
+    /// Whether `key`'s strings are free.
+    pub fn is_lifted(&self, key: u8) -> bool {
+        self.lifted() >> (key & 127) & 1 == 1
+    }
+}
+
+/// The bit of MIDI key `key` in a [`Dampers`] mask.
+fn bit(key: u8) -> u128 {
+    1 << (key & 127)
+}
+
 /// Shortest interval between updates of the string's coefficients while a damper moves (s): the
 /// rates change smoothly, so recomputing them every ~0.7 ms (32 samples at 44.1 kHz) is enough,
 /// and at N_b = 1 it keeps a landing damper from costing a pass of exponentials every sample.
@@ -149,39 +180,31 @@ pub fn damper_shares(string: &ModalString, position: f64, out: &mut Vec<f64>) {
     out.extend(string.wavenumbers().iter().map(|&beta| (mean(beta) / first).max(1.0)));
 }
 
-/// `key`'s partners in `table` whose dampers are off: every one with the pedal down (`pedal`), else
-/// those without a damper.
+/// Some of `key`'s partners in `table`, in the table's order (strongest first).
 #[derive(Debug)]
 struct PartnerList<'a> {
     /// `(string, modes)` of each partner.
     strings: [(&'a ModalString, usize); MAX_PARTNERS],
-    /// Whether each partner has a damper (which the pedal lifts and lets down).
-    damped: [bool; MAX_PARTNERS],
+    /// The key of each partner.
+    keys: [u8; MAX_PARTNERS],
     count: usize,
+    /// Every partner the table has for `key`, chosen or not, one bit per MIDI key.
+    all: u128,
 }
 
 impl<'a> PartnerList<'a> {
-    /// The partners ringing with a key struck with the pedal down or up, in the table's order.
-    fn at_strike(table: &'a PartnerTable, key: u8, pedal: bool) -> Self {
-        Self::those(table, key, |damped| pedal || !damped)
-    }
-
-    /// The partners a key struck with the pedal up gains once the pedal goes down: those with a
-    /// damper (it has the others from the strike).
-    fn with_pedal_later(table: &'a PartnerTable, key: u8) -> Self {
-        Self::those(table, key, |damped| damped)
-    }
-
-    /// `key`'s partners in `table`, in its order, that `keep` keeps given whether each has a damper.
-    fn those(table: &'a PartnerTable, key: u8, keep: impl Fn(bool) -> bool) -> Self {
+    /// `key`'s partners in `table` among `keys` (one bit per MIDI key).
+    fn among(table: &'a PartnerTable, key: u8, keys: u128) -> Self {
         let mut picks = [(0, 0); MAX_PARTNERS];
         let count = table.pick(key, &mut picks);
-        let mut list = Self { strings: [(table.string(0), 0); MAX_PARTNERS], damped: [false; MAX_PARTNERS], count: 0 };
+        let mut list =
+            Self { strings: [(table.string(0), 0); MAX_PARTNERS], keys: [0; MAX_PARTNERS], count: 0, all: 0 };
         for &(i, modes) in &picks[..count] {
-            let damped = has_damper(PartnerTable::key(i));
-            if keep(damped) {
+            let partner = PartnerTable::key(i);
+            list.all |= bit(partner);
+            if keys & bit(partner) != 0 {
                 list.strings[list.count] = (table.string(i), modes);
-                list.damped[list.count] = damped;
+                list.keys[list.count] = partner;
                 list.count += 1;
             }
         }
@@ -213,16 +236,18 @@ pub struct PianoVoice {
     damper: f64,
     /// The extra decay at the fundamental the string's coefficients hold now (1/s).
     applied: f64,
-    /// The partner strings' dampers' decay rate now (1/s), moving towards 0 with the pedal down
-    /// and towards the damper's rate with it up, and the rate their coefficients hold.
-    partner_damper: f64,
-    partner_applied: f64,
+    /// The key of each of the core's partners, and the same keys one bit per MIDI key.
+    partner_keys: [u8; MAX_PARTNERS],
+    partners_present: u128,
+    /// The partners the table gave at the strike that may still join once their dampers lift
+    /// (one bit per MIDI key).
+    partners_waiting: u128,
+    /// Each partner's damper's decay rate now (1/s), moving towards 0 while its key's strings are
+    /// free and towards the damper's rate while they are not, and the rate its coefficients hold.
+    partner_dampers: [f64; MAX_PARTNERS],
+    partner_applied: [f64; MAX_PARTNERS],
     /// Seconds since the partners' coefficients were last updated.
     partner_since: f64,
-    /// Whether the voice has looked for partners since its strike (it has them if any were found).
-    partners_sought: bool,
-    /// Which of the core's partners have a damper (the others ring whatever the pedal does).
-    partner_damped: [bool; MAX_PARTNERS],
     /// The damper's share of each mode relative to the fundamental, `g_i` (module docs).
     damper_shape: Vec<f64>,
     /// Scratch: the extra decay rate of each mode (1/s).
@@ -271,11 +296,12 @@ impl PianoVoice {
             pan: [1.0; 2],
             damper: 0.0,
             applied: 0.0,
-            partner_damper: 0.0,
-            partner_applied: 0.0,
+            partner_keys: [0; MAX_PARTNERS],
+            partners_present: 0,
+            partners_waiting: 0,
+            partner_dampers: [0.0; MAX_PARTNERS],
+            partner_applied: [0.0; MAX_PARTNERS],
             partner_since: 0.0,
-            partners_sought: false,
-            partner_damped: [false; MAX_PARTNERS],
             since_update: 0.0,
             reference_energy: 0.0,
             position: note.strike_position,
@@ -307,14 +333,15 @@ impl PianoVoice {
         self.play_with(strike, settings, now, None);
     }
 
-    /// [`play`](Self::play), a key struck from silence with the pedal down (`partners.1`) ringing
-    /// with its partners from the table `partners.0` (docs/physics.md §14).
+    /// [`play`](Self::play), a key struck from silence ringing with those of its partners from
+    /// the table `partners.0` whose strings are free of their dampers (`partners.1`;
+    /// docs/physics.md §14).
     pub fn play_with(
         &mut self,
         strike: Strike,
         settings: &Settings,
         now: u64,
-        partners: Option<(&PartnerTable, bool)>,
+        partners: Option<(&PartnerTable, Dampers)>,
     ) {
         let note = piano_note(strike.key);
         let position = (note.strike_position * settings.strike_position).clamp(0.02, 0.5);
@@ -333,26 +360,26 @@ impl PianoVoice {
             let max_frequency = settings.max_frequency.min(0.5 * fs);
             // The per-note rule and the clamped settings always give a valid unison.
             // Partners ring only while their dampers are off: all of them from a key struck with
-            // the pedal down, those without a damper from one struck with it up. Under their
-            // dampers they would barely move, and cost as much.
-            let retuned = match partners {
-                Some((table, pedal)) => {
-                    let list = PartnerList::at_strike(table, strike.key, pedal);
-                    self.partner_damped = list.damped;
-                    self.core.retune_with_partners(&unison, max_frequency, position, &list.strings[..list.count])
+            // the pedal down; with it up, those of the keys held down and those without a damper.
+            // Under their dampers they would barely move, and cost as much. The others wait until
+            // their dampers lift.
+            let (retuned, list) = match partners {
+                Some((table, dampers)) => {
+                    let list = PartnerList::among(table, strike.key, dampers.lifted());
+                    let strings = &list.strings[..list.count];
+                    (self.core.retune_with_partners(&unison, max_frequency, position, strings), Some(list))
                 }
-                None => {
-                    self.partner_damped = [false; MAX_PARTNERS];
-                    self.core.retune(&unison, max_frequency, position)
-                }
+                None => (self.core.retune(&unison, max_frequency, position), None),
             };
             if retuned.is_err() {
                 return;
             }
-            self.partners_sought = matches!(partners, Some((_, true)));
-            // Partners start free: a key struck with the pedal up has only undamped ones.
-            self.partner_damper = 0.0;
-            self.partner_applied = 0.0;
+            self.partner_keys = list.as_ref().map_or([0; MAX_PARTNERS], |l| l.keys);
+            self.partners_present = self.partner_keys[..self.core.partners()].iter().fold(0, |m, &k| m | bit(k));
+            self.partners_waiting = list.map_or(0, |l| l.all & !self.partners_present);
+            // The partners there start free.
+            self.partner_dampers = [0.0; MAX_PARTNERS];
+            self.partner_applied = [0.0; MAX_PARTNERS];
             self.shape_damper(position);
             self.damper = 0.0;
             self.applied = 0.0;
@@ -380,20 +407,23 @@ impl PianoVoice {
         self.started = now;
     }
 
-    /// With the pedal down, the damped partners of a key struck with it up join its bridge
-    /// (beside the undamped ones it has), at rest where their dampers held them, their dampers
-    /// lifting as the pedal's do.
-    fn seek_partners(&mut self, settings: &Settings, table: &PartnerTable) {
-        self.partners_sought = true;
-        let list = PartnerList::with_pedal_later(table, self.strike.key);
+    /// The waiting partners whose dampers have lifted (`lifted`, one bit per MIDI key) join the
+    /// bridge beside those there, at rest where their dampers held them, their dampers lifting
+    /// from the damper's rate. Those the bridge has no room for stop waiting.
+    fn seek_partners(&mut self, settings: &Settings, table: &PartnerTable, lifted: u128) {
+        let list = PartnerList::among(table, self.strike.key, lifted & self.partners_waiting);
         let had = self.core.partners();
         let added = self.core.add_partners(&list.strings[..list.count]);
+        self.partner_keys[had..had + added].copy_from_slice(&list.keys[..added]);
+        self.partners_present |= list.keys[..added].iter().fold(0, |m, &k| m | bit(k));
+        // A retuned table may no longer pair them: they stop waiting too.
+        self.partners_waiting &= !lifted & list.all;
         if added > 0 {
-            self.partner_damped[had..had + added].fill(true);
-            self.partner_damper = settings.damper_rate;
-            self.partner_applied = settings.damper_rate;
-            self.partner_since = 0.0;
-            self.core.set_partner_decay(settings.damper_rate, &self.partner_damped);
+            self.partner_dampers[had..had + added].fill(settings.damper_rate);
+            self.partner_applied[had..had + added].fill(settings.damper_rate);
+            let mut rates = [None; MAX_PARTNERS];
+            rates[had..had + added].fill(Some(settings.damper_rate));
+            self.core.set_partner_decays(&rates);
         }
     }
 
@@ -416,8 +446,8 @@ impl PianoVoice {
         self.extra.clear();
         self.extra.resize(self.core.modes(), STEAL_RATE);
         self.core.set_extra_decay(&self.extra, STEAL_RATE);
-        self.core.set_partner_decay(STEAL_RATE, &[true; MAX_PARTNERS]);
-        self.partner_applied = f64::NAN;
+        self.core.set_partner_decays(&[Some(STEAL_RATE); MAX_PARTNERS]);
+        self.partner_applied = [f64::NAN; MAX_PARTNERS];
         self.applied = f64::NAN;
     }
 
@@ -429,12 +459,21 @@ impl PianoVoice {
         }
     }
 
-    /// Release `key` on `channel` if this voice plays it (or will, after a steal fade).
+    /// Release `key` on `channel` if this voice plays it (or will, after a steal fade), or
+    /// played it and fell silent with the key held.
     pub fn key_up(&mut self, channel: u8, key: u8) {
         match self.pending {
             Some(p) if p.channel == channel && p.key == key => self.pending_released = true,
-            _ if self.sounding && self.strike.channel == channel && self.strike.key == key => self.key_down = false,
+            _ if self.strike.channel == channel && self.strike.key == key => self.key_down = false,
             _ => {}
+        }
+    }
+
+    /// The key this voice holds down (its damper off the strings), if any.
+    pub fn held_key(&self) -> Option<u8> {
+        match self.pending {
+            Some(p) => (!self.pending_released).then_some(p.key),
+            None => self.key_down.then_some(self.strike.key),
         }
     }
 
@@ -488,14 +527,15 @@ impl PianoVoice {
         self.loudness
     }
 
-    /// Work at a control-block boundary: start a pending note, bring the partners in if the pedal
-    /// went down after the strike (while `seeks`, the voices that may still do so in this block,
-    /// is above 0; it counts down), move the damper towards its target for the coming `len`
-    /// samples, release the voice once silent.
+    /// Work at a control-block boundary: start a pending note, bring in the partners whose
+    /// dampers have lifted since the strike (`dampers`: the pedal went down, or their keys; while
+    /// `seeks`, the voices that may still do so in this block, is above 0; it counts down), move
+    /// the dampers towards their targets for the coming `len` samples, release the voice once
+    /// silent.
     pub fn begin_block(
         &mut self,
         settings: &Settings,
-        sustained: bool,
+        dampers: Dampers,
         len: usize,
         now: u64,
         partners: Option<&PartnerTable>,
@@ -514,7 +554,7 @@ impl PianoVoice {
         {
             self.pending = None;
             self.sounding = false;
-            self.play_with(strike, settings, now, partners.map(|table| (table, sustained)));
+            self.play_with(strike, settings, now, partners.map(|table| (table, dampers)));
             self.key_down = !self.pending_released;
         }
         if self.pending.is_some() {
@@ -522,17 +562,17 @@ impl PianoVoice {
             return;
         }
         // Not while the felt may touch: the contact's coefficients would change under the solver.
-        if sustained
-            && !self.partners_sought
+        let lifted = dampers.lifted();
+        if lifted & self.partners_waiting != 0
             && *seeks > 0
             && !self.core.in_contact()
             && let Some(table) = partners
         {
             *seeks -= 1;
-            self.seek_partners(settings, table);
+            self.seek_partners(settings, table, lifted);
         }
         let span = len as f64 / fs;
-        let damped = !(self.key_down || sustained) && has_damper(self.strike.key);
+        let damped = !(self.key_down || dampers.pedal) && has_damper(self.strike.key);
         let target = if damped { settings.damper_rate } else { 0.0 };
         self.damper += (target - self.damper) * (1.0 - (-span / settings.damper_time).exp());
         if (target - self.damper).abs() <= 1e-3 * target.max(1.0) {
@@ -546,21 +586,27 @@ impl PianoVoice {
             self.extra.extend(self.damper_shape.iter().map(|g| self.damper * g));
             self.core.set_extra_decay(&self.extra, 0.0);
         }
-        // The other keys' dampers fall on their strings as the pedal lifts, and rise as it goes
-        // down, as the voice's own does.
-        let target = if sustained { 0.0 } else { settings.damper_rate };
-        self.partner_damper += (target - self.partner_damper) * (1.0 - (-span / settings.damper_time).exp());
-        if (target - self.partner_damper).abs() <= 1e-3 * target.max(1.0) {
-            self.partner_damper = target;
+        // The other keys' dampers fall on their strings as their keys are let go with the pedal
+        // up, or the pedal lifts, and rise as the keys or the pedal go down, as the voice's own.
+        let mut rates = [None; MAX_PARTNERS];
+        let mut settled = true;
+        for j in 0..self.core.partners() {
+            let target = if lifted & bit(self.partner_keys[j]) != 0 { 0.0 } else { settings.damper_rate };
+            let rate = &mut self.partner_dampers[j];
+            *rate += (target - *rate) * (1.0 - (-span / settings.damper_time).exp());
+            if (target - *rate).abs() <= 1e-3 * target.max(1.0) {
+                *rate = target;
+            }
+            if *rate != self.partner_applied[j] {
+                rates[j] = Some(*rate);
+                settled &= *rate == target;
+            }
         }
         self.partner_since += span;
-        if self.partner_damped[..self.core.partners()].contains(&true)
-            && self.partner_damper != self.partner_applied
-            && (self.partner_since >= DAMPER_UPDATE || self.partner_damper == target)
-        {
+        if rates.iter().any(Option::is_some) && (self.partner_since >= DAMPER_UPDATE || settled) {
             self.partner_since = 0.0;
-            self.partner_applied = self.partner_damper;
-            self.core.set_partner_decay(self.partner_damper, &self.partner_damped);
+            self.partner_applied = self.partner_dampers;
+            self.core.set_partner_decays(&rates);
         }
         let string_energy = self.core.own_energy();
         // The guard: with no source but the hammer, the string never holds more than the strike's
@@ -621,7 +667,7 @@ mod tests {
         voice.play(Strike { channel: 0, key: 60, velocity: 0.7 }, &settings, 0);
         let mut out = [0.0; 64];
         for _ in 0..blocks {
-            voice.begin_block(&settings, false, 64, 0, None, &mut 0);
+            voice.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
             voice.render(&mut out);
         }
         (voice, settings)
@@ -646,15 +692,15 @@ mod tests {
         let (mut voice, settings) = struck(20);
         let mut twin = voice.clone();
         let (mut plain, mut faded) = ([0.0; 64], [0.0; 64]);
-        twin.begin_block(&settings, false, 64, 0, None, &mut 0);
+        twin.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
         twin.render(&mut plain);
         voice.reference_energy *= 1e-6;
-        voice.begin_block(&settings, false, 64, 0, None, &mut 0);
+        voice.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
         voice.render(&mut faded);
         for (i, (f, p)) in faded.iter().zip(&plain).enumerate() {
             assert_eq!(*f, p * (1.0 - i as f64 / 64.0), "sample {i}");
         }
-        voice.begin_block(&settings, false, 64, 0, None, &mut 0);
+        voice.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
         assert!(!voice.sounding);
         assert_eq!(voice.guard_trips(), 1);
         assert_eq!(voice.core.own_energy(), 0.0);

@@ -86,8 +86,8 @@
 //! `m_L`, `k_L`), with no hammer on it (`h = 0`), its lowest modes in the coupled part, and its
 //! bridge force in the output. It only adds terms to the sums `Θ`, `E` and `G₀` above: the bridge
 //! is still eliminated in closed form and the contact stays one scalar. A damper on the partners
-//! (the pedal up) is an extra decay rate on their modes ([`UnisonCore::set_partner_decay`]), on
-//! those partners that have one.
+//! is an extra decay rate on their modes ([`UnisonCore::set_partner_decays`]), set for each
+//! partner as its damper lands or lifts.
 //!
 //! # Retiring the hammer
 //!
@@ -490,14 +490,15 @@ impl UnisonCore {
         self.refresh_coupling();
     }
 
-    /// Add the decay rate `rate` (1/s) to the modes of each partner `j` with `damped[j]` (a damper
-    /// on those partners' strings, or 0 to lift it); the others keep theirs. The state is
-    /// untouched; the coupling follows.
-    pub fn set_partner_decay(&mut self, rate: f64, damped: &[bool]) {
-        let rates = [rate; PARTNER_MODES];
-        for (range, _) in self.partner_ranges[..self.partners].iter().cloned().zip(damped).filter(|(_, d)| **d) {
-            let n = range.len().min(rates.len());
-            self.coupled_bank.set_extra_decay(range, &rates[..n]);
+    /// Set the extra decay rate of each partner `j` with `rates[j] = Some(rate)` (1/s): a damper
+    /// on its strings, or 0 to lift it; those with `None` keep theirs. The state is untouched;
+    /// the coupling follows.
+    pub fn set_partner_decays(&mut self, rates: &[Option<f64>]) {
+        for (range, rate) in self.partner_ranges[..self.partners].iter().cloned().zip(rates) {
+            if let Some(rate) = *rate {
+                let n = range.len().min(PARTNER_MODES);
+                self.coupled_bank.set_extra_decay(range, &[rate; PARTNER_MODES][..n]);
+            }
         }
         self.refresh_coupling();
         if self.retired {
