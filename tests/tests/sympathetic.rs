@@ -5,7 +5,7 @@
 
 use qsa_dsp::instrument::Event;
 use qsa_dsp::preset::key_frequency as hz;
-use xtask::realism::{FS, held_ring, held_with_pedal, level_near as level, performed, played, undamped_ring};
+use xtask::realism::{FS, added_to, held_ring, held_with_pedal, level_near as level, played, undamped_ring};
 
 /// C3 held with the pedal down against the same C3 with the pedal up: the difference is what the
 /// other keys' free strings add (and what C3's own partials give up to them). Over 1–3 s it is at
@@ -118,8 +118,7 @@ fn letting_a_held_key_go_damps_its_strings_as_a_partner() {
     let c3 =
         [(0.0, Event::NoteOn { channel: 0, key: 48, velocity: 0.7 }), (0.2, Event::NoteOff { channel: 0, key: 48 })];
     let fall = |c4: &[(f64, Event)]| {
-        let (both, only) = (performed(&[c4, &c3[..]].concat(), 2.3), performed(c4, 2.3));
-        let added: Vec<f64> = both.iter().zip(&only).map(|(b, o)| b - o).collect();
+        let added = added_to(c4, &c3, 2.3);
         let (before, after) = (&added[..(1.0 * FS) as usize], &added[(1.3 * FS) as usize..]);
         20.0 * (level(before, (0.5 * FS) as usize, hz(60)) / level(after, 0, hz(60))).log10()
     };
@@ -141,8 +140,7 @@ fn lifting_the_pedal_leaves_the_held_keys_strings_ringing() {
     let c4 = [(0.0, Event::NoteOn { channel: 0, key: 60, velocity: 1.0 / 127.0 })];
     let c3 =
         [(0.0, Event::NoteOn { channel: 0, key: 48, velocity: 0.7 }), (0.1, Event::NoteOff { channel: 0, key: 48 })];
-    let (both, only) = (performed(&[&pedal[..], &c4, &c3].concat(), 2.3), performed(&[&pedal[..], &c4].concat(), 2.3));
-    let added: Vec<f64> = both.iter().zip(&only).map(|(b, o)| b - o).collect();
+    let added = added_to(&[&pedal[..], &c4].concat(), &c3, 2.3);
     let (before, after) = (&added[..(1.0 * FS) as usize], &added[(1.3 * FS) as usize..]);
     let drop = |key: u8| 20.0 * (level(before, (0.3 * FS) as usize, hz(key)) / level(after, 0, hz(key))).log10();
     let (c4, g4) = (drop(60), drop(67));

@@ -212,6 +212,13 @@ pub fn performed(events: &[(f64, Event)], seconds: f64) -> Vec<f64> {
     performed_in(64, events, seconds)
 }
 
+/// What `events` add to the sound of `background` (played alone and with them, [`performed`]):
+/// the other voices' sound cancels, the same in both.
+pub fn added_to(background: &[(f64, Event)], events: &[(f64, Event)], seconds: f64) -> Vec<f64> {
+    let (both, alone) = (performed(&[background, events].concat(), seconds), performed(background, seconds));
+    both.iter().zip(&alone).map(|(b, a)| b - a).collect()
+}
+
 /// [`performed`] in blocks of `block` samples.
 fn performed_in(block: usize, events: &[(f64, Event)], seconds: f64) -> Vec<f64> {
     let mut piano = Instrument::new(FS, 8, Settings { limiter: false, stereo_width: 0.0, ..Settings::default() });
@@ -242,8 +249,7 @@ pub fn held_ring(press: f64) -> [(u8, f64, f64); 3] {
     let from = (0.5 * FS) as usize;
     HELD_KEYS.map(|key| {
         let held = [(press.max(0.0), Event::NoteOn { channel: 0, key, velocity: 1.0 / 127.0 })];
-        let (both, only) = (performed(&[&held[..], &c3[..]].concat(), 1.5), performed(&held, 1.5));
-        let added: Vec<f64> = both.iter().zip(&only).map(|(b, o)| b - o).collect();
+        let added = added_to(&held, &c3, 1.5);
         (key, level_near(&added, from, key_frequency(key)), level_near(&added, from, key_frequency(key + 1)))
     })
 }
