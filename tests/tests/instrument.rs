@@ -375,6 +375,25 @@ fn the_pedal_pressed_after_the_strike_adds_no_click() {
     }
 }
 
+/// Keys pressed while another key rings with the pedal up, which brings their strings onto its
+/// bridge as partners, and let go, which lets their dampers down there, add no click: C3 held
+/// from the start, C4, G4 and C5 pressed as softly as MIDI can (velocity 1/127, so that their own
+/// attacks hardly sound and are judged too) at 0.1 s, after C3's hammer has left, and let go at
+/// 0.3 s; the detector stays below [`CLICK_DB`] outside C3's attack, in 1- and 64-sample host
+/// buffers (measured 7.9 dB in both, as clean damper landings: at most 8.7).
+#[test]
+fn keys_held_down_join_and_leave_as_partners_without_a_click() {
+    let mut score: Score = vec![(0, on(48, 0.7))];
+    score.extend([60u8, 67, 72].map(|k| (4_800, on(k, 1.0 / 127.0))));
+    score.extend([60u8, 67, 72].map(|k| (14_400, off(k))));
+    for size in [1, 64] {
+        let out = wide(&play(&mut piano(4), &score, 24_000, || size));
+        let (db, at) = click_strength(&out, FS, &attacks(&score[..1].to_vec()));
+        println!("buffers of {size}: worst click {db:.1} dB at {at}");
+        assert!(db < CLICK_DB, "buffers of {size}: {db:.1} dB at sample {at}");
+    }
+}
+
 /// The hardest damper on the bass does not trip the energy guard: a damper of 500 1/s landing
 /// 2 ms after the strike of keys 21 to 33 struck near the agraffe (Strike position ×0.25) damps
 /// the high modes, which the pad sees at every phase, up to 80 times faster than the
