@@ -762,7 +762,9 @@ fn readme(
          pedal's lengthening (the last two columns) is not the measured one. Two things stand in its way \
          (docs/physics.md §12.7): the strings' own loss alone keeps every partial decaying at 4.34 dB/s or faster (a T60 of \
          13.8 s; a fit across beats reads a little longer), short of every measured pedal-down T60, and a partner tuned almost exactly to a partial forms with it a motion that barely \
-         moves the bridge, so its energy is not heard.\n\n\
+         moves the bridge, so its energy is not heard. The factor also swings with the partners' exact tuning: \
+         every partner retuned by the same 1.5 or 3 cents, less than a unison's own spread, moves it to anywhere \
+         from 0.64 to 1.35 at these three keys, in no common direction.\n\n\
          ## Contact duration against key\n\n\
          ![contact duration](realism/contact.png)\n\n\
          The hammer's first contact with its strings (±21 µs), at 2.5 m/s and 5 m/s. At mezzo-forte it lasts \
