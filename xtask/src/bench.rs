@@ -10,7 +10,9 @@
 //! - `piano/16-voices/{64,512}` and `slide/16-voices/{64,512}`: the instrument engine (the
 //!   plugin's process path) at 48 kHz with 16 keys from C3 to C6 played together, pedal down,
 //!   rendered in 64- and 512-sample calls; `slide/16-voices/64/acoustic` the slide notes on the
-//!   acoustic guitar (each string on its copy of the body);
+//!   acoustic guitar (each string on its copy of the body); `piano/16-voices/arpeggio` the same
+//!   16 keys struck one after another every 80 ms, the pedal up, each held, in 64-sample calls:
+//!   each key joins as a partner the bridges of the sounding keys whose partials it meets;
 //! - `piano/c4`: one C4 voice of the instrument at 48 kHz; its line says how many such voices fit
 //!   in real time on one core (`1/rtf`, rounded down);
 //! - `piano/88-keys`: all 88 keys (A0 to C8) struck together, pedal down, 48 kHz: the whole
@@ -359,7 +361,8 @@ pub const RESTRIKE_VELOCITIES: std::ops::Range<f32> = 0.1..0.7;
 
 /// What an instrument case plays: `keys` together with the pedal down at velocity 0.7, and, with
 /// `restrike`, all of them again every `restrike.0` calls at one velocity drawn from
-/// [`RESTRIKE_VELOCITIES`] by a generator seeded with `restrike.1`.
+/// [`RESTRIKE_VELOCITIES`] by a generator seeded with `restrike.1`; with `arpeggio`, one after
+/// another with the pedal up instead, held.
 #[derive(Debug, Clone, Copy)]
 pub struct Performance<'a> {
     /// MIDI keys.
@@ -368,6 +371,9 @@ pub struct Performance<'a> {
     pub restrike: Option<(usize, u64)>,
     /// The call before which the sustain pedal goes down, if not with the first strike.
     pub late_pedal: Option<usize>,
+    /// Calls between the keys struck one at a time, the pedal up, each held: every key joins the
+    /// bridges of the sounding keys whose partials it meets as a partner.
+    pub arpeggio: Option<usize>,
 }
 
 /// Time the instrument with `settings` playing `play` for `seconds` in calls of `call` samples,
@@ -387,7 +393,7 @@ pub fn measure_piano(
         // One channel per note (the MPE way) so that slide notes are separate voices, not glides.
         for (i, &key) in keys.iter().enumerate() {
             let channel = if mode == Mode::Slide { (i % 16) as u8 } else { 0 };
-            if play.late_pedal.is_none() {
+            if play.late_pedal.is_none() && play.arpeggio.is_none() {
                 piano.handle(Event::Sustain { channel, down: true });
             }
             piano.handle(Event::NoteOn { channel, key, velocity });
@@ -396,7 +402,9 @@ pub fn measure_piano(
     let once = || {
         let mut piano = Instrument::new(PIANO_RATE, keys.len().max(1), settings);
         let mut velocities = rand_pcg::Pcg64::seed_from_u64(play.restrike.map_or(0, |r| r.1));
-        strike(&mut piano, 0.7);
+        if play.arpeggio.is_none() {
+            strike(&mut piano, 0.7);
+        }
         let (mut left, mut right) = (vec![0.0f32; call], vec![0.0f32; call]);
         let mut calls = Vec::with_capacity(samples / call);
         let start = std::time::Instant::now();
@@ -409,6 +417,12 @@ pub fn measure_piano(
             }
             if play.late_pedal == Some(n) {
                 piano.handle(Event::Sustain { channel: 0, down: true });
+            }
+            if let Some(every) = play.arpeggio
+                && n % every == 0
+                && let Some(&key) = keys.get(n / every)
+            {
+                piano.handle(Event::NoteOn { channel: 0, key, velocity: 0.7 });
             }
             let in_contact = piano.in_contact();
             let t = std::time::Instant::now();
@@ -571,16 +585,19 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
     let piano = Settings { mode: Mode::Piano, ..Settings::default() };
     let slide = Settings { mode: Mode::Slide, ..Settings::default() };
     let acoustic = Settings { slide_body: SlideBody::Acoustic, ..slide };
-    let once = |keys| Performance { keys, restrike: None, late_pedal: None };
+    let once = |keys| Performance { keys, restrike: None, late_pedal: None, arpeggio: None };
     // Every 120 calls of 16 samples: 40 ms, 50 strikes in 2 s.
-    let restrike = Performance { keys: &sixteen, restrike: Some((120, 6)), late_pedal: None };
+    let restrike = Performance { keys: &sixteen, restrike: Some((120, 6)), late_pedal: None, arpeggio: None };
+    // A key every 80 ms, the pedal up, held: 16 keys in 1.28 s.
+    let arpeggio = Performance { keys: &sixteen, restrike: None, late_pedal: None, arpeggio: Some(60) };
     // The pedal 0.5 s after the strike: every key brings its partners in.
-    let late_pedal = Performance { keys: &all, restrike: None, late_pedal: Some(375) };
+    let late_pedal = Performance { keys: &all, restrike: None, late_pedal: Some(375), arpeggio: None };
     let with = |method| Settings { method, ..piano };
     let cases = [
         ("piano/c4", piano, once(&c4), 64),
         ("piano/16-voices/64", piano, once(&sixteen), 64),
         ("piano/16-voices/512", piano, once(&sixteen), 512),
+        ("piano/16-voices/arpeggio", piano, arpeggio, 64),
         ("slide/16-voices/64", slide, once(&sixteen), 64),
         ("slide/16-voices/512", slide, once(&sixteen), 512),
         ("slide/16-voices/64/acoustic", acoustic, once(&sixteen), 64),
