@@ -139,11 +139,6 @@ impl Dampers {
     pub fn lifted(&self) -> u128 {
         if self.pedal { u128::MAX } else { self.held | Self::UNDAMPED }
     }
-
-    /// Whether `key`'s strings are free.
-    pub fn is_lifted(&self, key: u8) -> bool {
-        self.lifted() >> (key & 127) & 1 == 1
-    }
 }
 
 /// The bit of MIDI key `key` in a [`Dampers`] mask.
