@@ -238,12 +238,15 @@ fn performed_in(block: usize, events: &[(f64, Event)], seconds: f64) -> Vec<f64>
 /// and C♯4, whose strings no partial of C3 meets.
 pub const HELD_KEYS: [u8; 3] = [60, 67, 61];
 
+/// `(held key, amplitude at its pitch, amplitude a semitone above)` on the dry output, as
+/// [`held_ring`] gives.
+pub type HeldRing = (u8, f64, f64);
+
 /// C3 struck with the pedal up and let go after 0.2 s, with each of [`HELD_KEYS`] held down,
 /// pressed at velocity 1/127 (as softly as MIDI can) `press` s after C3 (0: just before it): what
 /// C3 adds to the held key's own sound 0.5–1.5 s after its strike, its own strings silenced by
-/// their damper, as `(held key, amplitude at its pitch, amplitude a semitone above)` (N;
-/// docs/physics.md §14).
-pub fn held_ring(press: f64) -> [(u8, f64, f64); 3] {
+/// their damper (docs/physics.md §14).
+pub fn held_ring(press: f64) -> [HeldRing; 3] {
     let c3 =
         [(0.0, Event::NoteOn { channel: 0, key: 48, velocity: 0.7 }), (0.2, Event::NoteOff { channel: 0, key: 48 })];
     let from = (0.5 * FS) as usize;
@@ -674,7 +677,7 @@ fn readme(
     contacts: &[Contact],
     decays: &[Decay],
     t60: &[T60Row],
-    (sympathy, undamped, held): (&Sympathy, [(u8, f64); 2], [(u8, f64, f64); 3]),
+    (sympathy, undamped, held): (&Sympathy, [(u8, f64); 2], [HeldRing; 3]),
     guitars: &Guitars,
 ) -> String {
     let spread = Settings::default().unison_detune;
