@@ -3,7 +3,7 @@
 //! and not their neighbours; with it up, those of them that have no damper or whose keys are held
 //! down.
 
-use qsa_dsp::instrument::Event;
+use qsa_dsp::instrument::{Event, Instrument, Settings};
 use qsa_dsp::preset::key_frequency as hz;
 use xtask::realism::{FS, added_to, held_ring, held_with_pedal, level_near as level, played, undamped_ring};
 
@@ -146,4 +146,43 @@ fn lifting_the_pedal_leaves_the_held_keys_strings_ringing() {
     let (c4, g4) = (drop(60), drop(67));
     println!("across the lift: G4 falls {g4:.1} dB, C4 {c4:.1} dB");
     assert!(g4 - c4 >= 30.0, "G4 {g4:.1} dB, C4 {c4:.1} dB");
+}
+
+/// A key stays held down when its voice is taken for another note: on a piano of two voices, C4
+/// pressed as softly as MIDI can and C3 struck, both held, then E5 struck at 0.1 s (taking C4's
+/// voice, the quieter) and C3 let go at 0.2 s. With C4 still held, C3 sounds 0.5–1.5 s later at
+/// C4's pitch at least 30 dB louder than with C4 let go at 0.15 s: its strings stay free on C3's
+/// bridge (measured 51.6 dB; 0.0 when a key counted as held only while a voice played it).
+#[test]
+fn a_key_stays_held_when_its_voice_is_taken() {
+    let at_c4 = |release: bool| {
+        let mut piano = Instrument::new(FS, 2, Settings { limiter: false, stereo_width: 0.0, ..Settings::default() });
+        piano.set_raw_output(true);
+        let mut events: Vec<(f64, Event)> = vec![
+            (0.0, Event::NoteOn { channel: 0, key: 60, velocity: 1.0 / 127.0 }),
+            (0.0, Event::NoteOn { channel: 0, key: 48, velocity: 0.7 }),
+            (0.1, Event::NoteOn { channel: 0, key: 76, velocity: 0.7 }),
+            (0.2, Event::NoteOff { channel: 0, key: 48 }),
+        ];
+        if release {
+            events.push((0.15, Event::NoteOff { channel: 0, key: 60 }));
+        }
+        events.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let n = (1.5 * FS) as usize;
+        let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
+        let mut next = 0;
+        for (k, (l, r)) in left.chunks_mut(64).zip(right.chunks_mut(64)).enumerate() {
+            while next < events.len() && (events[next].0 * FS) as usize <= k * 64 {
+                piano.handle(events[next].1);
+                next += 1;
+            }
+            piano.process(l, r);
+        }
+        assert_eq!(piano.steals(), 1, "E5 takes a voice");
+        let out: Vec<f64> = left.into_iter().map(f64::from).collect();
+        level(&out, (0.5 * FS) as usize, hz(60))
+    };
+    let louder = 20.0 * (at_c4(false) / at_c4(true)).log10();
+    println!("C4 held on against let go: {louder:.1} dB at its pitch");
+    assert!(louder >= 30.0, "{louder:.1} dB");
 }

@@ -265,6 +265,9 @@ pub struct Instrument {
     pickup: f64,
     /// Sustain pedal per channel.
     sustain: [bool; 16],
+    /// The keys held down on each channel, one bit per MIDI key: their dampers are off their
+    /// strings, so they ring as partners of the keys struck meanwhile (docs/physics.md §14).
+    keys_down: [u128; 16],
     /// Samples rendered since the start.
     now: u64,
     /// Samples into the current control block.
@@ -310,6 +313,7 @@ impl Instrument {
             channels: [ChannelState::default(); 16],
             pickup: settings.pickup_position,
             sustain: [false; 16],
+            keys_down: [0; 16],
             now: 0,
             in_block: 0,
             scratch: vec![0.0; MAX_BLOCK],
@@ -421,6 +425,7 @@ impl Instrument {
             | Event::NoteOnWithId { channel, key, .. }
             | Event::NoteOff { channel, key } => {
                 let (channel, key) = (channel & 15, key & 127);
+                self.keys_down[usize::from(channel)] &= !(1 << key);
                 for v in &mut self.voices {
                     v.key_up(channel, key);
                 }
@@ -452,11 +457,13 @@ impl Instrument {
             Event::Sustain { channel, down } => self.sustain[usize::from(channel & 15)] = down,
             Event::AllNotesOff => {
                 self.sustain = [false; 16];
+                self.keys_down = [0; 16];
                 self.voices.iter_mut().for_each(PianoVoice::release);
                 self.slides.iter_mut().for_each(SlideVoice::key_up);
             }
             Event::AllSoundOff => {
                 self.sustain = [false; 16];
+                self.keys_down = [0; 16];
                 self.voices.iter_mut().for_each(PianoVoice::silence);
                 self.slides.iter_mut().for_each(SlideVoice::silence);
                 self.output.clear();
@@ -469,6 +476,7 @@ impl Instrument {
     /// Play a note (velocity above 0) in the current mode, and note which voice took it.
     fn play(&mut self, channel: u8, key: u8, velocity: f32, voice: Option<i32>) {
         let strike = Strike { channel: channel & 15, key: key & 127, velocity: f64::from(velocity.min(1.0)) };
+        self.keys_down[usize::from(strike.channel)] |= 1 << strike.key;
         let note = Note { voice, channel: strike.channel, key: strike.key };
         let index = match self.settings.mode {
             Mode::Piano => self.note_on(strike),
@@ -501,9 +509,9 @@ impl Instrument {
         }
     }
 
-    /// The piano keys held down, whatever their channel, one bit per MIDI key.
+    /// The keys held down, whatever their channel, one bit per MIDI key.
     fn held_keys(&self) -> u128 {
-        self.voices.iter().filter_map(PianoVoice::held_key).fold(0, |held, key| held | 1 << (key & 127))
+        self.keys_down.iter().fold(0, |held, keys| held | keys)
     }
 
     /// Strike `strike` on a piano voice; the index of the voice that took it.

@@ -454,21 +454,12 @@ impl PianoVoice {
         }
     }
 
-    /// Release `key` on `channel` if this voice plays it (or will, after a steal fade), or
-    /// played it and fell silent with the key held.
+    /// Release `key` on `channel` if this voice plays it (or will, after a steal fade).
     pub fn key_up(&mut self, channel: u8, key: u8) {
         match self.pending {
             Some(p) if p.channel == channel && p.key == key => self.pending_released = true,
-            _ if self.strike.channel == channel && self.strike.key == key => self.key_down = false,
+            _ if self.sounding && self.strike.channel == channel && self.strike.key == key => self.key_down = false,
             _ => {}
-        }
-    }
-
-    /// The key this voice holds down (its damper off the strings), if any.
-    pub fn held_key(&self) -> Option<u8> {
-        match self.pending {
-            Some(p) => (!self.pending_released).then_some(p.key),
-            None => self.key_down.then_some(self.strike.key),
         }
     }
 
