@@ -171,6 +171,36 @@ fn damper_and_sustain_pedal() {
     assert!(h > 0.0 && d < 1e-3 * h, "the damper silences the note: {d} vs {h}");
 }
 
+/// With MPE each note has its own channel and the pedal comes on the zone's master channel (MIDI
+/// channel 1 for the lower zone, 16 for the upper): a note on a member channel released under the
+/// master's pedal rings on exactly as if its key were still down; under a pedal on another member
+/// channel its damper falls (at its fundamental, below 1e-3 of the held note's 0.2–0.3 s after
+/// release, the damper test's bound).
+#[test]
+fn the_pedal_on_an_mpe_master_channel_holds_every_channels_dampers() {
+    let dry = || {
+        let mut p = piano(2);
+        p.set_raw_output(true);
+        p
+    };
+    let note = |on: bool| match on {
+        true => Event::NoteOn { channel: 2, key: 60, velocity: 0.7 },
+        false => Event::NoteOff { channel: 2, key: 60 },
+    };
+    for (pedal, holds) in [(0u8, true), (15, true), (5, false)] {
+        let pedal = Event::Sustain { channel: pedal, down: true };
+        let released = play(&mut dry(), &vec![(0, pedal), (0, note(true)), (9_600, note(false))], 24_000, || 64);
+        let key_down = play(&mut dry(), &vec![(0, pedal), (0, note(true))], 24_000, || 64);
+        let (r, k) = (at_fundamental(&released[19_200..24_000], 60), at_fundamental(&key_down[19_200..24_000], 60));
+        println!("{pedal:?}: released {r:e}, key down {k:e}");
+        if holds {
+            assert_eq!(released, key_down, "{pedal:?} holds the note as the key would");
+        } else {
+            assert!(k > 0.0 && r < 1e-3 * k, "{pedal:?}: the damper silences the note: {r} vs {k}");
+        }
+    }
+}
+
 /// The top strings have no dampers (docs/physics.md §6.5): E6 and C8 released after 0.2 s ring on
 /// bit for bit as if their keys were still held, while D♯6, the highest key with a damper, falls
 /// silent as every damped key does (at its fundamental, below 1e-3 of the held note's 0.2–0.3 s

@@ -12,8 +12,8 @@
 //!   velocity.
 //! - Note-off lets the damper down: a felt pad whose extra decay rises towards `damper_rate` (at
 //!   the fundamental, faster for higher modes) with time constant `damper_time`, changing how fast
-//!   the string decays, never its state. The sustain pedal (CC64 ≥ 64 on the note's channel) holds
-//!   dampers off.
+//!   the string decays, never its state. The sustain pedal (CC64 ≥ 64 on the note's channel, or
+//!   on an MPE zone's master channel, 1 or 16, which speaks for every channel) holds dampers off.
 //! - Striking a key that still sounds strikes the same, still vibrating string: the hammer meets
 //!   it wherever it swings ([`PianoVoice`]).
 //!
@@ -509,6 +509,13 @@ impl Instrument {
         }
     }
 
+    /// Whether the sustain pedal holds the dampers off for notes on `channel`: its own pedal, or
+    /// that of an MPE zone's master channel (MIDI channel 1 for the lower zone, 16 for the upper),
+    /// whose controllers apply to every note of the zone.
+    fn pedal(&self, channel: u8) -> bool {
+        self.sustain[usize::from(channel & 15)] || self.sustain[0] || self.sustain[15]
+    }
+
     /// The keys held down, whatever their channel, one bit per MIDI key.
     fn held_keys(&self) -> u128 {
         self.keys_down.iter().fold(0, |held, keys| held | keys)
@@ -517,7 +524,7 @@ impl Instrument {
     /// Strike `strike` on a piano voice; the index of the voice that took it.
     fn note_on(&mut self, strike: Strike) -> Option<usize> {
         let now = self.now;
-        let dampers = Dampers { pedal: self.sustain[usize::from(strike.channel & 15)], held: self.held_keys() };
+        let dampers = Dampers { pedal: self.pedal(strike.channel), held: self.held_keys() };
         // The same key again: strike the same string.
         if let Some(i) = self.voices.iter().position(|v| v.upcoming_key() == Some(strike.key)) {
             let v = &mut self.voices[i];
@@ -647,8 +654,9 @@ impl Instrument {
         self.partners.retune(&self.settings);
         let mut seeks = PARTNER_SEEKS;
         let held = self.held_keys();
+        let pedals: [bool; 16] = std::array::from_fn(|channel| self.pedal(channel as u8));
         for v in &mut self.voices {
-            let dampers = Dampers { pedal: self.sustain[usize::from(v.strike.channel)], held };
+            let dampers = Dampers { pedal: pedals[usize::from(v.strike.channel & 15)], held };
             v.begin_block(&self.settings, dampers, len, self.now, Some(&self.partners), &mut seeks);
         }
         // The pickup slides to a new position instead of jumping: its weights move a little in
