@@ -7,6 +7,13 @@ use qsa_dsp::instrument::{Event, Instrument, Settings};
 use qsa_dsp::preset::key_frequency as hz;
 use xtask::realism::{FS, added_to, held_ring, held_with_pedal, level_near as level, played, undamped_ring};
 
+/// How far `x`'s level at key `key`'s pitch falls across a change at 1 s (dB): from `from`–1 s
+/// to 1.3 s–the end (the change's damper lands within the 0.3 s left out).
+fn fall(x: &[f64], from: f64, key: u8) -> f64 {
+    let (before, after) = (&x[..FS as usize], &x[(1.3 * FS) as usize..]);
+    20.0 * (level(before, (from * FS) as usize, hz(key)) / level(after, 0, hz(key))).log10()
+}
+
 /// C3 held with the pedal down against the same C3 with the pedal up: the difference is what the
 /// other keys' free strings add (and what C3's own partials give up to them). Over 1–3 s it is at
 /// least 15 dB stronger at the pitch of each of C4, G4, C5 and E5 (C3's 2nd to 5th partials) than
@@ -76,9 +83,7 @@ fn the_strings_without_dampers_ring_with_the_pedal_up() {
 #[test]
 fn lifting_the_pedal_damps_only_the_partners_with_dampers() {
     let out = played(72, true, 0.1, 1.0, 2.3);
-    let (before, after) = (&out[..(1.0 * FS) as usize], &out[(1.3 * FS) as usize..]);
-    let drop = |key: u8| 20.0 * (level(before, (0.3 * FS) as usize, hz(key)) / level(after, 0, hz(key))).log10();
-    let (c6, c7) = (drop(84), drop(96));
+    let (c6, c7) = (fall(&out, 0.3, 84), fall(&out, 0.3, 96));
     println!("across the lift: C6 falls {c6:.1} dB, C7 {c7:.1} dB");
     assert!(c6 - c7 >= 30.0, "C6 {c6:.1} dB, C7 {c7:.1} dB");
 }
@@ -117,11 +122,7 @@ fn a_held_key_rings_with_the_partials_of_a_staccato_note() {
 fn letting_a_held_key_go_damps_its_strings_as_a_partner() {
     let c3 =
         [(0.0, Event::NoteOn { channel: 0, key: 48, velocity: 0.7 }), (0.2, Event::NoteOff { channel: 0, key: 48 })];
-    let fall = |c4: &[(f64, Event)]| {
-        let added = added_to(c4, &c3, 2.3);
-        let (before, after) = (&added[..(1.0 * FS) as usize], &added[(1.3 * FS) as usize..]);
-        20.0 * (level(before, (0.5 * FS) as usize, hz(60)) / level(after, 0, hz(60))).log10()
-    };
+    let fall = |c4: &[(f64, Event)]| fall(&added_to(c4, &c3, 2.3), 0.5, 60);
     let press = (0.0, Event::NoteOn { channel: 0, key: 60, velocity: 1.0 / 127.0 });
     let (let_go, held) = (fall(&[press, (1.0, Event::NoteOff { channel: 0, key: 60 })]), fall(&[press]));
     println!("across C4's release: {let_go:.1} dB let go, {held:.1} dB held");
@@ -141,9 +142,7 @@ fn lifting_the_pedal_leaves_the_held_keys_strings_ringing() {
     let c3 =
         [(0.0, Event::NoteOn { channel: 0, key: 48, velocity: 0.7 }), (0.1, Event::NoteOff { channel: 0, key: 48 })];
     let added = added_to(&[&pedal[..], &c4].concat(), &c3, 2.3);
-    let (before, after) = (&added[..(1.0 * FS) as usize], &added[(1.3 * FS) as usize..]);
-    let drop = |key: u8| 20.0 * (level(before, (0.3 * FS) as usize, hz(key)) / level(after, 0, hz(key))).log10();
-    let (c4, g4) = (drop(60), drop(67));
+    let (c4, g4) = (fall(&added, 0.3, 60), fall(&added, 0.3, 67));
     println!("across the lift: G4 falls {g4:.1} dB, C4 {c4:.1} dB");
     assert!(g4 - c4 >= 30.0, "G4 {g4:.1} dB, C4 {c4:.1} dB");
 }
