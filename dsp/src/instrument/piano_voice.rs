@@ -141,6 +141,15 @@ impl Dampers {
     }
 }
 
+/// Move a damper's decay rate `rate` (1/s) the fraction `step` of the way to `target`, landing on
+/// it once within 0.1 % (of 1/s at least): the felt settling with its time constant.
+fn settle(rate: &mut f64, target: f64, step: f64) {
+    *rate += (target - *rate) * step;
+    if (target - *rate).abs() <= 1e-3 * target.max(1.0) {
+        *rate = target;
+    }
+}
+
 /// The bit of MIDI key `key` in a [`Dampers`] mask.
 fn bit(key: u8) -> u128 {
     1 << (key & 127)
@@ -231,9 +240,8 @@ pub struct PianoVoice {
     damper: f64,
     /// The extra decay at the fundamental the string's coefficients hold now (1/s).
     applied: f64,
-    /// The key of each of the core's partners, and the same keys one bit per MIDI key.
+    /// The key of each of the core's partners.
     partner_keys: [u8; MAX_PARTNERS],
-    partners_present: u128,
     /// The partners the table gave at the strike that may still join once their dampers lift
     /// (one bit per MIDI key).
     partners_waiting: u128,
@@ -292,7 +300,6 @@ impl PianoVoice {
             damper: 0.0,
             applied: 0.0,
             partner_keys: [0; MAX_PARTNERS],
-            partners_present: 0,
             partners_waiting: 0,
             partner_dampers: [0.0; MAX_PARTNERS],
             partner_applied: [0.0; MAX_PARTNERS],
@@ -370,8 +377,8 @@ impl PianoVoice {
                 return;
             }
             self.partner_keys = list.as_ref().map_or([0; MAX_PARTNERS], |l| l.keys);
-            self.partners_present = self.partner_keys[..self.core.partners()].iter().fold(0, |m, &k| m | bit(k));
-            self.partners_waiting = list.map_or(0, |l| l.all & !self.partners_present);
+            let present = self.partner_keys[..self.core.partners()].iter().fold(0, |m, &k| m | bit(k));
+            self.partners_waiting = list.map_or(0, |l| l.all & !present);
             // The partners there start free.
             self.partner_dampers = [0.0; MAX_PARTNERS];
             self.partner_applied = [0.0; MAX_PARTNERS];
@@ -410,7 +417,6 @@ impl PianoVoice {
         let had = self.core.partners();
         let added = self.core.add_partners(&list.strings[..list.count]);
         self.partner_keys[had..had + added].copy_from_slice(&list.keys[..added]);
-        self.partners_present |= list.keys[..added].iter().fold(0, |m, &k| m | bit(k));
         // A retuned table may no longer pair them: they stop waiting too.
         self.partners_waiting &= !lifted & list.all;
         if added > 0 {
@@ -558,12 +564,11 @@ impl PianoVoice {
             self.seek_partners(settings, table, lifted);
         }
         let span = len as f64 / fs;
+        // The fraction of the way a damper's rate moves to its target over this block.
+        let step = 1.0 - (-span / settings.damper_time).exp();
         let damped = !(self.key_down || dampers.pedal) && has_damper(self.strike.key);
         let target = if damped { settings.damper_rate } else { 0.0 };
-        self.damper += (target - self.damper) * (1.0 - (-span / settings.damper_time).exp());
-        if (target - self.damper).abs() <= 1e-3 * target.max(1.0) {
-            self.damper = target;
-        }
+        settle(&mut self.damper, target, step);
         self.since_update += span;
         if self.damper != self.applied && (self.since_update >= DAMPER_UPDATE || self.damper == target) {
             self.since_update = 0.0;
@@ -579,10 +584,7 @@ impl PianoVoice {
         for j in 0..self.core.partners() {
             let target = if lifted & bit(self.partner_keys[j]) != 0 { 0.0 } else { settings.damper_rate };
             let rate = &mut self.partner_dampers[j];
-            *rate += (target - *rate) * (1.0 - (-span / settings.damper_time).exp());
-            if (target - *rate).abs() <= 1e-3 * target.max(1.0) {
-                *rate = target;
-            }
+            settle(rate, target, step);
             if *rate != self.partner_applied[j] {
                 rates[j] = Some(*rate);
                 settled &= *rate == target;
