@@ -3,9 +3,11 @@
 //! and not their neighbours; with it up, those of them that have no damper or whose keys are held
 //! down.
 
-use qsa_dsp::instrument::{Event, Instrument, Settings};
+use qsa_dsp::instrument::Event;
 use qsa_dsp::preset::key_frequency as hz;
-use xtask::realism::{FS, added_to, held_ring, held_with_pedal, level_near as level, played, undamped_ring};
+use xtask::realism::{
+    FS, added_to, dry_piano, held_ring, held_with_pedal, level_near as level, perform, played, undamped_ring,
+};
 
 /// How far `x`'s level at key `key`'s pitch falls across a change at 1 s (dB): from `from`–1 s
 /// to 1.3 s–the end (the change's damper lands within the 0.3 s left out).
@@ -155,9 +157,8 @@ fn lifting_the_pedal_leaves_the_held_keys_strings_ringing() {
 #[test]
 fn a_key_stays_held_when_its_voice_is_taken() {
     let at_c4 = |release: bool| {
-        let mut piano = Instrument::new(FS, 2, Settings { limiter: false, stereo_width: 0.0, ..Settings::default() });
-        piano.set_raw_output(true);
-        let mut events: Vec<(f64, Event)> = vec![
+        let mut piano = dry_piano(2);
+        let mut events = vec![
             (0.0, Event::NoteOn { channel: 0, key: 60, velocity: 1.0 / 127.0 }),
             (0.0, Event::NoteOn { channel: 0, key: 48, velocity: 0.7 }),
             (0.1, Event::NoteOn { channel: 0, key: 76, velocity: 0.7 }),
@@ -166,19 +167,8 @@ fn a_key_stays_held_when_its_voice_is_taken() {
         if release {
             events.push((0.15, Event::NoteOff { channel: 0, key: 60 }));
         }
-        events.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let n = (1.5 * FS) as usize;
-        let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
-        let mut next = 0;
-        for (k, (l, r)) in left.chunks_mut(64).zip(right.chunks_mut(64)).enumerate() {
-            while next < events.len() && (events[next].0 * FS) as usize <= k * 64 {
-                piano.handle(events[next].1);
-                next += 1;
-            }
-            piano.process(l, r);
-        }
+        let out = perform(&mut piano, 64, &events, 1.5);
         assert_eq!(piano.steals(), 1, "E5 takes a voice");
-        let out: Vec<f64> = left.into_iter().map(f64::from).collect();
         level(&out, (0.5 * FS) as usize, hz(60))
     };
     let louder = 20.0 * (at_c4(false) / at_c4(true)).log10();

@@ -221,8 +221,20 @@ pub fn added_to(background: &[(f64, Event)], events: &[(f64, Event)], seconds: f
 
 /// [`performed`] in blocks of `block` samples.
 fn performed_in(block: usize, events: &[(f64, Event)], seconds: f64) -> Vec<f64> {
-    let mut piano = Instrument::new(FS, 8, Settings { limiter: false, stereo_width: 0.0, ..Settings::default() });
+    perform(&mut dry_piano(8), block, events, seconds)
+}
+
+/// A piano of `voices` voices with its dry output, centred, without the limiter: what the
+/// realism measurements play.
+pub fn dry_piano(voices: usize) -> Instrument {
+    let mut piano = Instrument::new(FS, voices, Settings { limiter: false, stereo_width: 0.0, ..Settings::default() });
     piano.set_raw_output(true);
+    piano
+}
+
+/// `seconds` of `piano`'s left channel playing `events` in blocks of `block` samples, each event
+/// at the start of the block its time (s) falls in, in the order given.
+pub fn perform(piano: &mut Instrument, block: usize, events: &[(f64, Event)], seconds: f64) -> Vec<f64> {
     let n = (seconds * FS) as usize;
     let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
     for (k, (l, r)) in left.chunks_mut(block).zip(right.chunks_mut(block)).enumerate() {
