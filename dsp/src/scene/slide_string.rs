@@ -148,6 +148,9 @@ const fn contact(slot: usize) -> usize {
 /// excites nor damps the string: `F_φe = 0`, `γ_φ = 0`). A touching contact whose position
 /// changes across the block (with `N_b ≥ 2`) is interpolated between its start and end vectors,
 /// so the passes use both; any other touching contact uses its start vector alone.
+///
+/// There are 128 plans, one for each combination, made once ([`PLANS`]): a block looks its plan
+/// up, and two blocks have the same plan when they have the same key.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct Plan {
     touching: [bool; 3],
@@ -157,28 +160,70 @@ struct Plan {
     /// The slots in use, in order: `slots[..count]`.
     slots: [usize; SLOTS],
     count: usize,
+    /// The plan's index in [`PLANS`]: its flags, one bit each.
+    key: u8,
 }
 
-impl Plan {
-    /// No contact at all (before the first block).
-    const NONE: Plan = Plan { touching: [false; 3], moving: [false; 3], bridge: false, slots: [0; SLOTS], count: 0 };
+/// Every plan, by key (its flags, one bit each: see [`Plan::touching_bit`]).
+static PLANS: [Plan; 128] = {
+    let mut plans = [Plan::NONE; 128];
+    let mut key = 0;
+    while key < 128 {
+        plans[key] = Plan::make(key as u8);
+        key += 1;
+    }
+    plans
+};
 
-    fn new(touching: [bool; 3], moving: [bool; 3], bridge: bool) -> Self {
-        let mut plan = Plan { touching, moving, bridge, slots: [0; SLOTS], count: 0 };
-        for c in 0..3 {
-            let ends: &[bool] = if !touching[c] {
-                &[]
-            } else if moving[c] {
-                &[false, true]
-            } else {
-                &[false]
-            };
-            for &end in ends {
-                plan.slots[plan.count] = slot(c, end);
+impl Plan {
+    /// No contact at all (key 0).
+    const NONE: Plan =
+        Plan { touching: [false; 3], moving: [false; 3], bridge: false, slots: [0; SLOTS], count: 0, key: 0 };
+
+    /// Bit of the key: contact `c` touches the string.
+    const fn touching_bit(c: usize) -> u8 {
+        1 << c
+    }
+
+    /// Bit of the key: contact `c` moves across the block.
+    const fn moving_bit(c: usize) -> u8 {
+        1 << (3 + c)
+    }
+
+    /// Bit of the key: the bridge's lift is in use.
+    const BRIDGE_BIT: u8 = 1 << 6;
+
+    /// The plan of `key`.
+    fn of(key: u8) -> &'static Plan {
+        &PLANS[usize::from(key & 127)]
+    }
+
+    /// The plan of the flags in `key`: the slots of the touching contacts in order (a moving
+    /// one's start and end), then the lift's.
+    const fn make(key: u8) -> Self {
+        let mut plan = Plan {
+            touching: [false; 3],
+            moving: [false; 3],
+            bridge: key & Plan::BRIDGE_BIT != 0,
+            slots: [0; SLOTS],
+            count: 0,
+            key,
+        };
+        let mut c = 0;
+        while c < 3 {
+            plan.touching[c] = key & Plan::touching_bit(c) != 0;
+            plan.moving[c] = plan.touching[c] && key & Plan::moving_bit(c) != 0;
+            if plan.touching[c] {
+                plan.slots[plan.count] = slot(c, false);
                 plan.count += 1;
+                if plan.moving[c] {
+                    plan.slots[plan.count] = slot(c, true);
+                    plan.count += 1;
+                }
             }
+            c += 1;
         }
-        if bridge {
+        if plan.bridge {
             plan.slots[plan.count] = BRIDGE_SLOT;
             plan.count += 1;
         }
@@ -581,7 +626,7 @@ pub struct SlideCore {
     sho: SlideHand,
     vectors: ContactVectors,
     /// The current block's vectors.
-    plan: Plan,
+    plan: &'static Plan,
     /// `θ_ζξ(a) = c0 + a·c1 + a²·c2` between the contacts' interpolated vectors over the block
     /// (m/N): `[c0, c1, c2]`, zero for contacts that do not touch.
     theta: [[[f64; 3]; 3]; 3],
@@ -645,7 +690,8 @@ impl SlideCore {
         let sho = SlideHand::new(params.slide, fs, start.hand_height);
         let mut core = Self {
             vectors: ContactVectors::new(&string, &params.left, &params.right),
-            plan: Plan::NONE,
+            // No contact at all until the first block is planned.
+            plan: Plan::of(0),
             theta: [[[0.0; 3]; 3]; 3],
             pickup,
             kind: params.pickup.kind,
@@ -859,14 +905,15 @@ impl SlideCore {
     /// to the current positions and touching set.
     fn plan_block(&mut self) {
         let (start, end) = (self.start.positions(), self.target.positions());
-        let bridge = self.body_on();
         let touching = [true, self.start.left_force != 0.0 || self.target.left_force != 0.0, {
             self.start.right_force != 0.0 || self.target.right_force != 0.0
         }];
+        // The plan's key is gathered bit by bit (see `Plan::touching_bit`).
+        let mut key = if self.body_on() { Plan::BRIDGE_BIT } else { 0 };
         let was = self.plan;
         let v = &mut self.vectors;
         let mut fresh = [None; SLOTS];
-        let mut moving = [false; 3];
+        let mut any_fresh = false;
         // The slide's vector jumps at this block's first step unless the last step used exactly
         // this block's start vector (the last block held the slide still at this position).
         self.slide_jumped = was.moving[SLIDE];
@@ -891,28 +938,31 @@ impl SlideCore {
                     }
                 } else {
                     fresh[s] = Some(start[c]);
+                    any_fresh = true;
                 }
                 if c == SLIDE {
                     self.slide_jumped = true;
                 }
             }
-            moving[c] = self.block > 1 && end[c] != start[c];
-            if moving[c] && v.made_at[e] != end[c] {
+            let moving = self.block > 1 && end[c] != start[c];
+            key |= Plan::touching_bit(c) | if moving { Plan::moving_bit(c) } else { 0 };
+            if moving && v.made_at[e] != end[c] {
                 fresh[e] = Some(end[c]);
+                any_fresh = true;
             }
         }
-        let plan = Plan::new(touching, moving, bridge);
+        let plan = Plan::of(key);
         self.plan = plan;
-        if plan == was && fresh == [None; SLOTS] {
+        if plan.key == was.key && !any_fresh {
             if swapped {
-                self.theta = block_theta(&plan, &self.vectors.gram);
+                self.theta = block_theta(plan, &self.vectors.gram);
             }
             return;
         }
         // The state projections are needed for a fresh slide vector (the first in the Gram
         // pass, which sums them) and for an end vector whose projections were not kept.
         let (s, e) = (slot(SLIDE, false), slot(SLIDE, true));
-        let first = if fresh[e].is_some() || (moving[SLIDE] && !end_tracked) { e } else { s };
+        let first = if fresh[e].is_some() || (plan.moving[SLIDE] && !end_tracked) { e } else { s };
         let mut order = plan.slots;
         let at = order[..plan.count].iter().position(|&k| k == first).expect("the slide is in every plan");
         order[..plan.count].swap(0, at);
@@ -928,7 +978,7 @@ impl SlideCore {
         } else if fresh[s].is_some() {
             self.slide_state[0] = state;
         }
-        self.theta = block_theta(&plan, &v.gram);
+        self.theta = block_theta(plan, &v.gram);
     }
 
     /// Start a new block: move the targets on and plan its vectors.
