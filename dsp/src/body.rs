@@ -280,6 +280,9 @@ pub struct Body {
     heard: Heard,
     sample_rate: f64,
     last: f64,
+    /// Whether every mode is exactly at rest (zero), as [`reset`](Self::reset) leaves them: then
+    /// silence in gives silence out without looking at the modes.
+    resting: bool,
     /// The vector unit the steps run on.
     isa: Isa,
 }
@@ -310,6 +313,7 @@ impl Body {
             heard: params.heard,
             sample_rate,
             last: 0.0,
+            resting: true,
             isa: Isa::detect(),
         };
         for (j, m) in kept.iter().enumerate() {
@@ -339,6 +343,7 @@ impl Body {
     pub fn reset(&mut self) {
         self.w.iter_mut().for_each(|w| w.fill(0.0));
         self.last = 0.0;
+        self.resting = true;
     }
 
     /// Whether every mode is at rest (to `SILENT`).
@@ -350,12 +355,19 @@ impl Body {
 
     /// Replace the bridge force in `io` (N, one value per sample) by the radiated signal
     /// (module docs), sample by sample: for a body heard by its acceleration, each sample's
-    /// mean acceleration. A silent body given no force stays silent at no cost.
+    /// mean acceleration. A body at rest given no force stays at rest at no cost (it does not
+    /// even look at its modes, which matters when a call is a single sample).
     pub fn process(&mut self, io: &mut [f64]) {
-        if io.iter().all(|&f| f == 0.0) && self.is_silent() {
-            self.reset();
-            return;
+        if io.iter().all(|&f| f == 0.0) {
+            if self.resting {
+                return;
+            }
+            if self.is_silent() {
+                self.reset();
+                return;
+            }
         }
+        self.resting = false;
         let [w_re, w_im] = &mut self.w;
         for run in io.chunks_mut(RUN) {
             self.isa.run(Step {
@@ -598,6 +610,39 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A struck body given silence rings on (the shortcut for a body at rest does not cut it
+    /// off): one-sample calls give the bits of 64-sample calls, the ring lasts, and once it has
+    /// died away below the silence test the body is at rest again and stays so.
+    #[test]
+    fn a_ringing_body_rings_on_through_one_sample_calls_until_it_rests() {
+        let params = BodyParams::piano();
+        let (mut whole, mut single) = (Body::new(&params, 48_000.0), Body::new(&params, 48_000.0));
+        let samples = 48_000 * 4;
+        let mut by_block = vec![0.0; samples];
+        by_block[0] = 1.0;
+        let mut by_sample = by_block.clone();
+        for block in by_block.chunks_mut(64) {
+            whole.process(block);
+        }
+        for sample in by_sample.chunks_mut(1) {
+            single.process(sample);
+        }
+        assert_eq!(by_block, by_sample);
+        let late = by_block[24_000..24_064].iter().map(|y| y * y).sum::<f64>();
+        println!("0.5 s after the strike, 64 samples' energy {late:e}");
+        assert!(late > 0.0, "the body still rings half a second on");
+        let mut silence = [0.0; 1];
+        let mut rested_at = samples;
+        while !single.resting && rested_at < 48_000 * 60 {
+            single.process(&mut silence);
+            rested_at += 1;
+        }
+        println!("at rest {:.2} s after the strike", rested_at as f64 / 48_000.0);
+        assert!(single.resting && single.is_silent(), "still ringing a minute on");
+        single.process(&mut silence);
+        assert!(single.resting && silence[0] == 0.0);
     }
 
     /// No force, no state: a body costs nothing and outputs zeros; a non-finite force silences
