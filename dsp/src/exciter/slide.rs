@@ -96,8 +96,11 @@ impl SlideHand {
         Self { params, dt, k, q: xi * norm, norm, xi, w_prev: w0, w_now: w0 }
     }
 
-    /// New slide and hand parameters, keeping the slide's motion.
+    /// New slide and hand parameters, keeping the slide's motion (the same ones change nothing).
     pub fn set_params(&mut self, params: SlideParams) {
+        if params == self.params {
+            return;
+        }
         let (w_prev, w_now) = (self.w_prev, self.w_now);
         *self = Self::new(params, 1.0 / self.dt, w_now);
         self.w_prev = w_prev;

@@ -646,11 +646,14 @@ impl Instrument {
         let len = self.settings.block;
         self.output.set_gain(self.settings.gain);
         // The pickup's resonance glides, an octave per 50 ms at most, instead of stepping.
-        let octaves = len as f64 / self.sample_rate / PICKUP_GLIDE;
         let target = self.settings.pickup_resonance;
-        self.resonance = (self.resonance * (target / self.resonance).clamp(0.5f64.powf(octaves), 2f64.powf(octaves)))
-            .clamp(target.min(self.resonance), target.max(self.resonance));
-        self.circuit.tune(self.resonance, self.sample_rate);
+        if self.resonance != target {
+            let octaves = len as f64 / self.sample_rate / PICKUP_GLIDE;
+            let (down, up) = (0.5f64.powf(octaves), 2f64.powf(octaves));
+            self.resonance = (self.resonance * (target / self.resonance).clamp(down, up))
+                .clamp(target.min(self.resonance), target.max(self.resonance));
+            self.circuit.tune(self.resonance, self.sample_rate);
+        }
         self.partners.retune(&self.settings);
         let mut seeks = PARTNER_SEEKS;
         let held = self.held_keys();

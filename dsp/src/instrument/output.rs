@@ -127,7 +127,7 @@ impl OutputStage {
 
             let peak = frame.0.abs().max(frame.1.abs());
             let need = if limit && peak > CEILING { CEILING / peak } else { 1.0 };
-            self.at = (self.at + 1) % w;
+            self.at = if self.at + 1 == w { 0 } else { self.at + 1 };
             self.limiting -= usize::from(self.needed[self.at] < 1.0);
             self.limiting += usize::from(need < 1.0);
             self.needed[self.at] = need;
@@ -142,7 +142,7 @@ impl OutputStage {
 
             // The newest frame takes the slot of the one that left; the oldest is next in the ring.
             self.delay[self.at] = (frame.0 as f32, frame.1 as f32);
-            let (dl, dr) = self.delay[(self.at + 1) % w];
+            let (dl, dr) = self.delay[if self.at + 1 == w { 0 } else { self.at + 1 }];
             let (mut yl, mut yr) = (f64::from(dl) * applied, f64::from(dr) * applied);
             if limit {
                 yl = yl.clamp(-CEILING, CEILING);
