@@ -45,7 +45,8 @@
 //! its controls have done since. A voice whose state turns non-finite, or whose energy exceeds
 //! [`GUARD_FACTOR`] times that bound, is faded out within the control block and brought to rest,
 //! and counted ([`SlideVoice::guard_trips`]): a last line of defence that the tests and sweeps
-//! check never fires.
+//! check never fires. The energy is weighed every control block, or every [`ENERGY_INTERVAL`]
+//! samples when the blocks are shorter.
 
 use crate::body::BodyParams;
 use crate::contact::{Method, PowerLaw};
@@ -94,6 +95,10 @@ pub const HAND_ACCELERATION: f64 = 50.0;
 /// hand that would pass the target in this block stops on it (and sheds its last `Δv` in the
 /// next).
 pub fn approach(position: f64, velocity: f64, target: f64, span: f64) -> (f64, f64) {
+    if position == target && velocity == 0.0 {
+        // At rest on the target: what the lines below give, without their root and division.
+        return (target, 0.0);
+    }
     let error = target - position;
     let dv = HAND_ACCELERATION * span;
     let stopping = 0.5 * ((dv * dv + 8.0 * dv * error.abs() / span).sqrt() - dv);
@@ -118,6 +123,31 @@ pub struct ChannelState {
     pub pressure: f64,
     /// Mod wheel, 0..=1.
     pub mod_wheel: f64,
+}
+
+/// The fewest samples between two weighings of a voice's energy by the guard and the release
+/// test: with shorter control blocks, a pass over the modes every block would cost as much as the
+/// step's own passes.
+const ENERGY_INTERVAL: usize = 64;
+
+/// The latest value of a pure function of one argument, worked out again only when the argument
+/// changes (compared bit for bit, so the value is always the function's own).
+#[derive(Debug, Clone, Copy)]
+struct Memo {
+    arg: f64,
+    value: f64,
+}
+
+impl Memo {
+    /// Nothing kept yet (the NaN argument's bits are not those of the arithmetic's NaN).
+    const EMPTY: Memo = Memo { arg: f64::from_bits(0x7ff8_dead_0000_0001), value: f64::NAN };
+
+    fn get(&mut self, arg: f64, f: impl FnOnce(f64) -> f64) -> f64 {
+        if arg.to_bits() != self.arg.to_bits() {
+            *self = Memo { arg, value: f(arg) };
+        }
+        self.value
+    }
 }
 
 /// One slide voice.
@@ -172,6 +202,13 @@ pub struct SlideVoice {
     reference_energy: f64,
     /// Recent peak of the string's kinetic energy (J), decaying with a 50 ms time constant.
     motion: f64,
+    /// The latest block's exponentials and slide position, kept for the next block with the
+    /// same arguments: at a control block of one sample they would be worked out every sample.
+    glide_factor: Memo,
+    motion_factor: Memo,
+    position_at: Memo,
+    /// Samples since the guard and the release last weighed the voice's energy.
+    unweighed: usize,
     /// The guitar the current note sounds on: its string's end held and heard through the pickup,
     /// or on the acoustic body.
     pub body: SlideBody,
@@ -237,6 +274,10 @@ impl SlideVoice {
             pluck: None,
             reference_energy: f64::MIN_POSITIVE,
             motion: 0.0,
+            glide_factor: Memo::EMPTY,
+            motion_factor: Memo::EMPTY,
+            position_at: Memo::EMPTY,
+            unweighed: 0,
             body: SlideBody::Pickup,
         }
     }
@@ -402,13 +443,14 @@ impl SlideVoice {
         let fs = self.core.string().sample_rate();
         let span = len as f64 / fs;
         let target = self.keys_and_bends(settings, channel);
-        self.glided += (target - self.glided) * (1.0 - (-span / settings.glide_time).exp());
+        self.glided += (target - self.glided) * self.glide_factor.get(-span / settings.glide_time, |x| 1.0 - x.exp());
         // Arrive: an exponential glide never quite does, and a moving slide costs a recomputation
         // of the contact vectors every block.
         if (target - self.glided).abs() < 1e-4 {
             self.glided = target;
         }
-        let x_o = Self::slide_position(self.length, self.semitones(settings));
+        let length = self.length;
+        let x_o = self.position_at.get(self.semitones(settings), |semitones| Self::slide_position(length, semitones));
         let step = SLIDE_SPEED * span;
         self.x_o += (x_o - self.x_o).clamp(-step, step);
         let pressed = |v: f64| HAND_RANGE.0 + (HAND_RANGE.1 - HAND_RANGE.0) * v.clamp(0.0, 1.0);
@@ -441,6 +483,14 @@ impl SlideVoice {
             right_force,
         };
         self.core.set_params(self.slide, [settings.finger_damping; 2], settings.block);
+        // The energies take a pass over the modes: every block, or every `ENERGY_INTERVAL`
+        // samples when the blocks are shorter.
+        self.unweighed += len;
+        if self.unweighed < ENERGY_INTERVAL {
+            return;
+        }
+        let since = self.unweighed as f64 / fs;
+        self.unweighed = 0;
         // The guard leaves out the contact's small share (below the bound, which includes it).
         let (kinetic, energy) = self.core.energies();
         if self.over_budget(energy) {
@@ -448,7 +498,7 @@ impl SlideVoice {
         }
         // A pressed slide holds static energy in the string and the hand for ever, so silence is
         // judged on the string's motion.
-        self.motion = kinetic.max(self.motion * (-span / 0.05).exp());
+        self.motion = kinetic.max(self.motion * self.motion_factor.get(-since / 0.05, f64::exp));
         if !self.key_down && self.pluck.is_none() && self.motion < RELEASE_ENERGY * self.reference_energy {
             self.sounding = false;
         }
@@ -584,6 +634,28 @@ mod tests {
         assert!(!voice.sounding);
         assert_eq!(voice.guard_trips(), 1);
         assert_eq!(voice.core.string().energy(), 0.0, "the string is at rest");
+    }
+
+    /// With a control block of one sample the guard weighs the energy every [`ENERGY_INTERVAL`]
+    /// samples, not every block: a voice over its bound is caught within that many samples and
+    /// faded out in the block that follows.
+    #[test]
+    fn the_guard_weighs_one_sample_blocks_every_energy_interval() {
+        let (mut voice, settings) = plucked(20);
+        voice.energy_at_pluck = voice.energy() * 1e-7 / GUARD_FACTOR;
+        voice.reference_energy = 0.0;
+        voice.work_at_pluck = voice.core.control_work() + 1.0;
+        let mut out = [0.0; 1];
+        let mut blocks = 0;
+        while voice.sounding && blocks < 2 * ENERGY_INTERVAL {
+            voice.begin_block(&settings, &ChannelState::default(), 1);
+            voice.render(&mut out);
+            blocks += 1;
+        }
+        println!("silenced after {blocks} one-sample blocks");
+        assert!(!voice.sounding, "still sounding after {blocks} blocks");
+        assert!(blocks <= ENERGY_INTERVAL + 1, "{blocks} blocks");
+        assert_eq!(voice.guard_trips(), 1);
     }
 
     /// A non-finite state silences the voice in the same call: the samples are zero, not NaN,
