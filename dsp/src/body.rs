@@ -377,7 +377,9 @@ impl Body {
                 io: run,
             });
         }
-        if !self.w.iter().all(|w| w.iter().all(|x| x.is_finite())) {
+        // Every mode, the padded ones too, adds `γ·w` to each output, so a state gone non-finite
+        // shows in the outputs (`0·∞` and `γ·NaN` are NaN): looking at them is enough.
+        if !io.iter().all(|y| y.is_finite()) {
             self.reset();
             io.fill(0.0);
             return;
@@ -428,16 +430,12 @@ impl Step<'_> {
             s.store(&mut self.w[1][first + i], wi[i]);
         }
     }
-}
 
-impl Kernel for Step<'_> {
-    type Output = ();
-
+    /// The run (at most `S` samples) with its partial sums in an array of `S`.
     #[inline(always)]
-    fn run<L: Lanes>(mut self, s: L) {
-        let steps = self.io.len().min(RUN);
-        let mut sums = [[0.0; LANES]; RUN];
-        let sums = &mut sums[..steps];
+    fn sweep<L: Lanes, const S: usize>(mut self, s: L) {
+        let mut sums = [[0.0; LANES]; S];
+        let sums = &mut sums[..self.io.len().min(S)];
         let n = self.w[0].len();
         // As many chunks as a register-resident run holds: a chunk's four coefficients and two
         // states, six registers, are a little more than `free_run`'s five, but measured on AVX
@@ -456,6 +454,21 @@ impl Kernel for Step<'_> {
         }
         for (y, sum) in self.io.iter_mut().zip(sums.iter()) {
             *y = s.sum(s.load(sum));
+        }
+    }
+}
+
+impl Kernel for Step<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<L: Lanes>(self, s: L) {
+        // The partial sums live on the stack, zeroed for the run's length: a run of one sample
+        // (a one-sample control block) does not clear a whole run's worth.
+        match self.io.len() {
+            0..=1 => self.sweep::<L, 1>(s),
+            2..=8 => self.sweep::<L, 8>(s),
+            _ => self.sweep::<L, RUN>(s),
         }
     }
 }
@@ -613,23 +626,21 @@ mod tests {
     }
 
     /// A struck body given silence rings on (the shortcut for a body at rest does not cut it
-    /// off): one-sample calls give the bits of 64-sample calls, the ring lasts, and once it has
-    /// died away below the silence test the body is at rest again and stays so.
+    /// off): calls of one and of five samples give the bits of 64-sample calls, the ring lasts,
+    /// and once it has died away below the silence test the body is at rest again and stays so.
     #[test]
     fn a_ringing_body_rings_on_through_one_sample_calls_until_it_rests() {
         let params = BodyParams::piano();
-        let (mut whole, mut single) = (Body::new(&params, 48_000.0), Body::new(&params, 48_000.0));
         let samples = 48_000 * 4;
         let mut by_block = vec![0.0; samples];
         by_block[0] = 1.0;
-        let mut by_sample = by_block.clone();
-        for block in by_block.chunks_mut(64) {
-            whole.process(block);
-        }
-        for sample in by_sample.chunks_mut(1) {
-            single.process(sample);
-        }
+        let (mut by_five, mut by_sample) = (by_block.clone(), by_block.clone());
+        let [mut whole, mut five, mut single] = [(); 3].map(|_| Body::new(&params, 48_000.0));
+        by_block.chunks_mut(64).for_each(|block| whole.process(block));
+        by_five.chunks_mut(5).for_each(|block| five.process(block));
+        by_sample.chunks_mut(1).for_each(|sample| single.process(sample));
         assert_eq!(by_block, by_sample);
+        assert_eq!(by_block, by_five);
         let late = by_block[24_000..24_064].iter().map(|y| y * y).sum::<f64>();
         println!("0.5 s after the strike, 64 samples' energy {late:e}");
         assert!(late > 0.0, "the body still rings half a second on");

@@ -300,26 +300,36 @@ pub fn free_run(isa: Isa, a: &[f64], b: &[f64], up: &mut [f64], un: &mut [f64], 
     impl Kernel for FreeRun<'_> {
         type Output = ();
         #[inline(always)]
-        fn run<L: Lanes>(mut self, s: L) {
-            let steps = self.outputs.len().min(RUN);
-            let mut sums = [[[0.0; LANES]; 2]; RUN];
-            let sums = &mut sums[..steps];
-            let n = self.up.len().min(self.un.len()).min(self.a.len()).min(self.b.len()).min(self.out.len());
-            let mut first = 0;
-            let whole = L::RESIDENT.clamp(1, 4);
-            while first < n {
-                let size = whole.min(n - first);
-                match size {
-                    4 => group::<L, 4>(s, &mut self, first, sums),
-                    3 => group::<L, 3>(s, &mut self, first, sums),
-                    2 => group::<L, 2>(s, &mut self, first, sums),
-                    _ => group::<L, 1>(s, &mut self, first, sums),
-                }
-                first += size;
+        fn run<L: Lanes>(self, s: L) {
+            // The partial sums live on the stack, zeroed for the run's length: a run of one
+            // sample (a one-sample control block) does not clear a whole run's worth.
+            match self.outputs.len() {
+                0..=1 => sweep::<L, 1>(s, self),
+                2..=8 => sweep::<L, 8>(s, self),
+                _ => sweep::<L, RUN>(s, self),
             }
-            for (o, sum) in self.outputs.iter_mut().zip(sums.iter()) {
-                *o = s.sum(s.add(s.load(&sum[0]), s.load(&sum[1])));
+        }
+    }
+    /// The run (at most `S` steps) with its partial sums in an array of `S`.
+    #[inline(always)]
+    fn sweep<L: Lanes, const S: usize>(s: L, mut run: FreeRun<'_>) {
+        let mut sums = [[[0.0; LANES]; 2]; S];
+        let sums = &mut sums[..run.outputs.len().min(S)];
+        let n = run.up.len().min(run.un.len()).min(run.a.len()).min(run.b.len()).min(run.out.len());
+        let mut first = 0;
+        let whole = L::RESIDENT.clamp(1, 4);
+        while first < n {
+            let size = whole.min(n - first);
+            match size {
+                4 => group::<L, 4>(s, &mut run, first, sums),
+                3 => group::<L, 3>(s, &mut run, first, sums),
+                2 => group::<L, 2>(s, &mut run, first, sums),
+                _ => group::<L, 1>(s, &mut run, first, sums),
             }
+            first += size;
+        }
+        for (o, sum) in run.outputs.iter_mut().zip(sums.iter()) {
+            *o = s.sum(s.add(s.load(&sum[0]), s.load(&sum[1])));
         }
     }
     isa.run(FreeRun { a: chunks(a), b: chunks(b), up: chunks_mut(up), un: chunks_mut(un), out: chunks(out), outputs })
@@ -849,23 +859,24 @@ mod tests {
         }
     }
 
+    /// Runs of 1, 5 and 37 steps (each size of partial-sum array) are the free steps one by one.
     #[test]
     fn free_run_is_repeated_free_steps() {
-        for chunks in [1, 3, 4, 7, 9] {
+        for (chunks, steps) in [1, 3, 4, 7, 9].into_iter().flat_map(|c| [1, 5, 37].map(|s| (c, s))) {
             let n = chunks * LANES;
             let [a, b, up0, un0, out] = [20, 21, 22, 23, 24].map(|s| data(n, s));
             for isa in Isa::available() {
                 let (mut up, mut un) = (up0.clone(), un0.clone());
-                let mut want = vec![0.0; 37];
+                let mut want = vec![0.0; steps];
                 for w in &mut want {
                     *w = free(isa, &a, &b, &mut up, &un, &out);
                     std::mem::swap(&mut up, &mut un);
                 }
                 let (mut run_up, mut run_un) = (up0.clone(), un0.clone());
-                let mut got = vec![0.0; 37];
+                let mut got = vec![0.0; steps];
                 free_run(isa, &a, &b, &mut run_up, &mut run_un, &out, &mut got);
-                assert_eq!(got, want, "{isa:?}, {chunks} chunks");
-                assert_eq!((run_up, run_un), (up, un), "{isa:?}, {chunks} chunks");
+                assert_eq!(got, want, "{isa:?}, {chunks} chunks, {steps} steps");
+                assert_eq!((run_up, run_un), (up, un), "{isa:?}, {chunks} chunks, {steps} steps");
             }
         }
     }
