@@ -64,6 +64,7 @@
 //! block boundary, blocks being counted from the first sample. Nothing depends on how the host
 //! splits its buffers: rendering in calls of any size gives the same samples.
 
+mod memo;
 mod midi;
 mod monitor;
 mod notes;

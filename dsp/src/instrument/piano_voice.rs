@@ -56,6 +56,7 @@ use crate::instrument::settings::{Settings, hammer_speed};
 use crate::instrument::solvers::Solvers;
 use crate::preset::piano_note;
 use crate::scene::{MAX_PARTNERS, UnisonCore, UnisonParams};
+use crate::instrument::memo::{ENERGY_INTERVAL, Memo};
 use crate::string::{Damping, ModalString, StringParams};
 
 /// Energy below which a voice that is not touching its hammer is released, relative to the
@@ -257,6 +258,11 @@ pub struct PianoVoice {
     extra: Vec<f64>,
     /// Seconds since the coefficients were last updated.
     since_update: f64,
+    /// The fraction of the way a damper's rate moves in a block, kept while the block's length and
+    /// the damper's time stay.
+    damper_step: Memo,
+    /// Samples since the guard and the release last weighed the voice's energy.
+    unweighed: usize,
     /// Energy of the latest strike (J), the reference for releasing the voice.
     reference_energy: f64,
     /// Striking position of the latest strike (fraction of the length).
@@ -305,6 +311,8 @@ impl PianoVoice {
             partner_applied: [0.0; MAX_PARTNERS],
             partner_since: 0.0,
             since_update: 0.0,
+            damper_step: Memo::EMPTY,
+            unweighed: 0,
             reference_energy: 0.0,
             position: note.strike_position,
             fade_left: 0,
@@ -565,7 +573,7 @@ impl PianoVoice {
         }
         let span = len as f64 / fs;
         // The fraction of the way a damper's rate moves to its target over this block.
-        let step = 1.0 - (-span / settings.damper_time).exp();
+        let step = self.damper_step.get(-span / settings.damper_time, |x| 1.0 - x.exp());
         let damped = !(self.key_down || dampers.pedal) && has_damper(self.strike.key);
         let target = if damped { settings.damper_rate } else { 0.0 };
         settle(&mut self.damper, target, step);
@@ -596,16 +604,22 @@ impl PianoVoice {
             self.partner_applied = self.partner_dampers;
             self.core.set_partner_decays(&rates);
         }
-        let string_energy = self.core.own_energy();
-        // The guard: with no source but the hammer, the string never holds more than the strike's
-        // energy (the hammer's and what the string had); far more, or a non-finite state, is a
-        // fault to silence, not to play.
-        if !(string_energy <= GUARD_FACTOR * self.reference_energy) {
-            self.guard_fade.start(len);
+        // The energies take passes over the modes: every block, or every `ENERGY_INTERVAL`
+        // samples when the blocks are shorter.
+        self.unweighed += len;
+        if self.unweighed < ENERGY_INTERVAL {
+            return;
         }
+        self.unweighed = 0;
         // A silent unison cannot reach a hammer flying away from it. The partners count: those
         // without dampers ring on after the key's own strings fall silent, and feed them.
         let ringing = self.core.strings_energy() + self.core.partners_energy();
+        // The guard: with no source but the hammer, the string never holds more than the strike's
+        // energy (the hammer's and what the string had); far more, or a non-finite state, is a
+        // fault to silence, not to play.
+        if !(ringing + self.core.bridge_energy() <= GUARD_FACTOR * self.reference_energy) {
+            self.guard_fade.start(len);
+        }
         let silent = ringing < RELEASE_ENERGY * self.reference_energy;
         if self.core.hammer_leaving() && silent {
             self.sounding = false;

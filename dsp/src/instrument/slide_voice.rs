@@ -52,6 +52,7 @@ use crate::body::BodyParams;
 use crate::contact::{Method, PowerLaw};
 use crate::control::Live;
 use crate::exciter::SlideParams;
+use crate::instrument::memo::{ENERGY_INTERVAL, Memo};
 use crate::instrument::notes::NoteParam;
 use crate::instrument::piano_voice::{GUARD_FACTOR, GuardFade, RELEASE_ENERGY, Strike};
 use crate::instrument::settings::{HAND_RANGE, HandSource, Settings, SlideBody};
@@ -123,31 +124,6 @@ pub struct ChannelState {
     pub pressure: f64,
     /// Mod wheel, 0..=1.
     pub mod_wheel: f64,
-}
-
-/// The fewest samples between two weighings of a voice's energy by the guard and the release
-/// test: with shorter control blocks, a pass over the modes every block would cost as much as the
-/// step's own passes.
-const ENERGY_INTERVAL: usize = 64;
-
-/// The latest value of a pure function of one argument, worked out again only when the argument
-/// changes (compared bit for bit, so the value is always the function's own).
-#[derive(Debug, Clone, Copy)]
-struct Memo {
-    arg: f64,
-    value: f64,
-}
-
-impl Memo {
-    /// Nothing kept yet (the NaN argument's bits are not those of the arithmetic's NaN).
-    const EMPTY: Memo = Memo { arg: f64::from_bits(0x7ff8_dead_0000_0001), value: f64::NAN };
-
-    fn get(&mut self, arg: f64, f: impl FnOnce(f64) -> f64) -> f64 {
-        if arg.to_bits() != self.arg.to_bits() {
-            *self = Memo { arg, value: f(arg) };
-        }
-        self.value
-    }
 }
 
 /// One slide voice.

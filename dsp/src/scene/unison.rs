@@ -693,10 +693,15 @@ impl UnisonCore {
             .sum()
     }
 
+    /// The bridge's and soundboard's modes' energy weighed with their own stiffnesses (J).
+    pub fn bridge_energy(&self) -> f64 {
+        self.coupled_bank.own_energy(self.bridge_range.clone())
+    }
+
     /// The strings' and the bridge's energy weighed with their own stiffnesses (J), the
     /// coupling's cross terms left out: what a voice's guard reads.
     pub fn own_energy(&self) -> f64 {
-        self.strings_energy() + self.partners_energy() + self.coupled_bank.own_energy(self.bridge_range.clone())
+        self.strings_energy() + self.partners_energy() + self.bridge_energy()
     }
 
     /// The strings' and bridge's numerical energy and the hammer's (J), without the coupling's
