@@ -13,8 +13,12 @@
 //!   acoustic guitar (each string on its copy of the body); `piano/16-voices/arpeggio` the same
 //!   16 keys struck one after another every 80 ms, the pedal up, each held, in 64-sample calls:
 //!   each key joins as a partner the bridges of the sounding keys whose partials it meets;
+//! - `slide/1-voice/nb1/vibrato`: one slide note (A3) with a control block of one sample and a
+//!   1.5 Hz vibrato by pitch bend, so that the slide and the finger trailing it move at every
+//!   sample: the plugin's slide voice where it costs most;
 //! - `piano/c4`: one C4 voice of the instrument at 48 kHz; its line says how many such voices fit
-//!   in real time on one core (`1/rtf`, rounded down);
+//!   in real time on one core (`1/rtf`, rounded down); `piano/c4/nb1` the same with a control
+//!   block of one sample (every block's work done every sample);
 //! - `piano/88-keys`: all 88 keys (A0 to C8) struck together, pedal down, 48 kHz: the whole
 //!   piano at once; `piano/88-keys/late-pedal` the same with the pedal pressed 0.5 s after the
 //!   strike, when every key brings its partners onto its bridge (its worst call);
@@ -374,6 +378,9 @@ pub struct Performance<'a> {
     /// Calls between the keys struck one at a time, the pedal up, each held: every key joins the
     /// bridges of the sounding keys whose partials it meets as a partner.
     pub arpeggio: Option<usize>,
+    /// A vibrato of this rate (Hz) by pitch bend, ±half the bend range, set before every call:
+    /// a slide that never stops moving.
+    pub vibrato: Option<f64>,
 }
 
 /// Time the instrument with `settings` playing `play` for `seconds` in calls of `call` samples,
@@ -423,6 +430,13 @@ pub fn measure_piano(
                 && let Some(&key) = keys.get(n / every)
             {
                 piano.handle(Event::NoteOn { channel: 0, key, velocity: 0.7 });
+            }
+            if let Some(rate) = play.vibrato {
+                let phase = std::f64::consts::TAU * rate * (n * call) as f64 / PIANO_RATE;
+                let value = (0.5 * phase.sin()) as f32;
+                for channel in 0..keys.len().min(16) as u8 {
+                    piano.handle(Event::PitchBend { channel, value });
+                }
             }
             let in_contact = piano.in_contact();
             let t = std::time::Instant::now();
@@ -585,22 +599,29 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
     let piano = Settings { mode: Mode::Piano, ..Settings::default() };
     let slide = Settings { mode: Mode::Slide, ..Settings::default() };
     let acoustic = Settings { slide_body: SlideBody::Acoustic, ..slide };
-    let once = |keys| Performance { keys, restrike: None, late_pedal: None, arpeggio: None };
+    let once = |keys| Performance { keys, restrike: None, late_pedal: None, arpeggio: None, vibrato: None };
     // Every 120 calls of 16 samples: 40 ms, 50 strikes in 2 s.
-    let restrike = Performance { keys: &sixteen, restrike: Some((120, 6)), late_pedal: None, arpeggio: None };
+    let restrike = Performance { restrike: Some((120, 6)), ..once(&sixteen) };
     // A key every 80 ms, the pedal up, held: 16 keys in 1.28 s.
-    let arpeggio = Performance { keys: &sixteen, restrike: None, late_pedal: None, arpeggio: Some(60) };
+    let arpeggio = Performance { arpeggio: Some(60), ..once(&sixteen) };
     // The pedal 0.5 s after the strike: every key brings its partners in.
-    let late_pedal = Performance { keys: &all, restrike: None, late_pedal: Some(375), arpeggio: None };
+    let late_pedal = Performance { late_pedal: Some(375), ..once(&all) };
+    // A3 with a 1.5 Hz vibrato of ±1 semitone (half the default bend range of 2), at N_b = 1.
+    let a3 = vec![57u8];
+    let vibrato = Performance { vibrato: Some(1.5), ..once(&a3) };
+    let slide_nb1 = Settings { block: 1, ..slide };
+    let piano_nb1 = Settings { block: 1, ..piano };
     let with = |method| Settings { method, ..piano };
     let cases = [
         ("piano/c4", piano, once(&c4), 64),
+        ("piano/c4/nb1", piano_nb1, once(&c4), 64),
         ("piano/16-voices/64", piano, once(&sixteen), 64),
         ("piano/16-voices/512", piano, once(&sixteen), 512),
         ("piano/16-voices/arpeggio", piano, arpeggio, 64),
         ("slide/16-voices/64", slide, once(&sixteen), 64),
         ("slide/16-voices/512", slide, once(&sixteen), 512),
         ("slide/16-voices/64/acoustic", acoustic, once(&sixteen), 64),
+        ("slide/1-voice/nb1/vibrato", slide_nb1, vibrato, 64),
         ("piano/88-keys", piano, once(&all), 64),
         ("piano/88-keys/late-pedal", piano, late_pedal, 64),
         ("piano/restrike/qsa", with(Method::Qsa), restrike, 16),
