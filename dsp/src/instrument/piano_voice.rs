@@ -37,7 +37,8 @@
 //!   reach it). The partners count, since those without dampers ring on after the key's release.
 //!   The energy here and in the guard (which counts the bridge too) is weighed with its own modal
 //!   stiffnesses ([`ModalString::own_energy`]): the scheme's numerical energy depends on the decay
-//!   rates, so a damper landing would make it jump although the string has not moved.
+//!   rates, so a damper landing would make it jump although the string has not moved. It is
+//!   weighed every control block, or every [`ENERGY_INTERVAL`] samples when the blocks are shorter.
 //! - **Stealing.** With every voice busy, a new note takes the least audible voice, judged by the
 //!   mean square of its output over its latest block ([`PianoVoice::loudness`]). The stolen voice
 //!   fades at [`STEAL_RATE`] (a decay rate added to every mode, again without touching the state)
