@@ -52,12 +52,12 @@
 use crate::bridge::{BridgeParams, SOUNDBOARD_CONDUCTANCE};
 use crate::contact::{Method, PowerLaw};
 use crate::exciter::HammerParams;
+use crate::instrument::memo::{ENERGY_INTERVAL, Memo};
 use crate::instrument::partners::PartnerTable;
 use crate::instrument::settings::{Settings, hammer_speed};
 use crate::instrument::solvers::Solvers;
 use crate::preset::piano_note;
 use crate::scene::{MAX_PARTNERS, UnisonCore, UnisonParams};
-use crate::instrument::memo::{ENERGY_INTERVAL, Memo};
 use crate::string::{Damping, ModalString, StringParams};
 
 /// Energy below which a voice that is not touching its hammer is released, relative to the
