@@ -501,13 +501,14 @@ impl Instrument {
     /// Queue the notes of voices that have fallen silent.
     fn check_ended(&mut self) {
         let now = self.now;
-        for (i, v) in self.voices.iter().enumerate() {
-            self.notes.check(i, v.sounding || v.fading(), now);
-        }
-        let offset = self.voices.len();
-        for (i, v) in self.slides.iter().enumerate() {
-            self.notes.check(offset + i, v.sounding, now);
-        }
+        // Only voices with a live note can end one: the book knows which, without a pass over
+        // every voice.
+        let (voices, slides) = (&self.voices, &self.slides);
+        let offset = voices.len();
+        self.notes.check_live(now, |i| match voices.get(i) {
+            Some(v) => v.sounding || v.fading(),
+            None => slides.get(i - offset).is_some_and(|v| v.sounding),
+        });
     }
 
     /// Whether the sustain pedal holds the dampers off for notes on `channel`: its own pedal, or
@@ -659,7 +660,8 @@ impl Instrument {
         let mut seeks = PARTNER_SEEKS;
         let held = self.held_keys();
         let pedals: [bool; 16] = std::array::from_fn(|channel| self.pedal(channel as u8));
-        for v in &mut self.voices {
+        // A voice neither sounding nor fading for a new note has nothing to do at a block's start.
+        for v in self.voices.iter_mut().filter(|v| v.sounding || v.fading()) {
             let dampers = Dampers { pedal: pedals[usize::from(v.strike.channel & 15)], held };
             v.begin_block(&self.settings, dampers, len, self.now, Some(&self.partners), &mut seeks);
         }

@@ -104,13 +104,20 @@ pub struct EndedNote {
 #[derive(Debug, Clone)]
 pub(crate) struct NoteBook {
     live: Vec<Option<Note>>,
+    /// One bit per voice, set while `live` holds its note: the live voices without a pass over
+    /// them all.
+    live_bits: Vec<u64>,
     ended: Vec<EndedNote>,
 }
 
 impl NoteBook {
     /// Room for `voices` voices; the ended queue holds four times as many notes.
     pub(crate) fn new(voices: usize) -> Self {
-        Self { live: vec![None; voices], ended: Vec::with_capacity(4 * voices.max(1)) }
+        Self {
+            live: vec![None; voices],
+            live_bits: vec![0; voices.div_ceil(64)],
+            ended: Vec::with_capacity(4 * voices.max(1)),
+        }
     }
 
     /// The note voice `index` plays, if it has not ended.
@@ -120,9 +127,9 @@ impl NoteBook {
 
     /// Voice `index` starts `note` at sample `at`; the note it played before ends.
     pub(crate) fn start(&mut self, index: usize, note: Note, at: u64) {
-        if let Some(slot) = self.live.get_mut(index)
-            && let Some(old) = slot.replace(note)
-        {
+        let Some(slot) = self.live.get_mut(index) else { return };
+        self.live_bits[index / 64] |= 1 << (index % 64);
+        if let Some(old) = slot.replace(note) {
             self.push(old, at);
         }
     }
@@ -130,7 +137,21 @@ impl NoteBook {
     /// Voice `index` is silent (`sounding` false) at sample `at`: its note ends.
     pub(crate) fn check(&mut self, index: usize, sounding: bool, at: u64) {
         if !sounding && let Some(old) = self.live.get_mut(index).and_then(Option::take) {
+            self.live_bits[index / 64] &= !(1 << (index % 64));
             self.push(old, at);
+        }
+    }
+
+    /// [`check`](Self::check) every voice with a live note, in the order of their indices, with
+    /// `sounding(index)` its state at sample `at`.
+    pub(crate) fn check_live(&mut self, at: u64, sounding: impl Fn(usize) -> bool) {
+        for word in 0..self.live_bits.len() {
+            let mut bits = self.live_bits[word];
+            while bits != 0 {
+                let index = word * 64 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                self.check(index, sounding(index), at);
+            }
         }
     }
 
