@@ -214,4 +214,28 @@ mod tests {
         assert_eq!(book.ended.len(), capacity, "full, not grown");
         assert_eq!(book.ended.capacity(), capacity);
     }
+
+    /// Over 200 voices (four words of bits), `check_live` asks only the voices with live notes,
+    /// in the order of their indices, and ends exactly those that fell silent.
+    #[test]
+    fn check_live_asks_only_the_live_voices_and_ends_the_silent_ones() {
+        let mut book = NoteBook::new(200);
+        let note = |key| Note { voice: None, channel: 0, key };
+        for index in [3, 63, 64, 130, 199] {
+            book.start(index, note(index as u8), 0);
+        }
+        let asked = std::cell::RefCell::new(Vec::new());
+        book.check_live(50, |index| {
+            asked.borrow_mut().push(index);
+            index % 2 == 0
+        });
+        assert_eq!(asked.take(), [3, 63, 64, 130, 199]);
+        let ended: Vec<_> = book.drain_ended().map(|e| (e.note.key, e.at)).collect();
+        assert_eq!(ended, [(3, 50), (63, 50), (199, 50)]);
+        book.check_live(60, |index| {
+            asked.borrow_mut().push(index);
+            true
+        });
+        assert_eq!(asked.take(), [64, 130], "the ended notes are not asked again");
+    }
 }
