@@ -612,8 +612,8 @@ impl PianoVoice {
             return;
         }
         self.unweighed = 0;
-        // A silent unison cannot reach a hammer flying away from it. The partners count: those
-        // without dampers ring on after the key's own strings fall silent, and feed them.
+        // What rings: the strings and the partners (those without dampers ring on after the key's
+        // own strings fall silent, and feed them); the guard adds the bridge.
         let ringing = self.core.strings_energy() + self.core.partners_energy();
         // The guard: with no source but the hammer, the string never holds more than the strike's
         // energy (the hammer's and what the string had); far more, or a non-finite state, is a
@@ -621,6 +621,7 @@ impl PianoVoice {
         if !(ringing + self.core.bridge_energy() <= GUARD_FACTOR * self.reference_energy) {
             self.guard_fade.start(len);
         }
+        // A silent unison cannot reach a hammer flying away from it.
         let silent = ringing < RELEASE_ENERGY * self.reference_energy;
         if self.core.hammer_leaving() && silent {
             self.sounding = false;
