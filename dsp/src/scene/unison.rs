@@ -106,7 +106,7 @@ use crate::bridge::{BridgeMode, BridgeParams};
 use crate::contact::{ContactProblem, ContactSolver};
 use crate::exciter::{Hammer, HammerParams};
 use crate::scene::Frame;
-use crate::string::{ModalBank, ModalString, StringError, StringParams};
+use crate::string::{ModalBank, ModalString, StringError, StringParams, Tail};
 
 /// Most strings a unison has.
 pub const MAX_UNISON: usize = 3;
@@ -801,8 +801,12 @@ impl UnisonCore {
             fresh = true;
             out_c + out_f
         } else {
+            // The bridge's modes come last: only the sole is nonzero there, and only there.
+            let [shape, lift, sole] = forces;
+            let bridge = Tail { start: self.bridge_range.start, forces: [sole], next: [&cp.sole[..]] };
             let (out_c, next_c) =
-                self.coupled_bank.advance_projecting(forces, &cp.pickup, [&cp.shape, &cp.lift, &cp.sole]);
+                self.coupled_bank.advance_split([shape, lift], &cp.pickup, [&cp.shape, &cp.lift], bridge);
+            let next_c = next_c.map(|([h, g], [e])| [h, g, e]);
             let (out_f, next_f) =
                 self.free_bank.advance_projecting([(&fp.shape_gain[..], force)], &fp.pickup, [&fp.shape]);
             self.next_coupled = next_c;
@@ -859,8 +863,9 @@ impl UnisonCore {
         let inertia = c.lift_mass + 0.25 * c.lift_stiffness * dt2;
         let a = (b_free - 2.0 * b_now + b_prev - c.compliance * g0) / (dt2 + c.compliance * (inertia - theta));
         let f = -g0 + (theta - inertia) * a;
-        let forces = [(&cp.lift_gain[..], -a), (&cp.sole_gain[..], f)];
-        let (out, next) = self.coupled_bank.advance_projecting(forces, &cp.pickup, [&cp.lift, &cp.sole]);
+        let bridge = Tail { start: self.bridge_range.start, forces: [(&cp.sole_gain[..], f)], next: [&cp.sole[..]] };
+        let (out, next) = self.coupled_bank.advance_split([(&cp.lift_gain[..], -a)], &cp.pickup, [&cp.lift], bridge);
+        let next = next.map(|([g], [e])| [g, e]);
         self.next_retired = next;
         if next.is_some() {
             self.gv = (self.gv.1, self.gv.0 - gz - c.gg * a);

@@ -9,54 +9,64 @@
 
 use super::simd::{Chunk, Isa, Kernel, LANES, Lanes, chunks, chunks_mut, lane_sum};
 
-/// Run `$body` for every chunk index `$c` in `0..$n` with `$acc` bound to the even or the odd
-/// accumulator, two chunks per iteration, so the two stay in registers.
+/// Run `$body` for every chunk index `$c` in `0..$n` (or `$lo..$hi` with `@range`) with `$acc`
+/// bound to the even or the odd accumulator by the parity of `$c`, two chunks per iteration, so
+/// the two stay in registers. A range's chunks add to the accumulators exactly as they do in a
+/// pass over `0..$n`, so a loop split into ranges gives the same sums.
 ///
 /// With `fits = false` (both sets of accumulators and the loop's temporaries would not fit the
 /// vector registers together) it runs two sweeps instead, the even chunks into `$acc0`, then
 /// the odd ones into `$acc1`, so only one set is live at a time: the same sums in the same
 /// order, with half the registers.
 macro_rules! paired {
-    ($n:expr, fits = $fits:expr, $acc0:ident, $acc1:ident, |$c:ident, $acc:ident| $body:block) => {{
+    (@range $lo:expr, $hi:expr, fits = $fits:expr, $acc0:ident, $acc1:ident, |$c:ident, $acc:ident| $body:block) => {{
+        let (lo, hi): (usize, usize) = ($lo, $hi);
         if $fits {
-            paired!($n, $acc0, $acc1, |$c, $acc| $body)
+            let mut pair = lo;
+            if pair < hi && pair % 2 == 1 {
+                let $c = pair;
+                let $acc = &mut $acc1;
+                $body
+                pair += 1;
+            }
+            while pair + 2 <= hi {
+                {
+                    let $c = pair;
+                    let $acc = &mut $acc0;
+                    $body
+                }
+                {
+                    let $c = pair + 1;
+                    let $acc = &mut $acc1;
+                    $body
+                }
+                pair += 2;
+            }
+            if pair < hi {
+                let $c = pair;
+                let $acc = &mut $acc0;
+                $body
+            }
         } else {
-            let n = $n;
-            paired!(@sweep n, 0, $acc0, |$c, $acc| $body);
-            paired!(@sweep n, 1, $acc1, |$c, $acc| $body);
+            paired!(@sweep lo + lo % 2, hi, $acc0, |$c, $acc| $body);
+            paired!(@sweep lo + 1 - lo % 2, hi, $acc1, |$c, $acc| $body);
         }
     }};
-    (@sweep $n:expr, $first:expr, $into:ident, |$c:ident, $acc:ident| $body:block) => {{
+    (@sweep $first:expr, $hi:expr, $into:ident, |$c:ident, $acc:ident| $body:block) => {{
         let mut next = $first;
-        while next < $n {
+        while next < $hi {
             let $c = next;
             let $acc = &mut $into;
             $body
             next += 2;
         }
     }};
-    ($n:expr, $acc0:ident, $acc1:ident, |$c:ident, $acc:ident| $body:block) => {{
-        let n = $n;
-        let mut pair = 0;
-        while pair + 2 <= n {
-            {
-                let $c = pair;
-                let $acc = &mut $acc0;
-                $body
-            }
-            {
-                let $c = pair + 1;
-                let $acc = &mut $acc1;
-                $body
-            }
-            pair += 2;
-        }
-        if pair < n {
-            let $c = pair;
-            let $acc = &mut $acc0;
-            $body
-        }
-    }};
+    ($n:expr, fits = $fits:expr, $acc0:ident, $acc1:ident, |$c:ident, $acc:ident| $body:block) => {
+        paired!(@range 0, $n, fits = $fits, $acc0, $acc1, |$c, $acc| $body)
+    };
+    ($n:expr, $acc0:ident, $acc1:ident, |$c:ident, $acc:ident| $body:block) => {
+        paired!(@range 0, $n, fits = true, $acc0, $acc1, |$c, $acc| $body)
+    };
 }
 
 /// Whether `chunks` chunks fit the vector registers of `L` at once.
@@ -114,8 +124,9 @@ pub fn history<const K: usize>(
                 *v = &v[..n];
             }
             let zts = self.zt;
+            // Accumulators: the K projections, twice; temporaries: `zt` and two products.
             let (mut even, mut odd) = ([s.splat(0.0); K], [s.splat(0.0); K]);
-            paired!(n, even, odd, |c, acc| {
+            paired!(n, fits = fits::<L>(2 * K + 3), even, odd, |c, acc| {
                 let z = s.sub(s.mul(s.load(&b[c]), s.load(&up[c])), s.mul(s.load(&a[c]), s.load(&un[c])));
                 s.store(&mut zts[c], z);
                 accumulate(s, acc, &vectors, c, z);
@@ -150,50 +161,135 @@ pub fn advance<const K: usize, const J: usize>(
     out: &[f64],
     next: [&[f64]; J],
 ) -> (f64, [f64; J]) {
-    struct Advance<'a, const K: usize, const J: usize> {
+    let whole = Tail { start: up.len(), forces: [], next: [] };
+    let (out, next, []) = advance_split(isa, a, b, up, un, zt, forces, out, next, whole);
+    (out, next)
+}
+
+/// The modes of a bank from `start` on, with forces and projected vectors of their own (a
+/// piano key's bridge after its strings): see [`advance_split`].
+#[derive(Debug)]
+pub struct Tail<'a, const K: usize, const J: usize> {
+    /// The first mode of the tail.
+    pub start: usize,
+    /// The forces on the tail, with their gains.
+    pub forces: [(&'a [f64], f64); K],
+    /// The vectors the next `zt` is projected on over the tail.
+    pub next: [&'a [f64]; J],
+}
+
+/// [`advance`] over a bank whose modes before `tail.start` (the head) feel the `forces` and are
+/// projected on `next` and `out`, and whose modes from `tail.start` on feel `tail.forces` and are
+/// projected on `tail.next`: every gain and vector is zero on the other part, so their products
+/// are skipped there and the sums are the same bits as [`advance`] with every vector over the
+/// whole bank. Returns `outᵀ up` and the projections of the head's and the tail's vectors.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn advance_split<const K: usize, const J: usize, const KT: usize, const JT: usize>(
+    isa: Isa,
+    a: &[f64],
+    b: &[f64],
+    up: &mut [f64],
+    un: &[f64],
+    zt: &mut [f64],
+    forces: [(&[f64], f64); K],
+    out: &[f64],
+    next: [&[f64]; J],
+    tail: Tail<'_, KT, JT>,
+) -> (f64, [f64; J], [f64; JT]) {
+    /// One side of the split: the gains of its forces, the forces, its projected vectors.
+    struct Side<'a, const K: usize, const J: usize> {
+        gains: [&'a [Chunk]; K],
+        forces: [f64; K],
+        next: [&'a [Chunk]; J],
+    }
+    struct Advance<'a, const K: usize, const J: usize, const KT: usize, const JT: usize> {
         a: &'a [Chunk],
         b: &'a [Chunk],
         up: &'a mut [Chunk],
         un: &'a [Chunk],
         zt: &'a mut [Chunk],
-        gains: [&'a [Chunk]; K],
-        forces: [f64; K],
         out: &'a [Chunk],
-        next: [&'a [Chunk]; J],
+        head: Side<'a, K, J>,
+        tail: Side<'a, KT, JT>,
+        /// The chunks with head modes end here; those with tail modes start at `tail_start`.
+        head_end: usize,
+        tail_start: usize,
     }
-    impl<const K: usize, const J: usize> Kernel for Advance<'_, K, J> {
-        type Output = (f64, [f64; J]);
-        #[inline(always)]
-        fn run<L: Lanes>(self, s: L) -> (f64, [f64; J]) {
-            let n = self.up.len();
-            let (a, b, un, out) = (&self.a[..n], &self.b[..n], &self.un[..n], &self.out[..n]);
-            let zts = &mut self.zt[..n];
-            let mut gains = self.gains;
-            let mut forces = [s.splat(0.0); K];
-            for k in 0..K {
-                gains[k] = &gains[k][..n];
-                forces[k] = s.splat(self.forces[k]);
-            }
-            let mut next_vectors = self.next;
-            for v in &mut next_vectors {
-                *v = &v[..n];
-            }
-            let ups = self.up;
-            let zero = s.splat(0.0);
-            // (output sum, projections of the next zt) for the even and the odd chunks.
-            let (mut even, mut odd) = ((zero, [zero; J]), (zero, [zero; J]));
-            paired!(n, even, odd, |c, acc| {
-                let mut next = s.sub(s.load(&ups[c]), s.load(&zts[c]));
+    /// The output sum and both sides' projections, as partial sums.
+    type Sums<V, const J: usize, const JT: usize> = (V, [V; J], [V; JT]);
+    /// Chunks `lo..hi`, with the head's terms if `HEAD` and the tail's if `TAIL`.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn segment<
+        L: Lanes,
+        const K: usize,
+        const J: usize,
+        const KT: usize,
+        const JT: usize,
+        const HEAD: bool,
+        const TAIL: bool,
+    >(
+        s: L,
+        run: &mut Advance<'_, K, J, KT, JT>,
+        lo: usize,
+        hi: usize,
+        even: &mut Sums<L::V, J, JT>,
+        odd: &mut Sums<L::V, J, JT>,
+    ) {
+        let n = run.up.len();
+        let (a, b, un, out) = (&run.a[..n], &run.b[..n], &run.un[..n], &run.out[..n]);
+        let (ups, zts) = (&mut *run.up, &mut run.zt[..n]);
+        let head_forces: [L::V; K] = std::array::from_fn(|k| s.splat(run.head.forces[k]));
+        let tail_forces: [L::V; KT] = std::array::from_fn(|k| s.splat(run.tail.forces[k]));
+        let head_gains: [&[Chunk]; K] = run.head.gains.map(|g| &g[..n]);
+        let tail_gains: [&[Chunk]; KT] = run.tail.gains.map(|g| &g[..n]);
+        let head_next: [&[Chunk]; J] = run.head.next.map(|v| &v[..n]);
+        let tail_next: [&[Chunk]; JT] = run.tail.next.map(|v| &v[..n]);
+        // Accumulators: the output sum and the projections of the sides present, twice; with the
+        // forces, the new state, `zt` and a product as temporaries.
+        let sides = if HEAD { 1 + J } else { 0 } + if TAIL { JT } else { 0 };
+        let pushes = if HEAD { K } else { 0 } + if TAIL { KT } else { 0 };
+        let (mut e, mut o) = (&mut *even, &mut *odd);
+        paired!(@range lo, hi, fits = fits::<L>(2 * sides + pushes + 3), e, o, |c, acc| {
+            let mut next = s.sub(s.load(&ups[c]), s.load(&zts[c]));
+            if HEAD {
                 for k in 0..K {
-                    next = s.add(next, s.mul(s.load(&gains[k][c]), forces[k]));
+                    next = s.add(next, s.mul(s.load(&head_gains[k][c]), head_forces[k]));
                 }
-                s.store(&mut ups[c], next);
+            }
+            if TAIL {
+                for k in 0..KT {
+                    next = s.add(next, s.mul(s.load(&tail_gains[k][c]), tail_forces[k]));
+                }
+            }
+            s.store(&mut ups[c], next);
+            if HEAD {
                 acc.0 = s.add(acc.0, s.mul(s.load(&out[c]), next));
-                let z = s.sub(s.mul(s.load(&b[c]), s.load(&un[c])), s.mul(s.load(&a[c]), next));
-                s.store(&mut zts[c], z);
-                accumulate(s, &mut acc.1, &next_vectors, c, z);
-            });
-            (s.sum(s.add(even.0, odd.0)), finish(s, even.1, odd.1))
+            }
+            let z = s.sub(s.mul(s.load(&b[c]), s.load(&un[c])), s.mul(s.load(&a[c]), next));
+            s.store(&mut zts[c], z);
+            if HEAD {
+                accumulate(s, &mut acc.1, &head_next, c, z);
+            }
+            if TAIL {
+                accumulate(s, &mut acc.2, &tail_next, c, z);
+            }
+        });
+    }
+    impl<const K: usize, const J: usize, const KT: usize, const JT: usize> Kernel for Advance<'_, K, J, KT, JT> {
+        type Output = (f64, [f64; J], [f64; JT]);
+        #[inline(always)]
+        fn run<L: Lanes>(mut self, s: L) -> Self::Output {
+            let n = self.up.len();
+            let (head_end, tail_start) = (self.head_end.min(n), self.tail_start.min(n));
+            let zero = s.splat(0.0);
+            let (mut even, mut odd) = ((zero, [zero; J], [zero; JT]), (zero, [zero; J], [zero; JT]));
+            let run = &mut self;
+            segment::<L, K, J, KT, JT, true, false>(s, run, 0, tail_start.min(head_end), &mut even, &mut odd);
+            segment::<L, K, J, KT, JT, true, true>(s, run, tail_start, head_end, &mut even, &mut odd);
+            segment::<L, K, J, KT, JT, false, true>(s, run, head_end.max(tail_start), n, &mut even, &mut odd);
+            (s.sum(s.add(even.0, odd.0)), finish(s, even.1, odd.1), finish(s, even.2, odd.2))
         }
     }
     isa.run(Advance {
@@ -202,10 +298,15 @@ pub fn advance<const K: usize, const J: usize>(
         up: chunks_mut(up),
         un: chunks(un),
         zt: chunks_mut(zt),
-        gains: forces.map(|(g, _)| chunks(g)),
-        forces: forces.map(|(_, f)| f),
         out: chunks(out),
-        next: next.map(chunks),
+        head: Side { gains: forces.map(|(g, _)| chunks(g)), forces: forces.map(|(_, f)| f), next: next.map(chunks) },
+        tail: Side {
+            gains: tail.forces.map(|(g, _)| chunks(g)),
+            forces: tail.forces.map(|(_, f)| f),
+            next: tail.next.map(chunks),
+        },
+        head_end: tail.start.div_ceil(LANES),
+        tail_start: tail.start / LANES,
     })
 }
 
@@ -227,8 +328,9 @@ pub fn projections<const K: usize>(isa: Isa, zt: &[f64], vectors: [&[f64]; K]) -
             for v in &mut vectors {
                 *v = &v[..n];
             }
+            // Accumulators: the K projections, twice; temporaries: `zt` and a product.
             let (mut even, mut odd) = ([s.splat(0.0); K], [s.splat(0.0); K]);
-            paired!(n, even, odd, |c, acc| {
+            paired!(n, fits = fits::<L>(2 * K + 2), even, odd, |c, acc| {
                 accumulate(s, acc, &vectors, c, s.load(&zt[c]));
             });
             finish(s, even, odd)
@@ -780,6 +882,44 @@ mod tests {
 
     /// The next step's `z̃` that `advance` leaves behind, and its projections (made in the same
     /// pass or after it), are those of a separate first pass.
+    /// A bank split into a head and a tail, each with its own forces and vectors (zero on the
+    /// other part), steps exactly as the whole bank with every vector: the same state, `zt`,
+    /// output and projections, bit for bit, with the tail starting inside a chunk, on a chunk's
+    /// edge, at the first mode and past the last, on every instruction set. (With two
+    /// accumulator sets or, on AVX, the two sweeps that [`paired!`] falls back to.)
+    #[test]
+    fn a_split_advance_is_the_whole_advance() {
+        let n = 7 * LANES;
+        for start in [0, 13, 16, 29, 40, n] {
+            let [a, b, up0, un, zt0, out] = [40, 41, 42, 43, 44, 45].map(|s| data(n, s));
+            let head = |v: Vec<f64>| -> Vec<f64> {
+                v.iter().enumerate().map(|(i, x)| if i < start { *x } else { 0.0 }).collect()
+            };
+            let tail = |v: Vec<f64>| -> Vec<f64> {
+                v.iter().enumerate().map(|(i, x)| if i >= start { *x } else { 0.0 }).collect()
+            };
+            let out = head(out);
+            let [h0, h1] = [46, 47].map(|s| head(data(n, s)));
+            let [g0, g1] = [48, 49].map(|s| head(data(n, s)));
+            let [t0, r0] = [50, 51].map(|s| tail(data(n, s)));
+            for isa in Isa::available() {
+                let (mut up, mut zt) = (up0.clone(), zt0.clone());
+                let forces = [(&g0[..], 0.3), (&g1[..], -1.7), (&r0[..], 2.9)];
+                let (o, p) = advance(isa, &a, &b, &mut up, &un, &mut zt, forces, &out, [&h0, &h1, &t0]);
+                let (mut up_s, mut zt_s) = (up0.clone(), zt0.clone());
+                let rest = Tail { start, forces: [(&r0[..], 2.9)], next: [&t0[..]] };
+                let head_forces = [(&g0[..], 0.3), (&g1[..], -1.7)];
+                let (o_s, [p0, p1], [p2]) =
+                    advance_split(isa, &a, &b, &mut up_s, &un, &mut zt_s, head_forces, &out, [&h0, &h1], rest);
+                let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&up_s), bits(&up), "{isa:?}, tail from {start}");
+                assert_eq!(bits(&zt_s), bits(&zt), "{isa:?}, tail from {start}");
+                assert_eq!(o_s.to_bits(), o.to_bits(), "{isa:?}, tail from {start}");
+                assert_eq!([p0, p1, p2].map(f64::to_bits), p.map(f64::to_bits), "{isa:?}, tail from {start}");
+            }
+        }
+    }
+
     #[test]
     fn advance_leaves_the_next_history() {
         for chunks in [1, 5, 6] {

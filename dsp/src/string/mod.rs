@@ -70,7 +70,7 @@ mod vectors;
 
 pub use bank::ModalBank;
 pub use energy::StringEnergy;
-pub use kernel::GramVector;
+pub use kernel::{GramVector, Tail};
 pub use params::{Damping, StringError, StringParams};
 pub use simd::{Isa, LANES};
 
