@@ -215,6 +215,10 @@ struct Coupling {
     lift_stiffness: f64,
     /// `ρ = ρ_V + ½Δt ρ_T` (m/√J): how far the striking point can be from rest per `√(2H)`.
     reach: f64,
+    /// `1/Δt²` (1/s²) and `1/Δ`, `Δ = Δt² + C_Σ(E − Θ)` (s²): the step after the hammer retires
+    /// multiplies by them, so no division lies on the chain from one sample to the next.
+    inverse_dt2: f64,
+    inverse_delta: f64,
 }
 
 /// A hammer, a unison of strings and their bridge: everything of a piano key except the solver.
@@ -527,6 +531,10 @@ impl UnisonCore {
         self.coupling.gg = cb.project(&c.lift, &c.lift_gain);
         self.coupling.compliance = cb.project(&c.sole, &c.sole_gain);
         self.coupling.reach = self.reach();
+        let (c, dt2) = (&mut self.coupling, self.dt * self.dt);
+        let (theta, inertia) = (c.gg / dt2, c.lift_mass + 0.25 * c.lift_stiffness * dt2);
+        c.inverse_dt2 = 1.0 / dt2;
+        c.inverse_delta = 1.0 / (dt2 + c.compliance * (inertia - theta));
         self.next_coupled = None;
         self.next_free = None;
         self.next_retired = None;
@@ -857,11 +865,11 @@ impl UnisonCore {
             None => self.coupled_bank.history([&cp.lift, &cp.sole]),
         };
         let (b_prev, b_now) = self.b;
-        let g0 = (2.0 * self.gv.0 - gz - 2.0 * self.gv.1) / dt2 + c.lift_stiffness * b_now;
+        let g0 = (2.0 * self.gv.0 - gz - 2.0 * self.gv.1) * c.inverse_dt2 + c.lift_stiffness * b_now;
         let b_free = b_prev - ez;
         let theta = c.gg / dt2;
         let inertia = c.lift_mass + 0.25 * c.lift_stiffness * dt2;
-        let a = (b_free - 2.0 * b_now + b_prev - c.compliance * g0) / (dt2 + c.compliance * (inertia - theta));
+        let a = (b_free - 2.0 * b_now + b_prev - c.compliance * g0) * c.inverse_delta;
         let f = -g0 + (theta - inertia) * a;
         let bridge = Tail { start: self.bridge_range.start, forces: [(&cp.sole_gain[..], f)], next: [&cp.sole[..]] };
         let (out, next) = self.coupled_bank.advance_split([(&cp.lift_gain[..], -a)], &cp.pickup, [&cp.lift], bridge);
