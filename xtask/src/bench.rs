@@ -8,7 +8,8 @@
 //! - `hammer-c4/{qsa,exp,imp}`: the Fig. 5 voice (C4 string, 56 modes at 44.1 kHz), QSA N = 6;
 //! - `slide-phrase/nb{1,8,64}`: the slide phrase with control blocks of 1, 8 and 64 samples; on
 //!   an AVX-512 machine (without `--isa`), `slide-phrase/nb{1,64}/avx` right after each, with the
-//!   kernels an AVX2 machine runs, since their goal is an AVX2 machine's too;
+//!   kernels an AVX2 machine runs, since their goal is an AVX2 machine's too (as are
+//!   `piano/16-voices/64/avx` and `piano/88-keys/avx`);
 //! - `piano/16-voices/{64,512}` and `slide/16-voices/{64,512}`: the instrument engine (the
 //!   plugin's process path) at 48 kHz with 16 keys from C3 to C6 played together, pedal down,
 //!   rendered in 64- and 512-sample calls; `slide/16-voices/64/acoustic` the slide notes on the
@@ -205,16 +206,30 @@ pub enum BenchError {
     Write(String),
 }
 
-/// The cases measured a second time with the AVX kernels on an AVX-512 machine (`NAME/avx`).
-const AVX_TWINS: [&str; 2] = ["slide-phrase/nb1", "slide-phrase/nb64"];
+/// The cases measured a second time with the AVX kernels on an AVX-512 machine (`NAME/avx`):
+/// those whose goals an AVX2 machine must meet too.
+const AVX_TWINS: [&str; 4] = ["slide-phrase/nb1", "slide-phrase/nb64", "piano/16-voices/64", "piano/88-keys"];
+
+/// On an AVX-512 machine, unless `--isa` chose the kernels, a case of [`AVX_TWINS`] measured
+/// again right after its own line with the kernels an AVX2 machine runs (the same bits), named
+/// `NAME/avx`.
+fn avx_twin<T>(name: &str, isa_chosen: bool, measure: impl FnOnce(&str) -> T) -> Option<T> {
+    if !AVX_TWINS.contains(&name) || isa_chosen || Isa::detect() != Isa::Avx512 {
+        return None;
+    }
+    Isa::cap(Isa::Avx);
+    let twin = measure(&format!("{name}/avx"));
+    Isa::cap(Isa::Avx512);
+    Some(twin)
+}
 
 /// The real-time-factor goal of each case that has one.
 fn goal(name: &str) -> &'static str {
     match name {
         "hammer-c4/qsa" => "≤ 0.001",
         "slide-phrase/nb1" | "slide-phrase/nb64" | "slide-phrase/nb1/avx" | "slide-phrase/nb64/avx" => "≤ 0.01",
-        "piano/16-voices/64" | "piano/16-voices/512" => "≤ 0.1",
-        "piano/88-keys" => "≤ 0.5",
+        "piano/16-voices/64" | "piano/16-voices/512" | "piano/16-voices/64/avx" => "≤ 0.1",
+        "piano/88-keys" | "piano/88-keys/avx" => "≤ 0.5",
         _ => "",
     }
 }
@@ -595,12 +610,7 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
             line.roofline = Some(roofline(line.modes, line.sample_rate, line.rtf));
         }
         emit(line, &mut lines);
-        // The slide's goals hold for an AVX2 machine too: on an AVX-512 one, the same case again
-        // right after, with the kernels an AVX2 machine runs (the same bits).
-        if AVX_TWINS.contains(&name.as_str()) && args.isa.is_none() && Isa::detect() == Isa::Avx512 {
-            Isa::cap(Isa::Avx);
-            let twin = measure(&format!("{name}/avx"), scene, args.runs);
-            Isa::cap(Isa::Avx512);
+        if let Some(twin) = avx_twin(name, args.isa.is_some(), |name| measure(name, scene, args.runs)) {
             emit(twin?, &mut lines);
         }
     }
@@ -647,6 +657,10 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
                 line.fit = Some((1.0 / line.rtf) as usize);
             }
             emit(line, &mut lines);
+            let twin = |name: &str| measure_piano(name, settings, play, 2.0, call, args.runs);
+            if let Some(twin) = avx_twin(name, args.isa.is_some(), twin) {
+                emit(twin, &mut lines);
+            }
         }
     }
     if "piano/after-release".contains(&args.filter) {
