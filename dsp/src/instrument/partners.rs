@@ -82,6 +82,7 @@ impl PartnerTable {
     pub fn pick(&self, key: u8, out: &mut [(usize, usize); MAX_PARTNERS]) -> usize {
         let Some(own) = PARTNER_KEYS.clone().position(|k| k == key).map(|i| &self.strings[i]) else { return 0 };
         let tolerance = 2f64.powf(PARTNER_TOLERANCE_CENTS / 1200.0) - 1.0;
+        let own_w = &own.angular_frequencies()[..own.modes().min(STRIKING_PARTIALS)];
         // (table index, modes to keep, strength rank: the product of the partial numbers)
         let mut found = [(0usize, 0usize, usize::MAX); MAX_PARTNERS];
         let mut count = 0;
@@ -89,13 +90,9 @@ impl PartnerTable {
             if std::ptr::eq(string, own) {
                 continue;
             }
-            let modes = string.modes().min(PARTNER_MODES);
-            let (w, own_w) = (string.angular_frequencies(), own.angular_frequencies());
-            let meeting =
-                |i: usize| (0..own.modes().min(STRIKING_PARTIALS)).find(|&p| (w[i] / own_w[p] - 1.0).abs() < tolerance);
-            let Some(rank) = (0..modes).filter_map(|i| meeting(i).map(|p| (i + 1) * (p + 1))).min() else { continue };
-            let highest = (0..modes).rev().find(|&i| meeting(i).is_some()).unwrap_or(0);
-            let candidate = (index, highest + 1, rank);
+            let w = &string.angular_frequencies()[..string.modes().min(PARTNER_MODES)];
+            let Some((modes, rank)) = meeting(own_w, w, tolerance) else { continue };
+            let candidate = (index, modes, rank);
             if count < MAX_PARTNERS {
                 found[count] = candidate;
                 count += 1;
@@ -129,6 +126,33 @@ impl PartnerTable {
     }
 }
 
+/// Where a string of mode frequencies `w` (rad/s, rising) meets the partials `own` (rad/s,
+/// rising) of a struck key: each of its modes meets the first partial within `tolerance`
+/// (relative) of it. Returns `(modes, rank)`: the modes up to the highest that meets one, and the
+/// lowest product of the two partial numbers that meet; `None` if none meets.
+fn meeting(own: &[f64], w: &[f64], tolerance: f64) -> Option<(usize, usize)> {
+    let (&lowest, &highest) = (own.first()?, own.last()?);
+    let (&first, &last) = (w.first()?, w.last()?);
+    // Further than this from a partial, a frequency cannot meet it: a margin over the
+    // tolerance, so that the exact test runs on every pair it might accept and on few others.
+    let (below, above) = (1.0 - 2.0 * tolerance, 1.0 + 2.0 * tolerance);
+    if first > highest * above || last < lowest * below {
+        return None;
+    }
+    // Both rise with their numbers, so the scan of the partials stops past `w_i`.
+    let meets = |wi: f64| {
+        own.iter().take_while(|&&o| o * below <= wi).position(|&o| o * above >= wi && (wi / o - 1.0).abs() < tolerance)
+    };
+    let mut met = (0..w.len()).filter_map(|i| meets(w[i]).map(|p| (i, p)));
+    let (i, p) = met.next()?;
+    let (mut highest_met, mut rank) = (i, (i + 1) * (p + 1));
+    for (i, p) in met {
+        highest_met = i;
+        rank = rank.min((i + 1) * (p + 1));
+    }
+    Some((highest_met + 1, rank))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -151,5 +175,36 @@ mod tests {
             assert!(!keys.contains(&key), "key {key} is not");
         }
         assert!(modes <= MAX_PARTNER_MODES);
+    }
+
+    /// `meeting` tests only the pairs of frequencies that could meet: for every pair of keys, at
+    /// the default settings and at the most inharmonic and most damped ones, it finds what testing
+    /// every mode of the one against every striking partial of the other finds.
+    #[test]
+    fn meeting_finds_what_every_pair_of_partials_gives() {
+        let tolerance = 2f64.powf(PARTNER_TOLERANCE_CENTS / 1200.0) - 1.0;
+        let every_pair = |own: &[f64], w: &[f64]| {
+            let met: Vec<(usize, usize)> = (0..w.len())
+                .filter_map(|i| own.iter().position(|&o| (w[i] / o - 1.0).abs() < tolerance).map(|p| (i, p)))
+                .collect();
+            let rank = met.iter().map(|&(i, p)| (i + 1) * (p + 1)).min()?;
+            Some((met.last()?.0 + 1, rank))
+        };
+        let stretched = Settings { brightness: 4.0, damping: 20.0, ..Settings::default() };
+        let mut pairs_met = 0;
+        for settings in [Settings::default(), stretched] {
+            let table = PartnerTable::new(48_000.0, &settings);
+            for own in &table.strings {
+                let own_w = &own.angular_frequencies()[..own.modes().min(STRIKING_PARTIALS)];
+                for string in &table.strings {
+                    let w = &string.angular_frequencies()[..string.modes().min(PARTNER_MODES)];
+                    let found = meeting(own_w, w, tolerance);
+                    assert_eq!(found, every_pair(own_w, w));
+                    pairs_met += usize::from(found.is_some());
+                }
+            }
+        }
+        println!("{pairs_met} pairs of keys meet");
+        assert!(pairs_met > 1000);
     }
 }
