@@ -614,11 +614,11 @@ impl PianoVoice {
         self.unweighed = 0;
         // What rings: the strings and the partners (those without dampers ring on after the key's
         // own strings fall silent, and feed them); the guard adds the bridge.
-        let ringing = self.core.strings_energy() + self.core.partners_energy();
+        let (ringing, bridge) = self.core.weigh();
         // The guard: with no source but the hammer, the string never holds more than the strike's
         // energy (the hammer's and what the string had); far more, or a non-finite state, is a
         // fault to silence, not to play.
-        if !(ringing + self.core.bridge_energy() <= GUARD_FACTOR * self.reference_energy) {
+        if !(ringing + bridge <= GUARD_FACTOR * self.reference_energy) {
             self.guard_fade.start(len);
         }
         // A silent unison cannot reach a hammer flying away from it.

@@ -689,27 +689,23 @@ impl UnisonCore {
         self.strings[..self.count].iter().map(ModalString::modes).max().unwrap_or(0)
     }
 
-    /// The strings' energy weighed with their own stiffnesses (J), without the bridge: what
-    /// decides that a voice is silent (the strings are what sounds; the bridge's slowest modes
-    /// ring on at their own rate).
-    pub fn strings_energy(&self) -> f64 {
-        (0..self.count)
-            .map(|s| {
-                self.coupled_bank.own_energy(self.coupled_ranges[s].clone())
-                    + self.free_bank.own_energy(self.free_ranges[s].clone())
-            })
-            .sum()
-    }
-
-    /// The bridge's and soundboard's modes' energy weighed with their own stiffnesses (J).
-    pub fn bridge_energy(&self) -> f64 {
-        self.coupled_bank.own_energy(self.bridge_range.clone())
+    /// `(what rings, the bridge)`: the strings' and the partners' energy, and the bridge's and
+    /// soundboard's modes', each weighed with the modes' own stiffnesses (J), in vector passes
+    /// over the two banks. What rings decides that a voice is silent (the strings are what sounds,
+    /// and the partners without dampers ring on and feed them; the bridge's slowest modes ring on
+    /// at their own rate); the guard reads both.
+    pub fn weigh(&self) -> (f64, f64) {
+        // The coupled bank holds the strings' modes, then the partners', then the bridge's.
+        let (coupled, bridge) = self.coupled_bank.own_energy_split(self.bridge_range.start);
+        let (free, _) = self.free_bank.own_energy_split(self.free_bank.modes());
+        (coupled + free, bridge)
     }
 
     /// The strings' and the bridge's energy weighed with their own stiffnesses (J), the
     /// coupling's cross terms left out: what a voice's guard reads.
     pub fn own_energy(&self) -> f64 {
-        self.strings_energy() + self.partners_energy() + self.bridge_energy()
+        let (ringing, bridge) = self.weigh();
+        ringing + bridge
     }
 
     /// The strings' and bridge's numerical energy and the hammer's (J), without the coupling's

@@ -494,6 +494,44 @@ pub fn energy_sums(isa: Isa, up: &[f64], un: &[f64], k: &[f64]) -> (f64, f64) {
     isa.run(EnergySums { up: chunks(up), un: chunks(un), k: chunks(k) })
 }
 
+/// `(Σ m (un − up)², Σ k (un + up)²)` over the chunks `range`, for a bank's energy (modes of
+/// their own masses `m` and stiffnesses `k`).
+#[inline]
+pub fn weighted_energy_sums(
+    isa: Isa,
+    up: &[f64],
+    un: &[f64],
+    m: &[f64],
+    k: &[f64],
+    range: std::ops::Range<usize>,
+) -> (f64, f64) {
+    struct WeightedEnergySums<'a> {
+        up: &'a [Chunk],
+        un: &'a [Chunk],
+        m: &'a [Chunk],
+        k: &'a [Chunk],
+        range: std::ops::Range<usize>,
+    }
+    impl Kernel for WeightedEnergySums<'_> {
+        type Output = (f64, f64);
+        #[inline(always)]
+        fn run<L: Lanes>(self, s: L) -> (f64, f64) {
+            let n = self.up.len().min(self.un.len()).min(self.m.len()).min(self.k.len());
+            let (up, un, m, k) = (&self.up[..n], &self.un[..n], &self.m[..n], &self.k[..n]);
+            let zero = s.splat(0.0);
+            let (mut even, mut odd) = ([zero; 2], [zero; 2]);
+            paired!(@range self.range.start.min(n), self.range.end.min(n), fits = true, even, odd, |c, acc| {
+                let (p, q) = (s.load(&up[c]), s.load(&un[c]));
+                let (step, sum) = (s.sub(q, p), s.add(q, p));
+                acc[0] = s.add(acc[0], s.mul(s.load(&m[c]), s.mul(step, step)));
+                acc[1] = s.add(acc[1], s.mul(s.load(&k[c]), s.mul(sum, sum)));
+            });
+            (s.sum(s.add(even[0], odd[0])), s.sum(s.add(even[1], odd[1])))
+        }
+    }
+    isa.run(WeightedEnergySums { up: chunks(up), un: chunks(un), m: chunks(m), k: chunks(k), range })
+}
+
 /// One contact vector of [`ModalString::gram`](super::ModalString::gram): `shape` is `h` (dimensionless) and `gain` is `C∘h` (m/N),
 /// whole chunks each.
 #[derive(Debug)]
