@@ -248,8 +248,8 @@ pub fn advance_split<const K: usize, const J: usize, const KT: usize, const JT: 
         let tail_next: [&[Chunk]; JT] = run.tail.next.map(|v| &v[..n]);
         // Accumulators: the output sum and the projections of the sides present, twice; with the
         // forces, the new state, `zt` and a product as temporaries.
-        let sides = if HEAD { 1 + J } else { 0 } + if TAIL { JT } else { 0 };
-        let pushes = if HEAD { K } else { 0 } + if TAIL { KT } else { 0 };
+        let sides = (if HEAD { 1 + J } else { 0 }) + (if TAIL { JT } else { 0 });
+        let pushes = (if HEAD { K } else { 0 }) + (if TAIL { KT } else { 0 });
         let (mut e, mut o) = (&mut *even, &mut *odd);
         paired!(@range lo, hi, fits = fits::<L>(2 * sides + pushes + 3), e, o, |c, acc| {
             let mut next = s.sub(s.load(&ups[c]), s.load(&zts[c]));
