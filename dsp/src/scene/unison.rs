@@ -231,6 +231,9 @@ pub struct UnisonCore {
     /// Each string prepared on its own (where the banks' coefficients come from); the first
     /// also holds a copy of its state after every call, for monitors.
     strings: Vec<ModalString>,
+    /// What each string was last prepared for, `(parameters, highest frequency (Hz))`: a key
+    /// struck again on the same voice finds its strings ready and only brings them to rest.
+    prepared: [Option<(StringParams, f64)>; MAX_UNISON],
     /// How many of each string's modes (a prefix) are on the bridge.
     split: [usize; MAX_UNISON],
     /// Each string's modes in the coupled and in the free part.
@@ -293,6 +296,7 @@ impl UnisonCore {
         let free_bank = ModalBank::with_capacity(MAX_UNISON * modes, sample_rate);
         Ok(Self {
             strings: (0..MAX_UNISON).map(|_| ModalString::with_capacity(modes)).collect(),
+            prepared: [None; MAX_UNISON],
             split: [0; MAX_UNISON],
             coupled_ranges: [0..0, 0..0, 0..0],
             free_ranges: [0..0, 0..0, 0..0],
@@ -347,7 +351,17 @@ impl UnisonCore {
         }
         let fs = 1.0 / self.dt;
         for s in 0..params.strings {
-            self.strings[s].retune(params.string(s), fs, max_frequency).map_err(UnisonError::String)?;
+            // Preparing a string (its modes' coefficients) is most of a note-on's work: a string
+            // prepared for the same parameters (the key played again) has the same coefficients
+            // and only comes to rest, as `retune` leaves it.
+            let wanted = (params.string(s), max_frequency);
+            if self.prepared[s] == Some(wanted) {
+                self.strings[s].reset();
+            } else {
+                self.prepared[s] = None;
+                self.strings[s].retune(wanted.0, fs, max_frequency).map_err(UnisonError::String)?;
+                self.prepared[s] = Some(wanted);
+            }
         }
         self.count = params.strings;
         self.ell = position;
@@ -1007,6 +1021,49 @@ mod tests {
     /// Over a strike and 0.5 s of ringing on the soundboard, a detuned trichord's energy
     /// `H + losses` stays at its initial value to 1e-9 relative, for each of the three solvers:
     /// the bridge's elimination is exact, and every cross term of the coupling is counted.
+    /// A key struck again on the same unison finds its strings prepared and only brings them to
+    /// rest; another key is prepared afresh. Rung, then retuned key after key (C4, another, C4,
+    /// C4) and struck each time, a unison gives each key's fresh output bit for bit.
+    #[test]
+    fn a_key_struck_again_sounds_as_on_a_fresh_unison() {
+        let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
+        let c4 = chaigne_askenfelt_c4();
+        let params = UnisonParams { string: c4.string, strings: 3, detune: [-1.0, 0.2, 0.8] };
+        let mut other = params;
+        other.string.tension *= 1.5;
+        let y_ref = law(3).compression_at_energy(0.5 * 3.0 * 2.97e-3 * 3.5 * 3.5);
+        let hammer =
+            HammerParams { mass: c4.hammer_mass * 3.0, velocity: 3.5, position: c4.strike_position, gap: 2e-4 };
+        let strike = |core: &mut UnisonCore, params: &UnisonParams| {
+            core.retune_with_partners(params, f64::INFINITY, c4.strike_position, &[]).unwrap();
+            core.strike(&hammer);
+        };
+        let render = |core: UnisonCore| {
+            let mut scene = HammerUnison::new(core, QsaSolver::new(QuadSpline::new(law(3), y_ref, 6).unwrap()));
+            let mut out = vec![0.0; 6_000];
+            scene.core.process_output(&mut scene.solver, &mut out);
+            (out.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), scene.core)
+        };
+        let fresh = |params: &UnisonParams| {
+            let mut core = UnisonCore::new(200, &board, FS).unwrap();
+            strike(&mut core, params);
+            render(core).0
+        };
+        let (fresh_c4, fresh_other) = (fresh(&params), fresh(&other));
+        assert_ne!(fresh_c4, fresh_other);
+        let (_, mut core) = render(c4_unison(3, params.detune, &board));
+        for (name, key, want) in [
+            ("another key", &other, &fresh_other),
+            ("C4 after it", &params, &fresh_c4),
+            ("C4 again", &params, &fresh_c4),
+        ] {
+            strike(&mut core, key);
+            let (out, rung) = render(core);
+            assert!(&out == want, "{name}");
+            core = rung;
+        }
+    }
+
     #[test]
     fn a_trichord_on_the_soundboard_keeps_its_energy_balance() {
         let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
