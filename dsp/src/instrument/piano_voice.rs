@@ -291,7 +291,7 @@ impl PianoVoice {
         let note = piano_note(60);
         let unison = UnisonParams { string: note.string, strings: note.strings, detune: [0.0; 3] };
         core.retune(&unison, 20_000.0, note.strike_position).expect("the C4 rule is a valid string");
-        let per_mode = || crate::string::reserved(modes + crate::string::LANES);
+        let per_mode = || Vec::with_capacity(modes + crate::string::LANES);
         Self {
             damper_shape: per_mode(),
             extra: per_mode(),

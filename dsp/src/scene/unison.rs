@@ -175,7 +175,7 @@ struct Part {
 
 impl Part {
     fn new(bank: &ModalBank) -> Self {
-        let v = || crate::string::reserved(bank.capacity() + crate::string::LANES);
+        let v = || Vec::with_capacity(bank.capacity() + crate::string::LANES);
         Self { shape: v(), lift: v(), sole: v(), shape_gain: v(), lift_gain: v(), sole_gain: v(), pickup: v() }
     }
 

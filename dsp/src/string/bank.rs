@@ -49,7 +49,7 @@ pub type SplitProjections<const J: usize, const JT: usize> = ([f64; J], [f64; JT
 impl ModalBank {
     /// An empty bank at `sample_rate` (Hz) with room for `modes` modes.
     pub fn with_capacity(modes: usize, sample_rate: f64) -> Self {
-        let v = || super::reserved(modes.div_ceil(LANES) * LANES);
+        let v = || Vec::with_capacity(modes.div_ceil(LANES) * LANES);
         Self {
             coef_a: v(),
             coef_b: v(),

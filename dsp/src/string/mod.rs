@@ -77,17 +77,6 @@ pub use simd::{Isa, LANES};
 /// Most modes a string may have (bounds memory and cost for extreme parameters).
 pub const MAX_MODES: usize = 4096;
 
-/// An empty vector with room for `capacity` values, its memory written once. The system hands
-/// out a new allocation's pages only when they are first written; a voice prepared off the audio
-/// thread and first filled by a note-on on it would take those page faults there.
-pub fn reserved(capacity: usize) -> Vec<f64> {
-    let mut v = Vec::with_capacity(capacity);
-    v.resize(capacity, 0.0);
-    std::hint::black_box(&mut v[..]);
-    v.clear();
-    v
-}
-
 /// Modal amplitudes below this (m) are set to zero (docs/physics.md §10.11): decaying modes would
 /// otherwise become subnormal numbers, which are slower by orders of magnitude.
 pub const FLUSH_BELOW: f64 = 1e-30;

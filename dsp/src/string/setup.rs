@@ -35,7 +35,7 @@ impl ModalString {
     /// [`retune`](Self::retune)s never allocate.
     pub fn with_capacity(modes: usize) -> Self {
         let padded = modes.div_ceil(LANES) * LANES;
-        let v = || super::reserved(padded);
+        let v = || Vec::with_capacity(padded);
         Self {
             params: StringParams {
                 length: 1.0,
