@@ -215,10 +215,12 @@ struct Coupling {
     lift_stiffness: f64,
     /// `ρ = ρ_V + ½Δt ρ_T` (m/√J): how far the striking point can be from rest per `√(2H)`.
     reach: f64,
-    /// `1/Δt²` (1/s²) and `1/Δ`, `Δ = Δt² + C_Σ(E − Θ)` (s²): the step after the hammer retires
-    /// multiplies by them, so no division lies on the chain from one sample to the next.
+    /// `1/Δt²` (1/s²), `1/Δ` with `Δ = Δt² + C_Σ(E − Θ)` (s²) and `Θ − E` (kg), for the step
+    /// after the hammer retires: it multiplies by them, so no division lies on the chain from one
+    /// sample to the next.
     inverse_dt2: f64,
     inverse_delta: f64,
+    theta_less_e: f64,
 }
 
 /// A hammer, a unison of strings and their bridge: everything of a piano key except the solver.
@@ -549,6 +551,7 @@ impl UnisonCore {
         let (theta, inertia) = (c.gg / dt2, c.lift_mass + 0.25 * c.lift_stiffness * dt2);
         c.inverse_dt2 = 1.0 / dt2;
         c.inverse_delta = 1.0 / (dt2 + c.compliance * (inertia - theta));
+        c.theta_less_e = theta - inertia;
         self.next_coupled = None;
         self.next_free = None;
         self.next_retired = None;
@@ -867,7 +870,6 @@ impl UnisonCore {
     /// Returns the coupled part's output at `n+1`.
     #[inline]
     fn retired_step(&mut self) -> f64 {
-        let dt2 = self.dt * self.dt;
         let c = self.coupling;
         let cp = &self.coupled;
         let [gz, ez] = match self.next_retired.take() {
@@ -877,10 +879,8 @@ impl UnisonCore {
         let (b_prev, b_now) = self.b;
         let g0 = (2.0 * self.gv.0 - gz - 2.0 * self.gv.1) * c.inverse_dt2 + c.lift_stiffness * b_now;
         let b_free = b_prev - ez;
-        let theta = c.gg / dt2;
-        let inertia = c.lift_mass + 0.25 * c.lift_stiffness * dt2;
         let a = (b_free - 2.0 * b_now + b_prev - c.compliance * g0) * c.inverse_delta;
-        let f = -g0 + (theta - inertia) * a;
+        let f = -g0 + c.theta_less_e * a;
         let bridge = Tail { start: self.bridge_range.start, forces: [(&cp.sole_gain[..], f)], next: [&cp.sole[..]] };
         let (out, next) = self.coupled_bank.advance_split([(&cp.lift_gain[..], -a)], &cp.pickup, [&cp.lift], bridge);
         let next = next.map(|([g], [e])| [g, e]);
