@@ -307,12 +307,9 @@ impl ModalBank {
         output: &[f64],
         next: [&[f64]; J],
     ) -> (f64, Option<[f64; J]>) {
-        debug_assert!(self.history_ready, "advance follows history");
-        let (a, b) = (&self.coef_a, &self.coef_b);
-        let (projection, next) =
-            kernel::advance(self.isa, a, b, &mut self.u_prev, &self.u_now, &mut self.history, forces, output, next);
-        self.finish_step();
-        (projection, self.history_ready.then_some(next))
+        let whole = Tail { start: self.u_prev.len(), forces: [], next: [] };
+        let (projection, next) = self.advance_split(forces, output, next, whole);
+        (projection, next.map(|(next, [])| next))
     }
 
     /// [`advance_projecting`](Self::advance_projecting) for a bank whose modes from `tail.start`
