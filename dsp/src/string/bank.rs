@@ -105,27 +105,44 @@ impl ModalBank {
     /// Append one mode from its recursion `(P, Q)` and modal mass (kg), at rest; modes beyond
     /// the capacity are dropped (returns whether it was added).
     fn push(&mut self, p: f64, q: f64, mass: f64) -> bool {
-        self.unpad();
-        if self.modes == self.capacity() {
-            return false;
-        }
-        let m = self.modes;
-        for v in self.arrays_mut() {
-            v.push(0.0);
-        }
-        self.set_mode(m, p, q, mass);
-        self.modes += 1;
-        true
+        !self.append(&[p], &[q], mass).is_empty()
     }
 
-    /// Make entry `j` of every array the mode of recursion `(P, Q)` and modal mass `mass` (kg),
-    /// at rest.
-    fn set_mode(&mut self, j: usize, p: f64, q: f64, mass: f64) {
-        let c = Coefficients::new(p, q, 1.0 / self.sample_rate, mass);
-        (self.coef_a[j], self.coef_b[j], self.coef_c[j]) = (c.a, c.b, c.c);
-        (self.stiffness[j], self.resistance[j], self.own_stiffness[j]) = (c.stiffness, c.resistance, c.stiffness);
-        (self.own_p[j], self.own_q[j], self.mass[j]) = (p, q, mass);
-        (self.u_prev[j], self.u_now[j], self.history[j]) = (0.0, 0.0, 0.0);
+    /// Append the modes of recursions `(own_p[k], own_q[k])`, all of modal mass `mass` (kg), at
+    /// rest, as many as the capacity holds. Returns their indices. Each array grows once, not
+    /// once a mode.
+    fn append(&mut self, own_p: &[f64], own_q: &[f64], mass: f64) -> Range<usize> {
+        self.unpad();
+        let m = self.modes;
+        let count = own_p.len().min(own_q.len()).min(self.capacity() - m);
+        for v in self.arrays_mut() {
+            v.resize(m + count, 0.0);
+        }
+        self.set_modes(m, &own_p[..count], &own_q[..count], mass);
+        self.modes += count;
+        m..self.modes
+    }
+
+    /// Make entries `at..at + own_p.len()` of every array the modes of recursions
+    /// `(own_p[k], own_q[k])` (as many as `own_q`) and modal mass `mass` (kg), at rest: one pass
+    /// over equal slices.
+    fn set_modes(&mut self, at: usize, own_p: &[f64], own_q: &[f64], mass: f64) {
+        let dt = 1.0 / self.sample_rate;
+        let end = at + own_p.len();
+        let (a, b, c) = (&mut self.coef_a[at..end], &mut self.coef_b[at..end], &mut self.coef_c[at..end]);
+        let (k_hat, r_hat) = (&mut self.stiffness[at..end], &mut self.resistance[at..end]);
+        let (own_k, masses) = (&mut self.own_stiffness[at..end], &mut self.mass[at..end]);
+        for (k, (&p, &q)) in own_p.iter().zip(&own_q[..own_p.len()]).enumerate() {
+            let coefficients = Coefficients::new(p, q, dt, mass);
+            (a[k], b[k], c[k]) = (coefficients.a, coefficients.b, coefficients.c);
+            (k_hat[k], r_hat[k], own_k[k]) = (coefficients.stiffness, coefficients.resistance, coefficients.stiffness);
+            masses[k] = mass;
+        }
+        self.own_p[at..end].copy_from_slice(own_p);
+        self.own_q[at..end].copy_from_slice(&own_q[..own_p.len()]);
+        for v in [&mut self.u_prev, &mut self.u_now, &mut self.history] {
+            v[at..end].fill(0.0);
+        }
     }
 
     /// Drop the padding so that modes can be appended.
@@ -156,13 +173,9 @@ impl ModalBank {
     /// Append the modes `modes` (indices into the string's, mode `i + 1` at `i`) of `string`, at
     /// rest. Returns their indices in the bank (fewer if the capacity runs out).
     pub fn push_modes(&mut self, string: &ModalString, modes: Range<usize>) -> Range<usize> {
-        let start = self.modes;
-        for i in modes.start..modes.end.min(string.modes()) {
-            if !self.push(string.own_p[i], string.own_q[i], string.modal_mass) {
-                break;
-            }
-        }
-        start..self.modes
+        let end = modes.end.min(string.modes());
+        let modes = modes.start.min(end)..end;
+        self.append(&string.own_p[modes.clone()], &string.own_q[modes], string.modal_mass)
     }
 
     /// Insert the modes `modes` of `string` (as [`push_modes`](Self::push_modes)), at rest, before
@@ -179,9 +192,9 @@ impl ModalBank {
             v.resize(m + count, 0.0);
             v.copy_within(at..m, at + count);
         }
-        for (k, i) in (modes.start..modes.start + count).enumerate() {
-            self.set_mode(at + k, string.own_p[i], string.own_q[i], string.modal_mass);
-        }
+        let first = modes.start.min(string.modes());
+        let new = first..first + count;
+        self.set_modes(at, &string.own_p[new.clone()], &string.own_q[new], string.modal_mass);
         self.modes += count;
         self.history_ready = false;
         at..at + count
@@ -419,6 +432,62 @@ impl ModalBank {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every array of `bank` over its first `n` modes, by name.
+    fn arrays(bank: &mut ModalBank, n: usize) -> Vec<Vec<f64>> {
+        bank.arrays_mut().map(|v| v[..n].to_vec()).to_vec()
+    }
+
+    /// A string's modes added to a bank, all at once, one at a time, or some inserted between
+    /// others, carry the string's own coefficients (made by the string's setup) bit for bit, its
+    /// modal mass, and rest; ranges past the string's end or reversed add nothing, and a bank
+    /// keeps what its capacity holds.
+    #[test]
+    fn modes_added_to_a_bank_are_the_strings_modes() {
+        let fs = 48_000.0;
+        let string = ModalString::band_limited(crate::preset::piano_note(48).string, fs, 20_000.0).unwrap();
+        let n = string.modes();
+        let reference: Vec<Vec<f64>> = {
+            let s = &string;
+            let mass = vec![s.modal_mass; n];
+            let zeros = vec![0.0; n];
+            [&s.coef_a, &s.coef_b, &s.coef_c, &s.stiffness, &s.resistance, &s.own_p, &s.own_q, &s.own_stiffness]
+                .map(|v| v[..n].to_vec())
+                .into_iter()
+                .chain([mass, zeros.clone(), zeros.clone(), zeros])
+                .collect()
+        };
+        let mut whole = ModalBank::with_capacity(n, fs);
+        assert_eq!(whole.push_modes(&string, 0..n), 0..n);
+        let mut one_by_one = ModalBank::with_capacity(n, fs);
+        for i in 0..n {
+            assert_eq!(one_by_one.push_modes(&string, i..i + 1), i..i + 1);
+        }
+        let mut inserted = ModalBank::with_capacity(n, fs);
+        inserted.push_modes(&string, 0..10);
+        inserted.push_modes(&string, 20..n);
+        assert_eq!(inserted.insert_modes(10, &string, 10..20), 10..20);
+        for (name, bank) in [("whole", &mut whole), ("one by one", &mut one_by_one), ("inserted", &mut inserted)] {
+            assert_eq!(bank.push_modes(&string, 5..3), n..n, "{name}: reversed");
+            assert_eq!(bank.push_modes(&string, n + 5..n + 9), n..n, "{name}: past the end");
+            assert_eq!(bank.insert_modes(3, &string, n + 5..n + 9), 3..3, "{name}: past the end");
+            bank.finish();
+            assert_eq!(bank.modes(), n);
+            let got = arrays(bank, n);
+            for (k, (g, r)) in got.iter().zip(&reference).enumerate() {
+                let same = g.iter().zip(r).all(|(a, b)| a.to_bits() == b.to_bits());
+                assert!(same, "{name}: array {k}");
+            }
+        }
+        let mut small = ModalBank::with_capacity(n / 2, fs);
+        let kept = small.capacity();
+        assert!(kept < n);
+        assert_eq!(small.push_modes(&string, 0..n), 0..kept);
+        assert_eq!(small.push_modes(&string, 0..n), kept..kept);
+        small.finish();
+        let got = arrays(&mut small, kept);
+        assert!(got.iter().zip(&reference).all(|(g, r)| g[..] == r[..kept]));
+    }
 
     /// The split weighing is the mode-by-mode weighing of each part, to rounding (1e-13 of the
     /// whole; the sums run in another order), wherever the split falls: at either end, on a
