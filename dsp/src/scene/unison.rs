@@ -400,7 +400,9 @@ impl UnisonCore {
         Ok(())
     }
 
-    /// Make the vectors over both parts for the current strings and striking point.
+    /// Make the vectors over both parts for the current strings and striking point, the
+    /// partners' entries empty: [`place_partners`](Self::place_partners) fills them and
+    /// refreshes the coupling.
     fn place(&mut self) {
         let n = self.count as f64;
         self.coupled.clear_vectors(&self.coupled_bank);
@@ -444,7 +446,6 @@ impl UnisonCore {
         self.coupled.sole[self.bridge_range.clone()].fill(1.0);
         self.coupling.lift_mass = lift_mass;
         self.coupling.lift_stiffness = lift_stiffness;
-        self.refresh_coupling();
     }
 
     /// Put the lowest modes of more partner strings (as
@@ -491,7 +492,7 @@ impl UnisonCore {
 
     /// The lifts and bridge force weights (over the unison's `S`, as its own strings' output) of
     /// the partners from the `first`-th on, and their static shares of the bridge's mass and
-    /// stiffness.
+    /// stiffness; then the coupling follows the vectors.
     fn place_partners(&mut self, partners: &[(&ModalString, usize)], first: usize) {
         let n = self.count as f64;
         let mut weights = [0.0; PARTNER_MODES];
