@@ -14,6 +14,7 @@ use crate::instrument::{PianoVoice, Settings};
 use crate::preset::piano_note;
 use crate::scene::{MAX_PARTNERS, PARTNER_MODES};
 use crate::string::ModalString;
+use std::cell::Cell;
 
 /// The keyboard whose strings can be partners (MIDI): A0 to C8.
 pub const PARTNER_KEYS: std::ops::Range<u8> = 21..109;
@@ -31,11 +32,18 @@ pub const STRIKING_PARTIALS: usize = 8;
 /// Most partner modes a key carries in all.
 pub const MAX_PARTNER_MODES: usize = 64;
 
+/// What [`PartnerTable::pick`] finds for a key: `(index into the table, modes)` of each partner,
+/// and how many there are.
+type Picks = ([(usize, usize); MAX_PARTNERS], usize);
+
 /// Every key's partner string, prepared once and retuned when the settings that shape strings
 /// change.
 #[derive(Debug, Clone)]
 pub struct PartnerTable {
     strings: Vec<ModalString>,
+    /// Each key's partners as [`PartnerTable::pick`] found them for the strings as tuned, once
+    /// asked: a key struck again, on any voice, does not search again.
+    picks: Vec<Cell<Option<Picks>>>,
     /// `(brightness, damping)` the strings are tuned for.
     tuned: (f64, f64),
     sample_rate: f64,
@@ -46,6 +54,7 @@ impl PartnerTable {
     pub fn new(sample_rate: f64, settings: &Settings) -> Self {
         let mut table = Self {
             strings: PARTNER_KEYS.map(|_| ModalString::with_capacity(PARTNER_MODES + 1)).collect(),
+            picks: PARTNER_KEYS.map(|_| Cell::new(None)).collect(),
             tuned: (f64::NAN, f64::NAN),
             sample_rate,
         };
@@ -60,6 +69,7 @@ impl PartnerTable {
             return;
         }
         self.tuned = tuned;
+        self.picks.iter().for_each(|p| p.set(None));
         for (string, key) in self.strings.iter_mut().zip(PARTNER_KEYS) {
             let mut p = PianoVoice::string_for(key, settings);
             let s = piano_note(key).strings.max(1) as f64;
@@ -80,7 +90,22 @@ impl PartnerTable {
     /// strongest first (the lowest product of the two partial numbers that meet, where both strings
     /// move most), and no more than [`MAX_PARTNER_MODES`] modes in all.
     pub fn pick(&self, key: u8, out: &mut [(usize, usize); MAX_PARTNERS]) -> usize {
-        let Some(own) = PARTNER_KEYS.clone().position(|k| k == key).map(|i| &self.strings[i]) else { return 0 };
+        let Some(index) = PARTNER_KEYS.clone().position(|k| k == key) else { return 0 };
+        let (picks, count) = match self.picks[index].get() {
+            Some(found) => found,
+            None => {
+                let mut picks = [(0, 0); MAX_PARTNERS];
+                let count = self.search(&self.strings[index], &mut picks);
+                self.picks[index].set(Some((picks, count)));
+                (picks, count)
+            }
+        };
+        out[..count].copy_from_slice(&picks[..count]);
+        count
+    }
+
+    /// [`pick`](Self::pick)'s search among the table's strings for those meeting `own`'s partials.
+    fn search(&self, own: &ModalString, out: &mut [(usize, usize); MAX_PARTNERS]) -> usize {
         let tolerance = 2f64.powf(PARTNER_TOLERANCE_CENTS / 1200.0) - 1.0;
         let own_w = &own.angular_frequencies()[..own.modes().min(STRIKING_PARTIALS)];
         // (table index, modes to keep, strength rank: the product of the partial numbers)
@@ -206,5 +231,34 @@ mod tests {
         }
         println!("{pairs_met} pairs of keys meet");
         assert!(pairs_met > 1000);
+    }
+
+    /// Every key's partners, as `pick` gives them.
+    fn every_pick(table: &PartnerTable) -> Vec<Vec<(usize, usize)>> {
+        PARTNER_KEYS
+            .map(|key| {
+                let mut out = [(0, 0); MAX_PARTNERS];
+                let n = table.pick(key, &mut out);
+                out[..n].to_vec()
+            })
+            .collect()
+    }
+
+    /// The partners a table keeps from its searches are those of its strings as tuned now: after
+    /// every key was picked at the default settings, a retune to stiffer, more damped strings
+    /// gives what a table made for those settings gives, for every key, though many keys' partners
+    /// differ between the two.
+    #[test]
+    fn a_retuned_table_picks_what_a_fresh_table_picks() {
+        let stretched = Settings { brightness: 4.0, damping: 20.0, ..Settings::default() };
+        let mut table = PartnerTable::new(48_000.0, &Settings::default());
+        let before = every_pick(&table);
+        assert_eq!(every_pick(&table), before, "picked again from what was kept");
+        table.retune(&stretched);
+        let after = every_pick(&table);
+        assert_eq!(after, every_pick(&PartnerTable::new(48_000.0, &stretched)));
+        let changed = before.iter().zip(&after).filter(|(b, a)| b != a).count();
+        println!("{changed} of 88 keys' partners change with the settings");
+        assert!(changed >= 10);
     }
 }
