@@ -537,7 +537,16 @@ impl Instrument {
             }
             return Some(i);
         }
-        if let Some(i) = self.voices.iter().position(|v| !v.sounding && !v.fading()) {
+        // A free voice: the one that last played this key, whose strings are prepared for it
+        // while the settings stay, else the one whose note began longest ago, so that the free
+        // voices keep the keys played latest prepared.
+        let free = |v: &PianoVoice| !v.sounding && !v.fading();
+        let last_played = self.voices.iter().position(|v| free(v) && v.strike.key == strike.key);
+        let oldest = || {
+            let (i, _) = self.voices.iter().enumerate().filter(|(_, v)| free(v)).min_by_key(|(_, v)| v.started)?;
+            Some(i)
+        };
+        if let Some(i) = last_played.or_else(oldest) {
             self.voices[i].play_with(strike, &self.settings, now, Some((&self.partners, dampers)));
             return Some(i);
         }
@@ -715,4 +724,37 @@ fn mix_voiced(x: &[f64], gains: &Gains, voiced: &mut f64, pan: &mut [f64; 2], le
     }
     *voiced = g;
     *pan = [pl, pr];
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Which piano voice sounds `key`.
+    fn voice_of(instrument: &Instrument, key: u8) -> Option<usize> {
+        instrument.voices.iter().position(|v| v.sounding && v.strike.key == key)
+    }
+
+    /// A note takes the free voice that last played its key, whose strings are prepared for it,
+    /// else the free voice whose note began longest ago (one never played counts as begun at the
+    /// start): with C4, D4 and E4 played one after another on four voices and silenced, D4 takes
+    /// D4's voice, G4 the unplayed one, A4 C4's, and B4 E4's.
+    #[test]
+    fn a_note_takes_the_voice_that_played_its_key_else_the_longest_free() {
+        let mut instrument = Instrument::new(48_000.0, 4, Settings::default());
+        let (mut left, mut right) = ([0.0; 64], [0.0; 64]);
+        instrument.process(&mut left, &mut right);
+        let mut play = |instrument: &mut Instrument, key: u8| {
+            instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.6 });
+            instrument.process(&mut left, &mut right);
+            voice_of(instrument, key)
+        };
+        let first: Vec<_> = [60, 62, 64].into_iter().map(|key| play(&mut instrument, key)).collect();
+        assert_eq!(first, [Some(0), Some(1), Some(2)]);
+        instrument.handle(Event::AllSoundOff);
+        assert_eq!(play(&mut instrument, 62), Some(1), "D4 again");
+        assert_eq!(play(&mut instrument, 67), Some(3), "G4, a new key");
+        assert_eq!(play(&mut instrument, 69), Some(0), "A4");
+        assert_eq!(play(&mut instrument, 71), Some(2), "B4");
+    }
 }
