@@ -432,6 +432,7 @@ impl ModalBank {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::string::{Damping, StringParams};
 
     /// Every array of `bank` over its first `n` modes, by name.
     fn arrays(bank: &mut ModalBank, n: usize) -> Vec<Vec<f64>> {
@@ -445,7 +446,17 @@ mod tests {
     #[test]
     fn modes_added_to_a_bank_are_the_strings_modes() {
         let fs = 48_000.0;
-        let string = ModalString::band_limited(crate::preset::piano_note(48).string, fs, 20_000.0).unwrap();
+        // A C3-like wire: 0.95 m at 670 N, 130.8 Hz.
+        let (length, tension) = (0.95, 670.0);
+        let linear_density = tension / (2.0 * length * 130.8f64).powi(2);
+        let params = StringParams {
+            length,
+            tension,
+            linear_density,
+            bending_stiffness: 1e-4 * tension * length * length,
+            damping: Damping::PerMode { b1: 0.5, b3: 1e-9 },
+        };
+        let string = ModalString::band_limited(params, fs, 20_000.0).unwrap();
         let n = string.modes();
         let reference: Vec<Vec<f64>> = {
             let s = &string;
