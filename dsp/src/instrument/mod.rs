@@ -608,13 +608,23 @@ impl Instrument {
                 bus.fill(0.0);
             }
             let width = if self.raw { 0.0 } else { self.settings.stereo_width };
-            for voice in self.voices.iter_mut().filter(|v| v.sounding) {
+            // Only the voices with live notes can sound: the others are not looked at.
+            let (pianos, slides) = (0..self.voices.len(), self.voices.len()..self.voices.len() + self.slides.len());
+            for i in self.notes.live_in(pianos) {
+                let voice = &mut self.voices[i];
+                if !voice.sounding {
+                    continue;
+                }
                 voice.render(scratch);
                 let pan = pan_gains(voice.strike.key, width);
                 let gains = Gains { voicing: voice.voicing, pan, rate: self.voicing_rate };
                 mix_voiced(scratch, &gains, &mut voice.voiced, &mut voice.pan, bus_l, bus_r);
             }
-            for voice in self.slides.iter_mut().filter(|v| v.sounding) {
+            for i in self.notes.live_in(slides) {
+                let voice = &mut self.slides[i];
+                if !voice.sounding {
+                    continue;
+                }
                 voice.render(scratch);
                 let bus = match voice.body {
                     SlideBody::Pickup => &mut *bus_s,
@@ -669,8 +679,14 @@ impl Instrument {
         let mut seeks = PARTNER_SEEKS;
         let held = self.held_keys();
         let pedals: [bool; 16] = std::array::from_fn(|channel| self.pedal(channel as u8));
-        // A voice neither sounding nor fading for a new note has nothing to do at a block's start.
-        for v in self.voices.iter_mut().filter(|v| v.sounding || v.fading()) {
+        // A voice neither sounding nor fading for a new note has nothing to do at a block's start;
+        // only those with live notes can be either.
+        let (pianos, slides) = (0..self.voices.len(), self.voices.len()..self.voices.len() + self.slides.len());
+        for i in self.notes.live_in(pianos) {
+            let v = &mut self.voices[i];
+            if !(v.sounding || v.fading()) {
+                continue;
+            }
             let dampers = Dampers { pedal: pedals[usize::from(v.strike.channel & 15)], held };
             v.begin_block(&self.settings, dampers, len, self.now, Some(&self.partners), &mut seeks);
         }
@@ -680,10 +696,11 @@ impl Instrument {
         let pickup = self.pickup + (self.settings.pickup_position - self.pickup).clamp(-reach, reach);
         let move_pickup = self.pickup != pickup;
         self.pickup = pickup;
-        for v in &mut self.slides {
-            if move_pickup {
-                v.set_pickup(self.pickup, len);
-            }
+        if move_pickup {
+            self.slides.iter_mut().for_each(|v| v.set_pickup(pickup, len));
+        }
+        for i in self.notes.live_in(slides) {
+            let v = &mut self.slides[i];
             if v.sounding {
                 v.begin_block(&self.settings, &self.channels[usize::from(v.strike.channel)], len);
             }

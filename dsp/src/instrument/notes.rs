@@ -14,6 +14,8 @@
 //! it is full (a caller that never collects it, like the offline renderer), ending notes are not
 //! queued.
 
+use std::ops::Range;
+
 /// A note as the host started it: its voice (note) id, if the host gave one, channel and key.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Note {
@@ -155,6 +157,26 @@ impl NoteBook {
         }
     }
 
+    /// The voices among the flat indices `voices` with a live note, in the order of their indices,
+    /// counted from `voices.start`: a pass over one pool's sounding voices that does not look at
+    /// the others (every voice that sounds or fades has a live note until it is checked silent).
+    pub(crate) fn live_in(&self, voices: Range<usize>) -> impl Iterator<Item = usize> + '_ {
+        let start = voices.start;
+        (start / 64..voices.end.div_ceil(64))
+            .flat_map(move |word| {
+                let mut bits = self.live_bits.get(word).copied().unwrap_or(0);
+                std::iter::from_fn(move || {
+                    let index = word * 64 + bits.trailing_zeros() as usize;
+                    (bits != 0).then(|| {
+                        bits &= bits - 1;
+                        index
+                    })
+                })
+            })
+            .filter(move |index| voices.contains(index))
+            .map(move |index| index - start)
+    }
+
     /// Queue an ended note, unless the queue is full. Never allocates.
     fn push(&mut self, note: Note, at: u64) {
         if self.ended.len() < self.ended.capacity() {
@@ -237,5 +259,23 @@ mod tests {
             true
         });
         assert_eq!(asked.take(), [64, 130], "the ended notes are not asked again");
+    }
+
+    /// `live_in` gives the live voices of a range of flat indices, counted from its start, in
+    /// order, across words of bits and at a range's ends: one pool's voices without the other's.
+    #[test]
+    fn live_in_gives_one_pools_live_voices_from_its_start() {
+        let mut book = NoteBook::new(200);
+        let note = |key| Note { voice: None, channel: 0, key };
+        for index in [0, 3, 63, 64, 99, 100, 130, 199] {
+            book.start(index, note(index as u8), 0);
+        }
+        let live = |book: &NoteBook, range| book.live_in(range).collect::<Vec<_>>();
+        assert_eq!(live(&book, 0..100), [0, 3, 63, 64, 99]);
+        assert_eq!(live(&book, 100..200), [0, 30, 99]);
+        assert_eq!(live(&book, 64..65), [0]);
+        assert_eq!(live(&book, 4..63), [] as [usize; 0]);
+        book.check(64, false, 10);
+        assert_eq!(live(&book, 0..100), [0, 3, 63, 99], "an ended note is not live");
     }
 }
