@@ -479,7 +479,8 @@ mod tests {
         inserted.push_modes(&string, 20..n);
         assert_eq!(inserted.insert_modes(10, &string, 10..20), 10..20);
         for (name, bank) in [("whole", &mut whole), ("one by one", &mut one_by_one), ("inserted", &mut inserted)] {
-            assert_eq!(bank.push_modes(&string, 5..3), n..n, "{name}: reversed");
+            let reversed = Range { start: 5, end: 3 };
+            assert_eq!(bank.push_modes(&string, reversed), n..n, "{name}: reversed");
             assert_eq!(bank.push_modes(&string, n + 5..n + 9), n..n, "{name}: past the end");
             assert_eq!(bank.insert_modes(3, &string, n + 5..n + 9), 3..3, "{name}: past the end");
             bank.finish();
