@@ -1019,9 +1019,6 @@ mod tests {
         PowerLaw::new(c4.kappa * strings as f64, c4.alpha).unwrap()
     }
 
-    /// Over a strike and 0.5 s of ringing on the soundboard, a detuned trichord's energy
-    /// `H + losses` stays at its initial value to 1e-9 relative, for each of the three solvers:
-    /// the bridge's elimination is exact, and every cross term of the coupling is counted.
     /// A key struck again on the same unison finds its strings prepared and only brings them to
     /// rest; another key is prepared afresh. Rung, then retuned key after key (C4, another, C4,
     /// C4) and struck each time, a unison gives each key's fresh output bit for bit.
@@ -1065,6 +1062,9 @@ mod tests {
         }
     }
 
+    /// Over a strike and 0.5 s of ringing on the soundboard, a detuned trichord's energy
+    /// `H + losses` stays at its initial value to 1e-9 relative, for each of the three solvers:
+    /// the bridge's elimination is exact, and every cross term of the coupling is counted.
     #[test]
     fn a_trichord_on_the_soundboard_keeps_its_energy_balance() {
         let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
