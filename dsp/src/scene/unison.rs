@@ -551,8 +551,8 @@ impl UnisonCore {
         let (c, dt2) = (&mut self.coupling, self.dt * self.dt);
         let (theta, inertia) = (c.gg / dt2, c.lift_mass + 0.25 * c.lift_stiffness * dt2);
         c.inverse_dt2 = 1.0 / dt2;
-        c.inverse_delta = 1.0 / (dt2 + c.compliance * (inertia - theta));
         c.theta_less_e = theta - inertia;
+        c.inverse_delta = 1.0 / (dt2 - c.compliance * c.theta_less_e);
         self.next_coupled = None;
         self.next_free = None;
         self.next_retired = None;
