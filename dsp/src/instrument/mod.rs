@@ -108,6 +108,7 @@ use crate::body::{Body, BodyParams};
 use crate::pickup::PickupCircuit;
 use crate::string::ModalString;
 use notes::NoteBook;
+use std::ops::Range;
 
 /// Time constant with which a voice struck again moves to its new voicing gain (s).
 pub const VOICING_TIME: f64 = 0.005;
@@ -498,6 +499,12 @@ impl Instrument {
         }
     }
 
+    /// The flat voice indices of the note book: the piano voices', then the slide voices'.
+    fn pools(&self) -> (Range<usize>, Range<usize>) {
+        let pianos = self.voices.len();
+        (0..pianos, pianos..pianos + self.slides.len())
+    }
+
     /// Queue the notes of voices that have fallen silent.
     fn check_ended(&mut self) {
         let now = self.now;
@@ -594,6 +601,7 @@ impl Instrument {
         let n = left.len().min(right.len());
         left.fill(0.0);
         right.fill(0.0);
+        let (pianos, slides) = self.pools();
         let mut done = 0;
         while done < n {
             if self.in_block == 0 {
@@ -609,8 +617,7 @@ impl Instrument {
             }
             let width = if self.raw { 0.0 } else { self.settings.stereo_width };
             // Only the voices with live notes can sound: the others are not looked at.
-            let (pianos, slides) = (0..self.voices.len(), self.voices.len()..self.voices.len() + self.slides.len());
-            for i in self.notes.live_in(pianos) {
+            for i in self.notes.live_in(pianos.clone()) {
                 let voice = &mut self.voices[i];
                 if !voice.sounding {
                     continue;
@@ -620,7 +627,7 @@ impl Instrument {
                 let gains = Gains { voicing: voice.voicing, pan, rate: self.voicing_rate };
                 mix_voiced(scratch, &gains, &mut voice.voiced, &mut voice.pan, bus_l, bus_r);
             }
-            for i in self.notes.live_in(slides) {
+            for i in self.notes.live_in(slides.clone()) {
                 let voice = &mut self.slides[i];
                 if !voice.sounding {
                     continue;
@@ -681,7 +688,7 @@ impl Instrument {
         let pedals: [bool; 16] = std::array::from_fn(|channel| self.pedal(channel as u8));
         // A voice neither sounding nor fading for a new note has nothing to do at a block's start;
         // only those with live notes can be either.
-        let (pianos, slides) = (0..self.voices.len(), self.voices.len()..self.voices.len() + self.slides.len());
+        let (pianos, slides) = self.pools();
         for i in self.notes.live_in(pianos) {
             let v = &mut self.voices[i];
             if !(v.sounding || v.fading()) {
