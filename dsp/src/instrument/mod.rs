@@ -306,7 +306,7 @@ impl Instrument {
         let settings = settings.sanitized();
         let modes = Self::largest_string(sample_rate, &settings);
         let count = voices.clamp(1, MAX_VOICES);
-        Self {
+        let mut instrument = Self {
             sample_rate,
             requested: settings,
             settings,
@@ -329,6 +329,31 @@ impl Instrument {
             output: OutputStage::new(sample_rate, settings.gain),
             voicing_rate: 1.0 - (-1.0 / (VOICING_TIME * sample_rate)).exp(),
             notes: NoteBook::new(2 * count),
+        };
+        instrument.prepare_voices();
+        instrument
+    }
+
+    /// Tune every piano voice, before the first note, to the keys that reach furthest into its
+    /// arrays under the settings, and search every key's partners: the first chord then finds
+    /// the voices' memory in place and the partners found, as every later chord does, instead of
+    /// faulting in pages and searching on the audio thread. Allocates nothing further.
+    fn prepare_voices(&mut self) {
+        let Some((first, rest)) = self.voices.split_first_mut() else { return };
+        // `(reach, key)` of the keys with the most modes on the bridge, off it, and on one string.
+        let mut widest = [(0, 0u8); 3];
+        for key in 0..=127u8 {
+            let (coupled, free, string) = first.prepare(key, &self.settings, &self.partners);
+            for (w, reach) in widest.iter_mut().zip([coupled, free, string]) {
+                if reach > w.0 {
+                    *w = (reach, key);
+                }
+            }
+        }
+        for voice in rest {
+            for &(_, key) in &widest {
+                voice.prepare(key, &self.settings, &self.partners);
+            }
         }
     }
 
@@ -757,6 +782,20 @@ mod tests {
     /// Which piano voice sounds `key`.
     fn voice_of(instrument: &Instrument, key: u8) -> Option<usize> {
         instrument.voices.iter().position(|v| v.sounding && v.strike.key == key)
+    }
+
+    /// A new instrument has searched every key's partners before its first note, and preparing
+    /// its voices sounds nothing.
+    #[test]
+    fn a_new_instrument_has_found_every_keys_partners_and_is_silent() {
+        for voices in [1, 3] {
+            let mut instrument = Instrument::new(48_000.0, voices, Settings::default());
+            let (searched, keys) = instrument.partners.searched();
+            assert_eq!((searched, keys), (88, 88), "{voices} voices");
+            let (mut left, mut right) = ([1.0; 64], [1.0; 64]);
+            instrument.process(&mut left, &mut right);
+            assert!(left.iter().chain(&right).all(|&x| x == 0.0), "{voices} voices");
+        }
     }
 
     /// A note takes the free voice that last played its key, whose strings are prepared for it,

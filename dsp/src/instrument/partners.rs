@@ -104,6 +104,13 @@ impl PartnerTable {
         count
     }
 
+    /// How many keys' partners have been searched since the table was last retuned, of how many
+    /// keys it holds.
+    #[cfg(test)]
+    pub fn searched(&self) -> (usize, usize) {
+        (self.picks.iter().filter(|p| p.get().is_some()).count(), self.picks.len())
+    }
+
     /// [`pick`](Self::pick)'s search among the table's strings for those meeting `own`'s partials.
     fn search(&self, own: &ModalString, out: &mut [(usize, usize); MAX_PARTNERS]) -> usize {
         let tolerance = 2f64.powf(PARTNER_TOLERANCE_CENTS / 1200.0) - 1.0;

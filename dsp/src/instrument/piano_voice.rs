@@ -342,6 +342,11 @@ impl PianoVoice {
         string
     }
 
+    /// Where the hammer strikes `key`'s strings under `settings` (fraction of the length).
+    fn striking_point(key: u8, settings: &Settings) -> f64 {
+        (piano_note(key).strike_position * settings.strike_position).clamp(0.02, 0.5)
+    }
+
     /// Play `strike` now: on the same string if this voice already sounds that key (a re-strike),
     /// else on a freshly tuned string at rest. Never allocates.
     pub fn play(&mut self, strike: Strike, settings: &Settings, now: u64) {
@@ -359,45 +364,16 @@ impl PianoVoice {
         partners: Option<(&PartnerTable, Dampers)>,
     ) {
         let note = piano_note(strike.key);
-        let position = (note.strike_position * settings.strike_position).clamp(0.02, 0.5);
+        let position = Self::striking_point(strike.key, settings);
         let restrike = self.sounding && self.strike.key == strike.key && self.pending.is_none();
         self.voicing = super::voicing_gain(strike.key, strike.velocity);
         let strings = note.strings as f64;
         if !restrike {
             self.voiced = self.voicing;
             self.pan = super::pan_gains(strike.key, settings.stereo_width);
-            let fs = self.core.string().sample_rate();
-            let unison = UnisonParams {
-                string: Self::string_for(strike.key, settings),
-                strings: note.strings,
-                detune: note.detune.map(|d| d * settings.unison_detune),
-            };
-            let max_frequency = settings.max_frequency.min(0.5 * fs);
-            // The per-note rule and the clamped settings always give a valid unison.
-            // Partners ring only while their dampers are off: all of them from a key struck with
-            // the pedal down; with it up, those of the keys held down and those without a damper.
-            // Under their dampers they would barely move, and cost as much. The others wait until
-            // their dampers lift.
-            let (retuned, list) = match partners {
-                Some((table, dampers)) => {
-                    let list = PartnerList::among(table, strike.key, dampers.lifted());
-                    let strings = &list.strings[..list.count];
-                    (self.core.retune_with_partners(&unison, max_frequency, position, strings), Some(list))
-                }
-                None => (self.core.retune(&unison, max_frequency, position), None),
-            };
-            if retuned.is_err() {
+            if !self.tune(strike.key, settings, position, partners) {
                 return;
             }
-            self.partner_keys = list.as_ref().map_or([0; MAX_PARTNERS], |l| l.keys);
-            let present = self.partner_keys[..self.core.partners()].iter().fold(0, |m, &k| m | bit(k));
-            self.partners_waiting = list.map_or(0, |l| l.all & !present);
-            // The partners there start free.
-            self.partner_dampers = [0.0; MAX_PARTNERS];
-            self.partner_applied = [0.0; MAX_PARTNERS];
-            self.shape_damper(position);
-            self.damper = 0.0;
-            self.applied = 0.0;
             self.loudness = 0.0;
         }
         let fs = self.core.string().sample_rate();
@@ -420,6 +396,71 @@ impl PianoVoice {
         self.sounding = true;
         self.key_down = true;
         self.started = now;
+    }
+
+    /// Tune the strings to `key` under `settings`, struck at `position` (fraction of the length),
+    /// at rest, with those of its partners from the table `partners.0` whose strings are free of
+    /// their dampers (`partners.1`), the dampers off; whether the unison was valid.
+    fn tune(
+        &mut self,
+        key: u8,
+        settings: &Settings,
+        position: f64,
+        partners: Option<(&PartnerTable, Dampers)>,
+    ) -> bool {
+        let note = piano_note(key);
+        let fs = self.core.string().sample_rate();
+        let unison = UnisonParams {
+            string: Self::string_for(key, settings),
+            strings: note.strings,
+            detune: note.detune.map(|d| d * settings.unison_detune),
+        };
+        let max_frequency = settings.max_frequency.min(0.5 * fs);
+        // The per-note rule and the clamped settings always give a valid unison.
+        // Partners ring only while their dampers are off: all of them from a key struck with
+        // the pedal down; with it up, those of the keys held down and those without a damper.
+        // Under their dampers they would barely move, and cost as much. The others wait until
+        // their dampers lift.
+        let (retuned, list) = match partners {
+            Some((table, dampers)) => {
+                let list = PartnerList::among(table, key, dampers.lifted());
+                let strings = &list.strings[..list.count];
+                (self.core.retune_with_partners(&unison, max_frequency, position, strings), Some(list))
+            }
+            None => (self.core.retune(&unison, max_frequency, position), None),
+        };
+        if retuned.is_err() {
+            return false;
+        }
+        self.partner_keys = list.as_ref().map_or([0; MAX_PARTNERS], |l| l.keys);
+        let present = self.partner_keys[..self.core.partners()].iter().fold(0, |m, &k| m | bit(k));
+        self.partners_waiting = list.map_or(0, |l| l.all & !present);
+        // The partners there start free.
+        self.partner_dampers = [0.0; MAX_PARTNERS];
+        self.partner_applied = [0.0; MAX_PARTNERS];
+        self.shape_damper(position);
+        self.damper = 0.0;
+        self.applied = 0.0;
+        true
+    }
+
+    /// Tune this silent voice to `key` under `settings`, as a strike with the sustain pedal down
+    /// would, with every partner `table` gives, and leave it silent. What that key's notes write
+    /// of the voice's arrays is then in memory (a page the audio thread first writes costs it a
+    /// fault), the table has searched the key's partners, and the voice is as fresh for any other
+    /// key. Returns how far the key reaches into the arrays: `(modes on the bridge, modes off
+    /// it, most modes of one string)`. Never allocates.
+    pub fn prepare(&mut self, key: u8, settings: &Settings, table: &PartnerTable) -> (usize, usize, usize) {
+        if self.sounding || self.fading() {
+            return (0, 0, 0);
+        }
+        let position = Self::striking_point(key, settings);
+        let everything = Dampers { pedal: true, held: 0 };
+        if !self.tune(key, settings, position, Some((table, everything))) {
+            return (0, 0, 0);
+        }
+        let (coupled, free) = self.core.parts();
+        (coupled, free, self.core.modes())
     }
 
     /// The waiting partners whose dampers have lifted (`lifted`, one bit per MIDI key) join the
@@ -753,6 +794,39 @@ mod tests {
             assert!(fresh.iter().any(|&x| x != 0.0));
             assert!(heard == fresh, "key {key} at striking point ×{}", settings.strike_position);
         }
+    }
+
+    /// Preparing a silent voice for another key changes nothing it plays after: C4 struck with
+    /// the pedal down, its partners ringing, sounds bit for bit as on a fresh voice once the voice
+    /// was prepared for A0, for C8 or for C4 itself, and each preparation leaves the voice silent
+    /// with A0 reaching further into one string's arrays than C4.
+    #[test]
+    fn a_prepared_voice_plays_as_a_fresh_voice_does() {
+        let settings = Settings::default();
+        let table = PartnerTable::new(FS, &settings);
+        let pedal = Dampers { pedal: true, held: 0 };
+        let play = |voice: &mut PianoVoice| {
+            voice.play_with(Strike { channel: 0, key: 60, velocity: 0.7 }, &settings, 0, Some((&table, pedal)));
+            let (mut all, mut out) = (Vec::new(), [0.0; 64]);
+            for _ in 0..40 {
+                voice.begin_block(&settings, pedal, 64, 0, Some(&table), &mut 0);
+                voice.render(&mut out);
+                all.extend_from_slice(&out);
+            }
+            (all, voice.core.partners())
+        };
+        let (fresh, partners) = play(&mut PianoVoice::new(1000, FS));
+        assert!(partners > 0 && fresh.iter().any(|&x| x != 0.0));
+        let mut reach = [0; 128];
+        for key in [21, 108, 60] {
+            let mut voice = PianoVoice::new(1000, FS);
+            let (coupled, free, string) = voice.prepare(key, &settings, &table);
+            assert!(coupled > 0, "key {key}: {coupled} modes on the bridge, {free} off it");
+            assert!(!voice.sounding && voice.energy() == 0.0, "key {key} left the voice sounding");
+            reach[usize::from(key)] = string;
+            assert!(play(&mut voice) == (fresh.clone(), partners), "prepared for key {key}");
+        }
+        assert!(reach[21] > reach[60], "A0 {} modes, C4 {}", reach[21], reach[60]);
     }
 
     /// A non-finite state silences the voice in the same call: zeros, not NaN, and a trip.
