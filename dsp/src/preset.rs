@@ -18,7 +18,8 @@
 //!   grand by Lehtonen et al. (JASA 122(3), 2007), and the Chaigne–Askenfelt C7 (96) 8.56e-3
 //!   (extrapolated, clamped to [1e-5, 0.05]); `EI = B T L²/π²`;
 //! - tension `T = 670 N` for every key, and `ρA = T/(2L f_flex)²` with `f_flex = f0/√(1 + B)`, so
-//!   that the first partial `f_flex √(1 + B)` is exactly `f0`, as a tuner would set it;
+//!   that the first partial `f_flex √(1 + B)` is exactly `f0`; the instrument then moves each key
+//!   from equal temperament by the octave stretch a tuner gives it ([`stretch_cents`]);
 //! - damping, per-mode law `σ_i = b1 + b3 ω0_i²`: the string's own losses, Chaigne and
 //!   Askenfelt's Part I values, b1 = 0.5 s⁻¹ on every key and b3 log-linear through 6.25e-9,
 //!   6.25e-9, 2.6e-10 s at C2, C4, C7. What a string loses into the soundboard is not in them:
@@ -162,6 +163,42 @@ fn log_through(key: f64, values: [f64; 3]) -> f64 {
     through(key, values.map(f64::ln)).exp()
 }
 
+/// The inharmonicity coefficient B of the rule's string for MIDI key `key` (module docs).
+pub fn inharmonicity(key: u8) -> f64 {
+    log_through(f64::from(key.min(127)), [3.8e-5, 3.3e-4, 8.56e-3]).clamp(1e-5, 0.05)
+}
+
+/// The keys tuned in equal temperament, A♯3 to A4 (A4 at 440 Hz): the temperament octave from
+/// which [`stretch_cents`] tunes every other key by octaves.
+pub const TEMPERAMENT_OCTAVE: std::ops::RangeInclusive<u8> = 58..=69;
+
+/// How far key `key` (MIDI) sits from equal temperament (cents) when the keys outside the
+/// temperament octave are tuned from it by octaves, each beatless on the lower key's second
+/// partial, as a tuner tunes octaves by ear, on strings whose B is the rule's times `brightness`.
+///
+/// The second partial of a stiff string lies above twice its first,
+/// `f_2/f_1 = 2√((1 + 4B)/(1 + B))`, so each octave comes out wider than 2:1 by
+/// `1200 log₂ √((1 + 4B)/(1 + B)) ≈ 2600 B` cents of its lower key, and the octaves add up away
+/// from the middle: the treble sharp and the bass flat of equal temperament, Railsback's stretch
+/// of tuned pianos (JASA 9, 274, 1938), the more so where B is large. Keys beyond A0–C8, which no
+/// tuner sets, keep the stretch of the nearest key of the keyboard.
+pub fn stretch_cents(key: u8, brightness: f64) -> f64 {
+    let octave = |lower: u8| {
+        let b = brightness * inharmonicity(lower);
+        600.0 * ((1.0 + 4.0 * b) / (1.0 + b)).log2()
+    };
+    let (mut key, mut cents) = (key.clamp(21, 108), 0.0);
+    while key > *TEMPERAMENT_OCTAVE.end() {
+        key -= 12;
+        cents += octave(key);
+    }
+    while key < *TEMPERAMENT_OCTAVE.start() {
+        cents -= octave(key);
+        key += 12;
+    }
+    cents
+}
+
 /// A plausible piano string and hammer for MIDI key `key` (0..=127): the rule in the module docs.
 pub fn piano_note(key: u8) -> PianoNote {
     let k = f64::from(key.min(127));
@@ -169,7 +206,7 @@ pub fn piano_note(key: u8) -> PianoNote {
     let exponent = if k >= 60.0 { 0.9 } else { 0.45 };
     let length = (0.62 * 2f64.powf(-exponent * (k - 60.0) / 12.0)).min(1.9);
     let tension = 670.0;
-    let b = log_through(k, [3.8e-5, 3.3e-4, 8.56e-3]).clamp(1e-5, 0.05);
+    let b = inharmonicity(key);
     let flexible = f0 / (1.0 + b).sqrt();
     let linear_density = tension / (2.0 * length * flexible).powi(2);
     PianoNote {

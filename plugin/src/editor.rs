@@ -219,6 +219,7 @@ fn parameters(ui: &mut Ui, p: &QsaParams, setter: &ParamSetter) {
             row(ui, &p.piano.brightness, setter);
             row(ui, &p.piano.damper, setter);
             row(ui, &p.piano.unison_detune, setter);
+            row(ui, &p.piano.stretch, setter);
         });
 
         section(&mut columns[2], "Slide", Some(mode == ModeParam::Slide), |ui| {

@@ -26,6 +26,7 @@
 //! | `bright` | Brightness | 0..=4× | 1× | [`Settings::brightness`] (inharmonicity) |
 //! | `damper` | Damper | 1..=500 1/s | 60 1/s | [`Settings::damper_rate`] |
 //! | `detune` | Unison detune | 0..=20 ct | 2.5 ct | [`Settings::unison_detune`] (spread of each unison, cents) |
+//! | `stretch` | Octave stretch | 0..=2× | 1× | [`Settings::stretch`] (octaves tuned on the partials) |
 //! | `slide` | Slide position | 0..=24 st | 5 st | [`Settings::slide_position`] |
 //! | `follow` | Slide follows key | on/off | on | [`Settings::follow_key`] |
 //! | `glide` | Glide time | 1..=2000 ms | 50 ms | [`Settings::glide_time`] |
@@ -321,6 +322,8 @@ param_group! {
         damper: FloatParam = "damper",
         /// Spread of each unison's tuning (cents).
         unison_detune: FloatParam = "detune",
+        /// Octave stretch, relative to octaves tuned on the partials.
+        stretch: FloatParam = "stretch",
     }
 }
 
@@ -502,7 +505,7 @@ mod tests {
             QsaParams::default().param_map().into_iter().map(|(id, _, group)| (id, group)).collect();
         let expected = |id: &str| match id {
             "mode" | "solver" | "segs" | "nb" | "voices" => "Engine",
-            "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" | "detune" => "Piano",
+            "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" | "detune" | "stretch" => "Piano",
             "gain" | "limit" | "width" => "Output",
             _ => "Slide",
         };

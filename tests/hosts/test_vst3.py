@@ -11,7 +11,7 @@ environment) and ``target/bundled/QSA Strings.vst3`` (``cargo xtask bundle qsa-p
 - a parameter change (felt hardness) measurably changes the spectrum;
 - the choice parameters are discrete and name every value.
 
-Loading time. Besides its 27 parameters, the VST3 exposes 16 x 130 = 2,080 MIDI proxy parameters
+Loading time. Besides its 32 parameters, the VST3 exposes 16 x 130 = 2,080 MIDI proxy parameters
 (``MIDI Ch. N CC M``, pitch bend and channel pressure per channel: VST3 has no controller events,
 so nice-plug maps them to parameters, flagged hidden and read-only, which JUCE lists anyway). pedalboard's Python layer probes every parameter with 1,001
 text conversions when it loads a plugin and again on the first attribute access, which takes about
@@ -55,6 +55,7 @@ DOCUMENTED = {
     "brightness": "Brightness",
     "damper_1_s": "Damper",
     "unison_detune_ct": "Unison detune",
+    "octave_stretch": "Octave stretch",
     "slide_position_st": "Slide position",
     "slide_follows_key": "Slide follows key",
     "glide_time_ms": "Glide time",

@@ -20,8 +20,21 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use plotters::prelude::*;
+use qsa_dsp::instrument::PianoVoice;
 use qsa_dsp::instrument::{Event, Instrument, Mode, Settings, SlideBody, hammer_speed};
-use qsa_dsp::preset::{key_frequency, piano_note};
+use qsa_dsp::preset::piano_note;
+use qsa_dsp::string::StringParams;
+
+/// Key `key`'s string as the instrument tunes it with the default settings, octave stretch and
+/// all (the first string of its unison).
+pub fn tuned(key: u8) -> StringParams {
+    PianoVoice::string_for(key, &Settings::default())
+}
+
+/// Key `key`'s fundamental as the instrument tunes it with the default settings (Hz).
+pub fn pitch(key: u8) -> f64 {
+    tuned(key).partial(1)
+}
 
 /// Sample rate of every measurement (Hz).
 pub const FS: f64 = 48_000.0;
@@ -122,7 +135,7 @@ pub fn decay_rate(levels: &[f64], span: (f64, f64)) -> f64 {
 /// `detune` cents: `(prompt sound, aftersound)`.
 pub fn two_stages(key: u8, partial: usize, detune: f64) -> (f64, f64) {
     let out = held_note(key, 0.6, detune, 5.0);
-    let levels = partial_levels(&out, piano_note(key).string.partial(partial));
+    let levels = partial_levels(&out, tuned(key).partial(partial));
     (decay_rate(&levels, PROMPT), decay_rate(&levels, AFTERSOUND))
 }
 
@@ -155,7 +168,7 @@ pub const WHOLE: (f64, f64) = (0.05, 6.0);
 /// [`WHOLE`] (one rate for both stages, as a T60 read off a recorded tone).
 pub fn fundamental_t60(key: u8, pedal: bool) -> f64 {
     let out = held_with_pedal(key, pedal.then_some(0.0), WHOLE.1 + 0.5);
-    let levels = partial_levels(&out, piano_note(key).string.partial(1));
+    let levels = partial_levels(&out, tuned(key).partial(1));
     -60.0 / decay_rate(&levels, WHOLE)
 }
 
@@ -265,7 +278,7 @@ pub fn held_ring(press: f64) -> [HeldRing; 3] {
     HELD_KEYS.map(|key| {
         let held = [(press.max(0.0), Event::NoteOn { channel: 0, key, velocity: 1.0 / 127.0 })];
         let added = added_to(&held, &c3, 1.5);
-        (key, level_near(&added, from, key_frequency(key)), level_near(&added, from, key_frequency(key + 1)))
+        (key, level_near(&added, from, pitch(key)), level_near(&added, from, pitch(key + 1)))
     })
 }
 
@@ -280,7 +293,7 @@ pub fn undamped_ring() -> [(u8, f64); 2] {
     let out = played(72, false, 0.2, f64::INFINITY, 1.5);
     let from = (0.5 * FS) as usize;
     UNDAMPED_PARTNERS.map(|key| {
-        let (on, beside) = (level_near(&out, from, key_frequency(key)), level_near(&out, from, key_frequency(key + 1)));
+        let (on, beside) = (level_near(&out, from, pitch(key)), level_near(&out, from, pitch(key + 1)));
         (key, 20.0 * (on / beside).log10())
     })
 }
@@ -336,7 +349,7 @@ type Envelope = (usize, f64, Vec<f64>);
 fn envelopes(path: &Path) -> Result<Vec<Envelope>, String> {
     let spread = Settings::default().unison_detune;
     let (detuned, exact) = (held_note(60, 0.6, spread, 5.0), held_note(60, 0.6, 0.0, 5.0));
-    let c4 = piano_note(60).string;
+    let c4 = tuned(60);
     let mut rows: Vec<Envelope> = (1..=3).map(|p| (p, spread, partial_levels(&detuned, c4.partial(p)))).collect();
     rows.push((2, 0.0, partial_levels(&exact, c4.partial(2))));
     let top = rows.iter().flat_map(|r| r.2.iter().copied()).fold(f64::NEG_INFINITY, f64::max);
@@ -395,7 +408,7 @@ fn contacts(path: &Path) -> Result<Vec<Contact>, String> {
         (rows.iter().map(|r| (f64::from(r.0), r.1)).collect::<Vec<_>>(), BLUE, "the model, mezzo-forte (2.5 m/s)"),
         (rows.iter().map(|r| (f64::from(r.0), r.2)).collect::<Vec<_>>(), RED, "the model, forte (5 m/s)"),
         (
-            (21..=108u8).map(|k| (f64::from(k), 1e3 / key_frequency(k))).collect(),
+            (21..=108u8).map(|k| (f64::from(k), 1e3 / pitch(k))).collect(),
             RGBColor(128, 128, 128),
             "the string's period",
         ),
@@ -482,7 +495,7 @@ fn decays(path: &Path) -> Result<Vec<Decay>, String> {
         .step_by(3)
         .map(|k| {
             let out = held_note(k, 0.6, spread, WHOLE.1 + 0.5);
-            let note = piano_note(k).string;
+            let note = tuned(k);
             let levels = [1, 2].map(|p| partial_levels(&out, note.partial(p)));
             let rates = levels.each_ref().map(|l| (-decay_rate(l, PROMPT), -decay_rate(l, AFTERSOUND)));
             (k, rates, -decay_rate(&levels[0], WHOLE))
@@ -552,9 +565,8 @@ fn sympathetic(path: &Path) -> Result<Sympathy, String> {
     let (down, up) = (held_with_pedal(48, Some(0.0), 3.0), held_with_pedal(48, None, 3.0));
     let added: Vec<f64> = down.iter().zip(&up).map(|(d, u)| d - u).collect();
     let from = FS as usize;
-    let rows: Sympathy = (49..=84u8)
-        .map(|k| (k, level_near(&added, from, key_frequency(k)), level_near(&up, from, key_frequency(k))))
-        .collect();
+    let rows: Sympathy =
+        (49..=84u8).map(|k| (k, level_near(&added, from, pitch(k)), level_near(&up, from, pitch(k)))).collect();
     let db = |a: f64| 20.0 * a.max(1e-12).log10();
     let top = rows.iter().map(|r| db(r.1).max(db(r.2))).fold(f64::NEG_INFINITY, f64::max);
     let root = BitMapBackend::new(path, (960, 520)).into_drawing_area();
@@ -717,7 +729,7 @@ fn readme(
         })
         .collect();
     let contact = |key: u8| contacts.iter().find(|c| c.0 == key).map_or(f64::NAN, |c| c.1);
-    let crossover = contacts.iter().find(|c| c.1 * 1e-3 * key_frequency(c.0) >= 1.0).map_or(0, |c| c.0);
+    let crossover = contacts.iter().find(|c| c.1 * 1e-3 * pitch(c.0) >= 1.0).map_or(0, |c| c.0);
     let two_stage = decays.iter().filter(|d| d.1[1].0 >= 2.0 * d.1[1].1).count();
     let b = |key: u8| piano_note(key).string.inharmonicity();
     let added = |key: u8| sympathy.iter().find(|r| r.0 == key).map_or(f64::NAN, |r| r.1);

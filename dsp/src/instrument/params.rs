@@ -180,7 +180,7 @@ const fn float(min: f32, max: f32, default: f32, unit: &'static str, scale: Scal
 }
 
 /// Every parameter, in display order (the groups in the order Engine, Piano, Slide, Output).
-pub const PARAMETERS: [ParamSpec; 31] = [
+pub const PARAMETERS: [ParamSpec; 32] = [
     ParamSpec {
         id: "mode",
         name: "Mode",
@@ -291,6 +291,15 @@ pub const PARAMETERS: [ParamSpec; 31] = [
         maps_to: "[`Settings::unison_detune`] (spread of each unison, cents)",
         get: |v| v.unison_detune,
         put: |v, x| v.unison_detune = x,
+    },
+    ParamSpec {
+        id: "stretch",
+        name: "Octave stretch",
+        group: Group::Piano,
+        kind: ratio(0.0, 2.0, Scale::Linear),
+        maps_to: "[`Settings::stretch`] (octaves tuned on the partials)",
+        get: |v| v.stretch,
+        put: |v, x| v.stretch = x,
     },
     ParamSpec {
         id: "slide",
@@ -675,6 +684,8 @@ pub struct ParamValues {
     pub damper: f32,
     /// `detune` (cents).
     pub unison_detune: f32,
+    /// `stretch` (×).
+    pub stretch: f32,
     /// `slide` (semitones).
     pub slide_position: f32,
     /// `follow`.
@@ -731,6 +742,7 @@ impl Default for ParamValues {
             brightness: 0.0,
             damper: 0.0,
             unison_detune: 0.0,
+            stretch: 0.0,
             slide_position: 0.0,
             follow_key: false,
             glide_ms: 0.0,
@@ -792,6 +804,7 @@ impl ParamValues {
             brightness: f(self.brightness),
             damper_rate: f(self.damper),
             unison_detune: f(self.unison_detune),
+            stretch: f(self.stretch),
             slide_position: f(self.slide_position),
             follow_key: self.follow_key,
             glide_time: f(self.glide_ms) * 1e-3,
@@ -872,8 +885,8 @@ mod tests {
     fn ids_are_the_released_ones() {
         let released = [
             "mode", "solver", "segs", "nb", "voices", "hard", "hmass", "strike", "damp", "bright", "damper", "detune",
-            "slide", "follow", "glide", "bend", "hand", "handsrc", "smass", "hstiff", "hdamp", "fdamp", "kappa",
-            "alpha", "pluck", "pickup", "ptone", "sbody", "gain", "limit", "width",
+            "stretch", "slide", "follow", "glide", "bend", "hand", "handsrc", "smass", "hstiff", "hdamp", "fdamp",
+            "kappa", "alpha", "pluck", "pickup", "ptone", "sbody", "gain", "limit", "width",
         ];
         assert_eq!(PARAM_IDS, released);
     }
@@ -894,6 +907,7 @@ mod tests {
             (s.brightness, d.brightness),
             (s.damper_rate, d.damper_rate),
             (s.unison_detune, d.unison_detune),
+            (s.stretch, d.stretch),
             (s.slide_position, d.slide_position),
             (s.glide_time, d.glide_time),
             (s.bend_range, d.bend_range),
@@ -924,7 +938,7 @@ mod tests {
         let fields = |s: &Settings| {
             [s.hardness, s.hammer_mass, s.strike_position, s.damping, s.brightness, s.damper_rate, s.slide_position]
                 .into_iter()
-                .chain([s.unison_detune])
+                .chain([s.unison_detune, s.stretch])
                 .chain([s.glide_time, s.bend_range, s.hand_height, s.slide_mass, s.hand_stiffness, s.hand_damping])
                 .chain([s.finger_damping, s.slide_kappa, s.slide_alpha, s.pluck_position, s.pickup_position])
                 .chain([s.pickup_resonance, s.stereo_width])

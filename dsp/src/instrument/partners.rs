@@ -44,8 +44,8 @@ pub struct PartnerTable {
     /// Each key's partners as [`PartnerTable::pick`] found them for the strings as tuned, once
     /// asked: a key struck again, on any voice, does not search again.
     picks: Vec<Cell<Option<Picks>>>,
-    /// `(brightness, damping)` the strings are tuned for.
-    tuned: (f64, f64),
+    /// `(brightness, damping, stretch)` the strings are tuned for.
+    tuned: (f64, f64, f64),
     sample_rate: f64,
 }
 
@@ -55,7 +55,7 @@ impl PartnerTable {
         let mut table = Self {
             strings: PARTNER_KEYS.map(|_| ModalString::with_capacity(PARTNER_MODES + 1)).collect(),
             picks: PARTNER_KEYS.map(|_| Cell::new(None)).collect(),
-            tuned: (f64::NAN, f64::NAN),
+            tuned: (f64::NAN, f64::NAN, f64::NAN),
             sample_rate,
         };
         table.retune(settings);
@@ -64,7 +64,7 @@ impl PartnerTable {
 
     /// Retune for `settings` if they shape the strings otherwise than before. Never allocates.
     pub fn retune(&mut self, settings: &Settings) {
-        let tuned = (settings.brightness, settings.damping);
+        let tuned = (settings.brightness, settings.damping, settings.stretch);
         if tuned == self.tuned {
             return;
         }

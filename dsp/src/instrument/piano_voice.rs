@@ -56,7 +56,7 @@ use crate::instrument::memo::{ENERGY_INTERVAL, Memo};
 use crate::instrument::partners::PartnerTable;
 use crate::instrument::settings::{Settings, hammer_speed};
 use crate::instrument::solvers::Solvers;
-use crate::preset::piano_note;
+use crate::preset::{piano_note, stretch_cents};
 use crate::scene::{MAX_PARTNERS, UnisonCore, UnisonParams};
 use crate::string::{Damping, ModalString, StringParams};
 
@@ -329,10 +329,13 @@ impl PianoVoice {
         }
     }
 
-    /// The string a key gets under `settings`: the per-note rule with the relative settings.
+    /// The string a key gets under `settings`: the per-note rule with the relative settings, and
+    /// tuned by the octave stretch (a lighter or heavier string: the pitch moves, B stays).
     pub fn string_for(key: u8, settings: &Settings) -> StringParams {
         let mut string = piano_note(key).string;
         string.bending_stiffness *= settings.brightness;
+        let ratio = 2f64.powf(settings.stretch * stretch_cents(key, settings.brightness) / 1200.0);
+        string.linear_density /= ratio * ratio;
         string.damping = match string.damping {
             Damping::PerMode { b1, b3 } => Damping::PerMode { b1: b1 * settings.damping, b3: b3 * settings.damping },
             Damping::Viscous { eta0, eta2 } => {
@@ -713,6 +716,7 @@ impl PianoVoice {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::preset::key_frequency;
 
     const FS: f64 = 48000.0;
 
@@ -827,6 +831,40 @@ mod tests {
             assert!(play(&mut voice) == (fresh.clone(), partners), "prepared for key {key}");
         }
         assert!(reach[21] > reach[60], "A0 {} modes, C4 {}", reach[21], reach[60]);
+    }
+
+    /// With the octave stretch at 1 every octave outside the temperament octave is beatless on
+    /// its lower key's second partial (to rounding), the temperament octave stays in equal
+    /// temperament, and a stretch of 0 leaves every key there; at brightness 2 the stretch grows
+    /// with B.
+    #[test]
+    fn stretched_octaves_are_beatless_on_the_lower_keys_second_partial() {
+        let stretched = Settings::default();
+        let partial = |key: u8, n: usize, s: &Settings| PianoVoice::string_for(key, s).partial(n);
+        for key in 21..=108u8 {
+            let f1 = partial(key, 1, &stretched);
+            if key > 69 {
+                let below = partial(key - 12, 2, &stretched);
+                assert!((f1 / below - 1.0).abs() < 1e-12, "key {key}: {f1} Hz against {below} Hz");
+            } else if key < 58 {
+                let above = partial(key + 12, 1, &stretched);
+                let second = partial(key, 2, &stretched);
+                assert!((second / above - 1.0).abs() < 1e-12, "key {key}: {second} Hz against {above} Hz");
+            } else {
+                assert!((f1 / key_frequency(key) - 1.0).abs() < 1e-12, "key {key} in the temperament octave");
+            }
+            let equal = Settings { stretch: 0.0, ..stretched };
+            assert!((partial(key, 1, &equal) / key_frequency(key) - 1.0).abs() < 1e-12, "key {key} unstretched");
+        }
+        let cents = |key: u8, s: &Settings| 1200.0 * (partial(key, 1, s) / key_frequency(key)).log2();
+        let brighter = Settings { brightness: 2.0, ..stretched };
+        println!(
+            "C8 {:.1} ct, C1 {:.2} ct; brightness 2: C8 {:.1} ct",
+            cents(108, &stretched),
+            cents(24, &stretched),
+            cents(108, &brighter)
+        );
+        assert!(cents(108, &brighter) > 1.9 * cents(108, &stretched));
     }
 
     /// A non-finite state silences the voice in the same call: zeros, not NaN, and a trip.

@@ -77,6 +77,10 @@ pub struct Settings {
     /// Spread of each unison's tuning, lowest to highest string (cents), 0..=20: every key
     /// detunes its strings by its own pattern of this ([`crate::preset::unison_detune`]).
     pub unison_detune: f64,
+    /// Octave stretch relative to octaves tuned beatless on the lower key's second partial,
+    /// 0..=2: each key sits this times [`crate::preset::stretch_cents`] from equal temperament
+    /// (0 is equal temperament of the fundamentals).
+    pub stretch: f64,
     /// Extra decay rate a damper adds when it rests on the string (1/s), 1..=500.
     pub damper_rate: f64,
     /// Time for a damper to settle on or lift off the string (s), 0.001..=0.1.
@@ -139,6 +143,7 @@ impl Default for Settings {
             damping: 1.0,
             brightness: 1.0,
             unison_detune: 2.5,
+            stretch: 1.0,
             damper_rate: 60.0,
             damper_time: 0.01,
             gain: 1.0,
@@ -185,6 +190,7 @@ impl Settings {
             damping: clamp(self.damping, 0.1, 20.0, d.damping),
             brightness: clamp(self.brightness, 0.0, 4.0, d.brightness),
             unison_detune: clamp(self.unison_detune, 0.0, 20.0, d.unison_detune),
+            stretch: clamp(self.stretch, 0.0, 2.0, d.stretch),
             damper_rate: clamp(self.damper_rate, 1.0, 500.0, d.damper_rate),
             damper_time: clamp(self.damper_time, 0.001, 0.1, d.damper_time),
             gain: clamp(self.gain, 0.0, 10.0, d.gain),
