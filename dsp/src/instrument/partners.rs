@@ -254,7 +254,7 @@ mod tests {
     /// The partners a table keeps from its searches are those of its strings as tuned now: after
     /// every key was picked at the default settings, a retune to stiffer, more damped strings
     /// gives what a table made for those settings gives, for every key, though many keys' partners
-    /// differ between the two.
+    /// differ between the two; and so does a retune that changes only the octave stretch.
     #[test]
     fn a_retuned_table_picks_what_a_fresh_table_picks() {
         let stretched = Settings { brightness: 4.0, damping: 20.0, ..Settings::default() };
@@ -267,5 +267,13 @@ mod tests {
         let changed = before.iter().zip(&after).filter(|(b, a)| b != a).count();
         println!("{changed} of 88 keys' partners change with the settings");
         assert!(changed >= 10);
+        // The octave stretch alone retunes the table too.
+        let equal = Settings { stretch: 0.0, ..stretched };
+        table.retune(&equal);
+        let unstretched = every_pick(&table);
+        assert_eq!(unstretched, every_pick(&PartnerTable::new(48_000.0, &equal)));
+        let moved = after.iter().zip(&unstretched).filter(|(a, u)| a != u).count();
+        println!("{moved} of 88 keys' partners change with the stretch");
+        assert!(moved >= 10);
     }
 }
