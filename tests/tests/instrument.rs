@@ -10,9 +10,7 @@ use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use qsa_dsp::contact::Method;
-use qsa_dsp::instrument::{
-    Event, Instrument, Mode, NoteParam, NoteTarget, PianoVoice, STEAL_TIME, Settings, SlideBody,
-};
+use qsa_dsp::instrument::{Event, Instrument, Mode, NoteParam, NoteTarget, STEAL_TIME, Settings, SlideBody};
 use qsa_dsp::preset::key_frequency;
 use qsa_tests::{CLICK_DB, click_strength, fundamental, seeded_rng, spectral_peak};
 use rand::RngExt;
@@ -105,7 +103,7 @@ fn piano(voices: usize) -> Instrument {
 /// The amplitude of `x` at key `key`'s fundamental (heterodyned over all of `x`).
 fn at_fundamental(x: &[f32], key: u8) -> f64 {
     let x: Vec<f64> = x.iter().map(|&v| f64::from(v)).collect();
-    xtask::realism::amplitude_at(&x, 0, PianoVoice::string_for(key, &Settings::default()).partial(1))
+    xtask::realism::amplitude_at(&x, 0, xtask::realism::pitch(key))
 }
 
 fn rms(x: &[f32]) -> f64 {
@@ -121,7 +119,7 @@ fn keys_sound_at_their_pitch() {
         let mut p = piano(4);
         let out = play(&mut p, &vec![(0, on(key, 0.8))], 24_000, || 512);
         let signal: Vec<f64> = out[2_400..].iter().map(|&v| f64::from(v)).collect();
-        let expected = key_frequency(key) * 2f64.powf(qsa_dsp::preset::stretch_cents(key, 1.0) / 1200.0);
+        let expected = xtask::realism::pitch(key);
         let f = spectral_peak(&signal, FS, 0.9 * expected, 1.1 * expected);
         println!("key {key}: {f:.2} Hz (expected {expected:.2} Hz)");
         assert!((f / expected - 1.0).abs() < 0.01, "key {key}: {f} Hz vs {expected} Hz");
