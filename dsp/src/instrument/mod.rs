@@ -565,7 +565,7 @@ impl Instrument {
             if v.fading() {
                 v.steal(strike, self.sample_rate, now);
             } else {
-                v.play_with(strike, &self.settings, now, Some((&self.partners, dampers)));
+                v.play_with(strike, &self.settings, now, Some((self.partners.ready(), dampers)));
             }
             return Some(i);
         }
@@ -579,7 +579,7 @@ impl Instrument {
             Some(i)
         };
         if let Some(i) = last_played.or_else(oldest) {
-            self.voices[i].play_with(strike, &self.settings, now, Some((&self.partners, dampers)));
+            self.voices[i].play_with(strike, &self.settings, now, Some((self.partners.ready(), dampers)));
             return Some(i);
         }
         // Steal the least audible voice: the quietest output over its latest block.
@@ -707,7 +707,7 @@ impl Instrument {
                 .clamp(target.min(self.resonance), target.max(self.resonance));
             self.circuit.tune(self.resonance, self.sample_rate);
         }
-        self.partners.retune(&self.settings);
+        self.partners.request(&self.settings);
         let mut seeks = PARTNER_SEEKS;
         let held = self.held_keys();
         let pedals: [bool; 16] = std::array::from_fn(|channel| self.pedal(channel as u8));
@@ -720,7 +720,7 @@ impl Instrument {
                 continue;
             }
             let dampers = Dampers { pedal: pedals[usize::from(v.strike.channel & 15)], held };
-            v.begin_block(&self.settings, dampers, len, self.now, Some(&self.partners), &mut seeks);
+            v.begin_block(&self.settings, dampers, len, self.now, Some(&mut self.partners), &mut seeks);
         }
         // The pickup slides to a new position instead of jumping: its weights move a little in
         // each block, linearly across the block, never in one audible step.
@@ -796,6 +796,38 @@ mod tests {
             instrument.process(&mut left, &mut right);
             assert!(left.iter().chain(&right).all(|&x| x == 0.0), "{voices} voices");
         }
+    }
+
+    /// Automating a setting that shapes strings while keys ring retunes no partner string until
+    /// a key is struck: with a chord held under the pedal and the octave stretch moved at every
+    /// block, every key's partners found when the instrument was made are still kept 50 blocks
+    /// later (a retune forgets them), and the key struck then gets the partners that a table made
+    /// for the stretch in force gives it, after one search.
+    #[test]
+    fn a_swept_setting_retunes_the_partners_only_when_a_key_is_struck() {
+        let mut instrument = Instrument::new(48_000.0, 8, Settings::default());
+        let (mut left, mut right) = ([0.0; 64], [0.0; 64]);
+        instrument.handle(Event::Sustain { channel: 0, down: true });
+        for key in [36, 48, 55, 60] {
+            instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.6 });
+        }
+        let mut settings = Settings::default();
+        for block in 0..50 {
+            settings.stretch = 2.0 * f64::from(block) / 49.0;
+            instrument.set_settings(&settings);
+            instrument.process(&mut left, &mut right);
+        }
+        assert_eq!(instrument.partners.searched(), (88, 88), "a retune while no key was struck");
+        instrument.handle(Event::NoteOn { channel: 0, key: 43, velocity: 0.6 });
+        assert_eq!(instrument.partners.searched(), (1, 88), "G2 struck at the stretch in force");
+        let pick = |table: &PartnerTable| {
+            let mut out = [(0, 0); crate::scene::MAX_PARTNERS];
+            let count = table.pick(43, &mut out);
+            out[..count].to_vec()
+        };
+        let fresh = PartnerTable::new(48_000.0, &settings);
+        assert!(!pick(&fresh).is_empty());
+        assert_eq!(pick(&instrument.partners), pick(&fresh));
     }
 
     /// A note takes the free voice that last played its key, whose strings are prepared for it,

@@ -36,8 +36,8 @@ pub const MAX_PARTNER_MODES: usize = 64;
 /// and how many there are.
 type Picks = ([(usize, usize); MAX_PARTNERS], usize);
 
-/// Every key's partner string, prepared once and retuned when the settings that shape strings
-/// change.
+/// Every key's partner string, prepared once and retuned when it is used after the settings that
+/// shape strings changed.
 #[derive(Debug, Clone)]
 pub struct PartnerTable {
     strings: Vec<ModalString>,
@@ -46,6 +46,8 @@ pub struct PartnerTable {
     picks: Vec<Cell<Option<Picks>>>,
     /// `(brightness, damping, stretch)` the strings are tuned for.
     tuned: (f64, f64, f64),
+    /// The settings the table is used under next: [`ready`](Self::ready) tunes for them.
+    wanted: Settings,
     sample_rate: f64,
 }
 
@@ -56,14 +58,30 @@ impl PartnerTable {
             strings: PARTNER_KEYS.map(|_| ModalString::with_capacity(PARTNER_MODES + 1)).collect(),
             picks: PARTNER_KEYS.map(|_| Cell::new(None)).collect(),
             tuned: (f64::NAN, f64::NAN, f64::NAN),
+            wanted: *settings,
             sample_rate,
         };
         table.retune(settings);
         table
     }
 
+    /// Use the table under `settings` from now on. The strings are retuned when it is next used
+    /// ([`ready`](Self::ready)), not now: a setting that shapes strings, automated while keys
+    /// ring, costs nothing until a key is struck or a partner joins.
+    pub fn request(&mut self, settings: &Settings) {
+        self.wanted = *settings;
+    }
+
+    /// The table for the settings last requested, retuned first if they shape the strings
+    /// otherwise than before. Never allocates.
+    pub fn ready(&mut self) -> &Self {
+        let wanted = self.wanted;
+        self.retune(&wanted);
+        self
+    }
+
     /// Retune for `settings` if they shape the strings otherwise than before. Never allocates.
-    pub fn retune(&mut self, settings: &Settings) {
+    fn retune(&mut self, settings: &Settings) {
         let tuned = (settings.brightness, settings.damping, settings.stretch);
         if tuned == self.tuned {
             return;
@@ -252,9 +270,10 @@ mod tests {
     }
 
     /// The partners a table keeps from its searches are those of its strings as tuned now: after
-    /// every key was picked at the default settings, a retune to stiffer, more damped strings
-    /// gives what a table made for those settings gives, for every key, though many keys' partners
-    /// differ between the two; and so does a retune that changes only the octave stretch.
+    /// every key was picked at the default settings, stiffer, more damped strings requested give,
+    /// once the table is next used, what a table made for those settings gives, for every key,
+    /// though many keys' partners differ between the two; and so does a request that changes
+    /// only the octave stretch. A request alone retunes nothing (a retune forgets the picks).
     #[test]
     fn a_retuned_table_picks_what_a_fresh_table_picks() {
         let stretched = Settings { brightness: 4.0, damping: 20.0, ..Settings::default() };
@@ -263,8 +282,9 @@ mod tests {
         let mut previous = every_pick(&table);
         assert_eq!(every_pick(&table), previous, "picked again from what was kept");
         for (settings, what) in [(stretched, "the settings"), (equal, "the stretch alone")] {
-            table.retune(&settings);
-            let picks = every_pick(&table);
+            table.request(&settings);
+            assert_eq!(table.searched(), (88, 88), "requested {what}, not yet used");
+            let picks = every_pick(table.ready());
             assert_eq!(picks, every_pick(&PartnerTable::new(48_000.0, &settings)), "retuned for {what}");
             let changed = previous.iter().zip(&picks).filter(|(a, b)| a != b).count();
             println!("{changed} of 88 keys' partners change with {what}");

@@ -593,7 +593,7 @@ impl PianoVoice {
         dampers: Dampers,
         len: usize,
         now: u64,
-        partners: Option<&PartnerTable>,
+        mut partners: Option<&mut PartnerTable>,
         seeks: &mut usize,
     ) {
         if !self.sounding && self.pending.is_none() {
@@ -609,7 +609,8 @@ impl PianoVoice {
         {
             self.pending = None;
             self.sounding = false;
-            self.play_with(strike, settings, now, partners.map(|table| (table, dampers)));
+            let partners = partners.as_deref_mut().map(|table| (table.ready(), dampers));
+            self.play_with(strike, settings, now, partners);
             self.key_down = !self.pending_released;
         }
         if self.pending.is_some() {
@@ -624,7 +625,7 @@ impl PianoVoice {
             && let Some(table) = partners
         {
             *seeks -= 1;
-            self.seek_partners(settings, table, lifted);
+            self.seek_partners(settings, table.ready(), lifted);
         }
         let span = len as f64 / fs;
         // The fraction of the way a damper's rate moves to its target over this block.
@@ -807,19 +808,19 @@ mod tests {
     #[test]
     fn a_prepared_voice_plays_as_a_fresh_voice_does() {
         let settings = Settings::default();
-        let table = PartnerTable::new(FS, &settings);
+        let mut table = PartnerTable::new(FS, &settings);
         let pedal = Dampers { pedal: true, held: 0 };
-        let play = |voice: &mut PianoVoice| {
-            voice.play_with(Strike { channel: 0, key: 60, velocity: 0.7 }, &settings, 0, Some((&table, pedal)));
+        let play = |voice: &mut PianoVoice, table: &mut PartnerTable| {
+            voice.play_with(Strike { channel: 0, key: 60, velocity: 0.7 }, &settings, 0, Some((table.ready(), pedal)));
             let (mut all, mut out) = (Vec::new(), [0.0; 64]);
             for _ in 0..40 {
-                voice.begin_block(&settings, pedal, 64, 0, Some(&table), &mut 0);
+                voice.begin_block(&settings, pedal, 64, 0, Some(&mut *table), &mut 0);
                 voice.render(&mut out);
                 all.extend_from_slice(&out);
             }
             (all, voice.core.partners())
         };
-        let (fresh, partners) = play(&mut PianoVoice::new(1000, FS));
+        let (fresh, partners) = play(&mut PianoVoice::new(1000, FS), &mut table);
         assert!(partners > 0 && fresh.iter().any(|&x| x != 0.0));
         let mut reach = [0; 128];
         for key in [21, 108, 60] {
@@ -828,7 +829,7 @@ mod tests {
             assert!(coupled > 0, "key {key}: {coupled} modes on the bridge, {free} off it");
             assert!(!voice.sounding && voice.energy() == 0.0, "key {key} left the voice sounding");
             reach[usize::from(key)] = string;
-            assert!(play(&mut voice) == (fresh.clone(), partners), "prepared for key {key}");
+            assert!(play(&mut voice, &mut table) == (fresh.clone(), partners), "prepared for key {key}");
         }
         assert!(reach[21] > reach[60], "A0 {} modes, C4 {}", reach[21], reach[60]);
     }
