@@ -616,7 +616,12 @@ impl Instrument {
             .position(|v| !v.sounding)
             .or_else(|| self.slides.iter().enumerate().min_by_key(|(_, v)| v.started).map(|(i, _)| i));
         if let Some(i) = index {
-            self.slides[i].play(strike, &settings, false, now);
+            let voice = &mut self.slides[i];
+            // A silent voice's pickup stayed where the voice last sounded (see `begin_block`).
+            if voice.pickup() != self.pickup {
+                voice.set_pickup(self.pickup, 0);
+            }
+            voice.play(strike, &settings, false, now);
         }
         index
     }
@@ -728,8 +733,14 @@ impl Instrument {
         let pickup = self.pickup + (self.settings.pickup_position - self.pickup).clamp(-reach, reach);
         let move_pickup = self.pickup != pickup;
         self.pickup = pickup;
+        // Only the voices sounding follow it; a silent one takes its place when plucked
+        // (`slide_on`), so that the idle voices cost nothing while the pickup moves.
         if move_pickup {
-            self.slides.iter_mut().for_each(|v| v.set_pickup(pickup, len));
+            for i in self.notes.live_in(slides.clone()) {
+                if self.slides[i].sounding {
+                    self.slides[i].set_pickup(pickup, len);
+                }
+            }
         }
         for i in self.notes.live_in(slides) {
             let v = &mut self.slides[i];
@@ -828,6 +839,34 @@ mod tests {
         let fresh = PartnerTable::new(48_000.0, &settings);
         assert!(!pick(&fresh).is_empty());
         assert_eq!(pick(&instrument.partners), pick(&fresh));
+    }
+
+    /// A slide voice silent while the pickup moved hears the string where the pickup is when
+    /// plucked: the pickup moved from 0.9 to 0.5 of the length before the first note (0.4 s at
+    /// its top speed), the note sounds bit for bit as on an instrument made with the pickup at 0.5.
+    #[test]
+    fn a_silent_slide_voice_plucked_after_the_pickup_moved_hears_it_where_it_is() {
+        let at = |pickup_position| Settings { mode: Mode::Slide, pickup_position, ..Settings::default() };
+        let render = |instrument: &mut Instrument, blocks: usize| {
+            let (mut left, mut right, mut all) = ([0.0; 64], [0.0; 64], Vec::new());
+            for _ in 0..blocks {
+                instrument.process(&mut left, &mut right);
+                all.extend_from_slice(&left);
+            }
+            all
+        };
+        let mut moved = Instrument::new(48_000.0, 4, at(0.9));
+        moved.set_settings(&at(0.5));
+        let mut made_there = Instrument::new(48_000.0, 4, at(0.5));
+        let before = 0.45 * 48_000.0 / 64.0;
+        for instrument in [&mut moved, &mut made_there] {
+            assert!(render(instrument, before as usize).iter().all(|&x| x == 0.0));
+            instrument.handle(Event::NoteOn { channel: 0, key: 52, velocity: 0.7 });
+        }
+        assert_eq!(moved.pickup, 0.5);
+        let heard = render(&mut moved, 40);
+        assert!(heard.iter().any(|&x| x != 0.0));
+        assert!(heard == render(&mut made_there, 40));
     }
 
     /// A note takes the free voice that last played its key, whose strings are prepared for it,

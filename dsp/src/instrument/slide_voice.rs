@@ -188,6 +188,8 @@ pub struct SlideVoice {
     /// The guitar the current note sounds on: its string's end held and heard through the pickup,
     /// or on the acoustic body.
     pub body: SlideBody,
+    /// Where the pickup's weights are made for (fraction of the length).
+    pickup: f64,
 }
 
 impl SlideVoice {
@@ -255,6 +257,7 @@ impl SlideVoice {
             position_at: Memo::EMPTY,
             unweighed: 0,
             body: SlideBody::Pickup,
+            pickup: settings.pickup_position,
         }
     }
 
@@ -499,7 +502,14 @@ impl SlideVoice {
     /// Move the pickup to `position` (fraction of the length), gliding over the next `samples`
     /// samples.
     pub fn set_pickup(&mut self, position: f64, samples: usize) {
+        self.pickup = position;
         self.core.set_pickup(Pickup { kind: OutputKind::Velocity, position, aperture: PICKUP_APERTURE }, samples);
+    }
+
+    /// Where the pickup is (fraction of the length): the last position [`set_pickup`](Self::set_pickup)
+    /// moved it to.
+    pub fn pickup(&self) -> f64 {
+        self.pickup
     }
 
     /// Render `out.len()` samples of string velocity at the pickup (m/s, see
