@@ -25,6 +25,9 @@
 //! - `piano/88-keys`: all 88 keys (A0 to C8) struck together, pedal down, 48 kHz: the whole
 //!   piano at once; `piano/88-keys/late-pedal` the same with the pedal pressed 0.5 s after the
 //!   strike, when every key brings its partners onto its bridge (its worst call);
+//! - `piano/automated` (a line of its own, not in the table): 8 keys ringing under the pedal, a
+//!   second of calls with every continuous parameter moved before each call against the same
+//!   second with them still; the ratio is 1 within the noise;
 //! - `piano/restrike/{qsa,exp,imp}`: the 16 keys struck together again every 40 ms, 50 times,
 //!   each time at a seeded random velocity in [`RESTRIKE_VELOCITIES`] (the same for all 16, so
 //!   that their contacts overlap), in calls of 16 samples, for each solver: every voice in
@@ -666,6 +669,9 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
     if "piano/after-release".contains(&args.filter) {
         writeln!(stdout, "{}", after_release(args.runs)).ok();
     }
+    if "piano/automated".contains(&args.filter) {
+        writeln!(stdout, "{}", automated(args.runs)).ok();
+    }
     if args.write {
         write_docs(&lines, peak, &isa)?;
     }
@@ -735,6 +741,71 @@ fn after_release(runs: usize) -> serde_json::Value {
         "idle_call_us": mean(&idle),
         "after_call_us": mean(&after),
         "ratio": mean(&after) / mean(&idle),
+    })
+}
+
+/// What a host automating every parameter costs the piano: 8 keys (C2 to C6) struck with the
+/// pedal down and held on 32 voices, then one second of 64-sample calls timed (fastest of `runs`
+/// per call, summed), with every continuous parameter moved before every call (each along a
+/// triangle from its lowest to its highest value and back, at its own rate, 100 to 164 calls a
+/// period), against the same second with the parameters still. In piano mode they change only
+/// notes struck later, or nothing that sounds (the slide guitar's), so the ratio is 1 within
+/// the noise.
+fn automated(runs: usize) -> serde_json::Value {
+    use qsa_dsp::instrument::{PARAMETERS, ParamKind, ParamValues};
+    let call = 64;
+    let second = (PIANO_RATE as usize) / call;
+    let keys = [36u8, 43, 48, 55, 60, 64, 67, 84];
+    let moved = |n: usize| {
+        let mut values = ParamValues::default();
+        for (i, spec) in PARAMETERS.iter().enumerate() {
+            if let ParamKind::Float { min, max, scale, .. } = spec.kind {
+                let period = 100 + 4 * i;
+                let phase = (n % period) as f32 / period as f32;
+                let x = 1.0 - (2.0 * phase - 1.0).abs();
+                (spec.put)(&mut values, scale.to_plain(min + (max - min) * x));
+            }
+        }
+        values.settings()
+    };
+    let timed = |automate: bool| {
+        let mut piano = Instrument::new(PIANO_RATE, 32, Settings::default());
+        piano.handle(Event::Sustain { channel: 0, down: true });
+        for key in keys {
+            piano.handle(Event::NoteOn { channel: 0, key, velocity: 0.7 });
+        }
+        let (mut left, mut right) = (vec![0.0f32; call], vec![0.0f32; call]);
+        // The strike's calls first, untimed: what is compared is the ringing chord.
+        for _ in 0..second / 4 {
+            piano.process(&mut left, &mut right);
+        }
+        (0..second)
+            .map(|n| {
+                let settings = if automate { moved(n) } else { Settings::default() };
+                let t = std::time::Instant::now();
+                piano.set_settings(&settings);
+                piano.process(&mut left, &mut right);
+                t.elapsed().as_secs_f64()
+            })
+            .collect::<Vec<f64>>()
+    };
+    let (mut still, mut swept) = (vec![f64::INFINITY; second], vec![f64::INFINITY; second]);
+    for _ in 0..runs.max(1) {
+        for (best, t) in still.iter_mut().zip(timed(false)) {
+            *best = best.min(t);
+        }
+        for (best, t) in swept.iter_mut().zip(timed(true)) {
+            *best = best.min(t);
+        }
+    }
+    let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64 * 1e6;
+    serde_json::json!({
+        "name": "piano/automated",
+        "voices": 32,
+        "keys": keys.len(),
+        "still_call_us": mean(&still),
+        "automated_call_us": mean(&swept),
+        "ratio": mean(&swept) / mean(&still),
     })
 }
 
