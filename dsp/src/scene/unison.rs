@@ -98,7 +98,8 @@
 //! inverse has a closed form (docs/physics.md §12.6). Checked every [`RETIRE_CHECK`] steps; once
 //! the hammer moves away beyond that reach, the contact is not solved any more, the free part runs
 //! by its homogeneous recursion in register-resident runs and the coupled part steps without the
-//! striking point. A change of coefficients (a damper) has the hammer judged again.
+//! striking point. A change of coefficients (a damper) has the hammer judged again at once, with
+//! `H` weighed by the new coefficients: it stays retired if it is still out of reach.
 
 use std::ops::Range;
 
@@ -523,7 +524,7 @@ impl UnisonCore {
         }
         self.refresh_coupling();
         if self.retired {
-            self.measure();
+            self.judge_again();
         }
     }
 
@@ -663,8 +664,26 @@ impl UnisonCore {
         self.coupled_bank.set_extra_decay(self.bridge_range.clone(), &rates[..self.bridge_range.len()]);
         self.refresh_coupling();
         if self.retired {
-            // The energy's weights changed: judge the hammer again from here.
-            self.measure();
+            self.judge_again();
+        }
+    }
+
+    /// After the coefficients of a retired hammer's unison changed: every projection again from
+    /// the state, and the hammer judged again at once, the energy weighed with the new
+    /// coefficients (module docs). It stays retired if it is still out of reach, as the next
+    /// check would find it, instead of being stepped with its contact until that check: a damper
+    /// landing updates the coefficients at every block.
+    fn judge_again(&mut self) {
+        self.measure();
+        self.retire_if_out_of_reach();
+    }
+
+    /// Retire the hammer if it has moved away beyond its reach for good (module docs).
+    fn retire_if_out_of_reach(&mut self) {
+        if self.out_of_reach() {
+            self.retired = true;
+            self.last_force = 0.0;
+            self.next_retired = None;
         }
     }
 
@@ -907,11 +926,7 @@ impl UnisonCore {
             self.since_check += 1;
             if self.since_check == RETIRE_CHECK {
                 self.since_check = 0;
-                if self.out_of_reach() {
-                    self.retired = true;
-                    self.last_force = 0.0;
-                    self.next_retired = None;
-                }
+                self.retire_if_out_of_reach();
             }
         }
         let rest = &mut out[done..];
@@ -1198,7 +1213,8 @@ mod tests {
     /// The real-time path (the hammer retired once out of reach, the free part run on its own)
     /// gives the monitored path's output to rounding (1e-9 of the peak over 1 s, which the
     /// hammer leaves within 0.1 s), for a detuned trichord on the soundboard; and a damper landing
-    /// on the retired voice brings the hammer back into judgement without changing the sound.
+    /// on the retired voice has the hammer judged again at once: still out of reach, it stays
+    /// retired, and the sound is still the monitored path's.
     #[test]
     fn the_real_time_path_retires_the_hammer_and_matches_the_monitored_path() {
         let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
@@ -1214,7 +1230,7 @@ mod tests {
                 let extra = [40.0; 200];
                 fast.core.set_extra_decay(&extra, 0.0);
                 slow.core.set_extra_decay(&extra, 0.0);
-                assert!(!fast.core.retired(), "a change of coefficients has the hammer judged again");
+                assert!(fast.core.retired(), "judged again at once, the hammer is still out of reach");
             }
             fast.process_output(block);
             slow.process(&mut frames[k * 64..(k + 1) * 64]);
