@@ -733,18 +733,14 @@ impl Instrument {
         let pickup = self.pickup + (self.settings.pickup_position - self.pickup).clamp(-reach, reach);
         let move_pickup = self.pickup != pickup;
         self.pickup = pickup;
-        // Only the voices sounding follow it; a silent one takes its place when plucked
-        // (`slide_on`), so that the idle voices cost nothing while the pickup moves.
-        if move_pickup {
-            for i in self.notes.live_in(slides.clone()) {
-                if self.slides[i].sounding {
-                    self.slides[i].set_pickup(pickup, len);
-                }
-            }
-        }
         for i in self.notes.live_in(slides) {
             let v = &mut self.slides[i];
             if v.sounding {
+                // Only the voices sounding follow the pickup; a silent one takes its place when
+                // plucked (`slide_on`), so that the idle voices cost nothing while it moves.
+                if move_pickup {
+                    v.set_pickup(pickup, len);
+                }
                 v.begin_block(&self.settings, &self.channels[usize::from(v.strike.channel)], len);
             }
         }
