@@ -726,21 +726,16 @@ fn after_release(runs: usize) -> serde_json::Value {
         let mut fresh = Instrument::new(PIANO_RATE, 32, settings);
         let mut used = played();
         sounding = used.sounding();
-        for (best, t) in idle.iter_mut().zip(timed(&mut fresh)) {
-            *best = best.min(t);
-        }
-        for (best, t) in after.iter_mut().zip(timed(&mut used)) {
-            *best = best.min(t);
-        }
+        keep_fastest(&mut idle, timed(&mut fresh));
+        keep_fastest(&mut after, timed(&mut used));
     }
-    let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64 * 1e6;
     serde_json::json!({
         "name": "piano/after-release",
         "voices": 32,
         "sounding": sounding,
-        "idle_call_us": mean(&idle),
-        "after_call_us": mean(&after),
-        "ratio": mean(&after) / mean(&idle),
+        "idle_call_us": mean_us(&idle),
+        "after_call_us": mean_us(&after),
+        "ratio": mean_us(&after) / mean_us(&idle),
     })
 }
 
@@ -791,22 +786,29 @@ fn automated(runs: usize) -> serde_json::Value {
     };
     let (mut still, mut swept) = (vec![f64::INFINITY; second], vec![f64::INFINITY; second]);
     for _ in 0..runs.max(1) {
-        for (best, t) in still.iter_mut().zip(timed(false)) {
-            *best = best.min(t);
-        }
-        for (best, t) in swept.iter_mut().zip(timed(true)) {
-            *best = best.min(t);
-        }
+        keep_fastest(&mut still, timed(false));
+        keep_fastest(&mut swept, timed(true));
     }
-    let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64 * 1e6;
     serde_json::json!({
         "name": "piano/automated",
         "voices": 32,
         "keys": keys.len(),
-        "still_call_us": mean(&still),
-        "automated_call_us": mean(&swept),
-        "ratio": mean(&swept) / mean(&still),
+        "still_call_us": mean_us(&still),
+        "automated_call_us": mean_us(&swept),
+        "ratio": mean_us(&swept) / mean_us(&still),
     })
+}
+
+/// Keep in `best` each call's fastest time (s) of the runs so far, given this run's `times`.
+fn keep_fastest(best: &mut [f64], times: Vec<f64>) {
+    for (best, t) in best.iter_mut().zip(times) {
+        *best = best.min(t);
+    }
+}
+
+/// The mean of call times `x` (s), in µs.
+fn mean_us(x: &[f64]) -> f64 {
+    x.iter().sum::<f64>() / x.len() as f64 * 1e6
 }
 
 #[cfg(test)]
