@@ -102,20 +102,23 @@ fn open_pluck(body: Option<&BodyParams>, seconds: f64) -> Vec<f64> {
 
 const REALISM_FS: f64 = xtask::realism::FS;
 
-/// The body drains the partials that meet its resonances, and only those: the open string
-/// plucked at 0.6 L, with the body on the bridge against the bridge held (decay rates of the
-/// partials by heterodyning over 0.1–1.4 s, 0.1–0.6 s for the fast one):
+/// The body drains the partials as its conductance says: the open string plucked at 0.6 L, with
+/// the body on the bridge against the bridge held (decay rates of the partials by heterodyning
+/// over 0.1–1.4 s, 0.1–0.6 s for the fast one):
 /// - the second partial (220 Hz), on the top's 219 Hz resonance, decays at least 5 times as fast
-///   (measured 67.4 dB/s against 7.2) and no faster than the string and the body sharing their
+///   (measured 65.1 dB/s against 7.2) and no faster than the string and the body sharing their
 ///   losses evenly, `(σ_s + σ_b)/2`, the limit of strong coupling (119 dB/s);
 /// - the first (110 Hz), 6 Hz above the air resonance, weakly coupled, loses the rate the body's
 ///   conductance there predicts for a string on it, `σ = 2f₀Z₀ Re Y(ω)` (Weinreich's drain,
 ///   docs/physics.md §13.5), within 25 % (measured 5.4 dB/s against 6.7): the formula neglects the
 ///   pull of the coupling on the partial's frequency, where `Re Y` falls steeply;
-/// - the third and fourth (330 and 440 Hz), where the body moves as a mass, decay within 1 dB/s of
-///   the held bridge's.
+/// - the partials above, from the third to the ninth (those the pluck excites; the fifth sits on
+///   its node), on the top's higher modes, each decay faster on the body than held, and by what
+///   Weinreich's drain predicts on the whole: the geometric mean of the measured over the
+///   predicted extra rate lies within 0.8–1.25 (measured 1.05; one by one 0.31 to 2.39, as `Re Y`
+///   swings tenfold between the modes and their valleys).
 #[test]
-fn the_body_drains_the_partials_on_its_resonances() {
+fn the_body_drains_each_partial_as_its_conductance_says() {
     use xtask::realism::{decay_rate, partial_levels};
     let body = BodyParams::guitar();
     let (coupled, held) = (open_pluck(Some(&body), 1.5), open_pluck(None, 1.5));
@@ -149,34 +152,40 @@ fn the_body_drains_the_partials_on_its_resonances() {
     assert!(with >= 5.0 * without && with <= limit, "{with} {without} {limit}");
     let (with, without, predicted) = rates(1, (0.1, 1.4));
     assert!(((with - without) / predicted - 1.0).abs() < 0.25, "{with} {without} {predicted}");
-    for partial in [3, 4] {
-        let (with, without, _) = rates(partial, (0.1, 1.4));
-        assert!((with - without).abs() < 1.0, "partial {partial}: {with} {without}");
+    let mut log_ratio = 0.0;
+    let above = [3, 4, 6, 7, 8, 9];
+    for partial in above {
+        let (with, without, predicted) = rates(partial, (0.1, 1.4));
+        assert!(with > without, "partial {partial}: {with} {without}");
+        log_ratio += ((with - without) / predicted).ln();
     }
+    let mean = (log_ratio / above.len() as f64).exp();
+    println!("measured over predicted extra decay, geometric mean over partials 3–9: {mean:.2}");
+    assert!((0.8..=1.25).contains(&mean), "{mean}");
 }
 
 /// The acoustic guitar is voiced as the electric: D3 at velocity 80 (the note
 /// [`SLIDE_SCALE`](qsa_dsp::instrument::SLIDE_SCALE) is set by) measures the same integrated
-/// loudness on both within 0.5 LU (measured −39.0 and −39.1 LUFS). Across A2–C5 the body's
-/// resonances shape the notes: the loudest is A3 (220 Hz), on the top's 219 Hz resonance, 11.6 LU
-/// above D3 (asserted within 10–14 LU), and the notes an octave above it are within 6 LU of D3:
-/// the two-mass model has no plate modes above the top's first, so the low resonances stand out
-/// more than on a real guitar (docs/physics.md §13.5).
+/// loudness on both within 0.5 LU (measured −39.1 on both). Across A2–C5 the body colours the
+/// notes without one standing out: against the same note on the electric guitar (relative to
+/// D3 on each), every note lies within 11 LU (measured −9.9 to +2.8), and A3, on the top's 219 Hz
+/// resonance, within 4 LU (measured +2.7). With the two-mass model alone, whose response is flat
+/// above the top's resonance, A3 stood 9.1 LU out (docs/physics.md §13.5).
 #[test]
-fn the_acoustic_guitar_is_voiced_as_the_electric_and_its_top_resonance_sings() {
+fn the_acoustic_guitar_is_voiced_as_the_electric_and_its_body_colours_every_note() {
     let lufs = |body, key| integrated_lufs(&slide_note(body, key, None), REALISM_FS);
     let (electric, acoustic) = (lufs(SlideBody::Pickup, 50), lufs(SlideBody::Acoustic, 50));
     println!("D3: {electric:.1} LUFS electric, {acoustic:.1} acoustic");
     assert!((electric - acoustic).abs() < 0.5);
-    let keys: Vec<(u8, f64)> = (45..=72u8).map(|k| (k, lufs(SlideBody::Acoustic, k) - acoustic)).collect();
-    println!("{}", keys.iter().map(|(k, l)| format!("{k}: {l:+.1}")).collect::<Vec<_>>().join(", "));
-    let (loudest, above) =
-        keys.iter().copied().fold((0, f64::NEG_INFINITY), |m, (k, l)| if l > m.1 { (k, l) } else { m });
-    assert_eq!(loudest, 57, "the loudest note sits on the top's resonance");
-    assert!((10.0..=14.0).contains(&above), "{above}");
-    for &(k, l) in keys.iter().filter(|(k, _)| *k >= 69) {
-        assert!(l.abs() <= 6.0, "key {k}: {l:+.1} LU");
+    let colour: Vec<(u8, f64)> = (45..=72u8)
+        .map(|k| (k, (lufs(SlideBody::Acoustic, k) - acoustic) - (lufs(SlideBody::Pickup, k) - electric)))
+        .collect();
+    println!("{}", colour.iter().map(|(k, l)| format!("{k}: {l:+.1}")).collect::<Vec<_>>().join(", "));
+    for &(k, l) in &colour {
+        assert!(l.abs() <= 11.0, "key {k}: {l:+.1} LU");
     }
+    let a3 = colour.iter().find(|(k, _)| *k == 57).map(|(_, l)| *l).unwrap_or(f64::NAN);
+    assert!(a3.abs() <= 4.0, "A3: {a3:+.1} LU");
 }
 
 /// Changing the guitar never touches a sounding note: a note plucked on the electric guitar and

@@ -326,6 +326,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let undamped = undamped_ring();
     let held = held_ring(0.0);
     let guitars = acoustic(&dir.join("acoustic.png"))?;
+    guitar_body(&dir.join("guitar-body.png"))?;
     let scales = [("pp", 40u8), ("mf", 80), ("ff", 120)].map(|(name, velocity)| (name, scale(velocity)));
     // One gain for all three, the fortissimo scale peaking at −1 dBFS: the dynamics stay audible.
     let peak = scales.iter().flat_map(|s| s.1.iter()).fold(0.0f64, |m, x| m.max(x.abs()));
@@ -663,6 +664,60 @@ fn acoustic(path: &Path) -> Result<Guitars, String> {
     Ok(rows)
 }
 
+/// The acoustic guitar's body as a listener hears it: the transmittance's power gain (dB, 1 over
+/// 1–4 kHz) from 60 Hz to 10 kHz, of the whole body and of the two-mass pair alone (normalised
+/// alike), the air and top resonances marked.
+fn guitar_body(path: &Path) -> Result<(), String> {
+    use qsa_dsp::body::{BodyParams, GUITAR_AIR, GUITAR_TOP, Heard};
+    let body = BodyParams::guitar();
+    let pair = BodyParams { modes: body.modes[..2].to_vec(), heard: Heard::Acceleration };
+    let pair_gain = 1.0 / pair.mean_power_gain((1000.0, 4000.0));
+    let db = |b: &BodyParams, scale: f64, f: f64| {
+        let (re, im) = b.response(f);
+        10.0 * (scale * (re * re + im * im)).log10()
+    };
+    let (low, high, n) = (60.0f64, 10_000.0f64, 1500);
+    let grid: Vec<f64> = (0..n).map(|k| low * (high / low).powf(k as f64 / (n - 1) as f64)).collect();
+    let root = BitMapBackend::new(path, (960, 520)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("The acoustic guitar's body: pressure per bridge force", ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(60)
+        .build_cartesian_2d((low..high).log_scale(), -40.0f64..40.0f64)
+        .map_err(|e| e.to_string())?;
+    let hertz = |x: &f64| {
+        let mantissa = x / 10f64.powf(x.log10().floor());
+        if [1.0, 2.0, 5.0].iter().any(|m| (mantissa - m).abs() < 1e-6 * m) { format!("{x:.0}") } else { String::new() }
+    };
+    chart
+        .configure_mesh()
+        .x_desc("frequency (Hz); the air resonance at 104 Hz, the top's at 219 Hz")
+        .y_desc("power gain (dB), 0 dB the mean over 1–4 kHz")
+        .x_label_formatter(&hertz)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    for (label, color, b, scale) in [
+        ("the two-mass pair alone (Christensen & Vistisen)", BLUE, &pair, pair_gain),
+        ("with the top's higher modes (the instrument's body)", RED, &body, 1.0),
+    ] {
+        let points: Vec<(f64, f64)> = grid.iter().map(|&f| (f, db(b, scale, f))).collect();
+        chart
+            .draw_series(LineSeries::new(points, color.stroke_width(2)))
+            .map_err(|e| e.to_string())?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+    }
+    let grey = BLACK.mix(0.4).stroke_width(1);
+    for f in [GUITAR_AIR, GUITAR_TOP] {
+        chart.draw_series(LineSeries::new([(f, -40.0), (f, 40.0)], grey)).map_err(|e| e.to_string())?;
+    }
+    crate::report::plot::legend(&mut chart, SeriesLabelPosition::LowerRight)?;
+    root.present().map_err(|e| e.to_string())?;
+    Ok(())
+}
+
 /// C4 to C5 (C major) at MIDI `velocity`, a note every 0.3 s held 0.28 s, the last held 1.5 s,
 /// at [`crate::examples::RATE`]: what a listener hears, centred (stereo width 0).
 fn scale(velocity: u8) -> Vec<f64> {
@@ -761,7 +816,12 @@ fn readme(
         .join("; ");
     let c7_measured = MEASURED_CONTACT.iter().find(|m| m.0 == 96).map_or(f64::NAN, |m| m.2);
     let d3 = guitars.iter().find(|r| r.0 == 50).copied().unwrap_or((50, f64::NAN, f64::NAN));
-    let loudest = guitars.iter().copied().fold((0, f64::NAN, f64::NEG_INFINITY), |m, r| if r.2 > m.2 { r } else { m });
+    // The body's colour of each note: its loudness on the acoustic over the electric, each
+    // relative to D3 on its guitar.
+    let colour_of = |r: &(u8, f64, f64)| (r.2 - d3.2) - (r.1 - d3.1);
+    let colour =
+        guitars.iter().map(colour_of).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| (lo.min(c), hi.max(c)));
+    let a3 = guitars.iter().find(|r| r.0 == 57).map_or(f64::NAN, colour_of);
     format!(
         "# How the piano compares with real grands\n\n\
          Written by `cargo xtask realism` (`xtask/src/realism.rs`); the model is in docs/physics.md §12, the \
@@ -820,12 +880,17 @@ fn readme(
          with another key pressed just before it at velocity 1/127 and held, adds over the same span {held_rows}.\n\n\
          ## The acoustic slide guitar\n\n\
          ![the two guitars](realism/acoustic.png)\n\n\
+         ![the guitar's body](realism/guitar-body.png)\n\n\
          Each slide note A2–C5 plucked at velocity 80, the slide pressed, measured over 2 s. On the acoustic \
-         guitar the string ends on Christensen and Vistisen's measured body (docs/physics.md §13.5), which it \
-         drives and which drains it. D3 measures {:.1} LUFS on the electric guitar and {:.1} on the acoustic \
-         (the two are voiced alike there). The acoustic's loudest note is {} ({:+.1} LU against its D3), on \
-         the top's resonance, which also drains it soonest. The model has no plate modes above that \
-         resonance, so the notes around it stand out more than on a real guitar.\n\n\
+         guitar the string ends on the body (docs/physics.md §13.5): Christensen and Vistisen's measured air \
+         and top resonances, and above them the top's higher modes, a plate drawn from the same measurements. \
+         The string drives the body, which drains it and radiates. D3 measures {:.1} LUFS on the electric \
+         guitar and {:.1} on the acoustic (the two are voiced alike there). Against the electric guitar (each \
+         note relative to D3 on its guitar), the body colours the notes by {:+.1} to {:+.1} LU, and A3, on the \
+         top's 219 Hz resonance, by {:+.1} LU: the two-mass model alone, flat above its resonances, left A3 \
+         9.1 LU out. The second picture shows why: the pair alone is flat above the top's resonance, which \
+         stands 30 dB above that plateau; with the top's higher modes the plateau rises, the resonance stands \
+         19 dB above it, and the plate's modes put their own peaks and valleys in it from 300 Hz up.\n\n\
          ## Not shown yet\n\n\
          Each key has its own copy of the soundboard and of its partners, so keys played together do not \
          ring through one bridge. Decay times above C4 have no measured grand beside them, and the string \
@@ -847,7 +912,8 @@ fn readme(
         b(60),
         d3.1,
         d3.2,
-        name_of(loudest.0),
-        loudest.2 - d3.2,
+        colour.0,
+        colour.1,
+        a3,
     )
 }

@@ -145,7 +145,7 @@ pub const SLIDE_SCALE: f64 = 0.06;
 /// Output scale of the acoustic slide guitar: what the body radiates (in newtons of bridge force
 /// above a kilohertz, [`crate::body::BodyParams::guitar`]) to full scale, set so that the note
 /// [`SLIDE_SCALE`] is set by measures the same loudness on either guitar.
-pub const ACOUSTIC_SCALE: f64 = 0.033;
+pub const ACOUSTIC_SCALE: f64 = 0.063;
 
 /// A note or controller event, as MIDI delivers them.
 #[derive(Debug, Clone, Copy, PartialEq)]

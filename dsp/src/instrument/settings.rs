@@ -39,8 +39,9 @@ pub enum SlideBody {
     /// ([`crate::pickup`]).
     #[default]
     Pickup,
-    /// An acoustic guitar: the string ends on the guitar's body, which it drives and which
-    /// drains it, and the body radiates ([`crate::body::BodyParams::guitar`]).
+    /// An acoustic guitar: the string ends on the guitar's body (its air and top resonances and
+    /// the top's higher modes), which it drives and which drains it, and the body radiates
+    /// ([`crate::body::BodyParams::guitar`]).
     Acoustic,
 }
 

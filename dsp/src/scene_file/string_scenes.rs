@@ -63,8 +63,8 @@
 //! kind = "guitar"              # ways; the output is then what it radiates (no output.kind/position)
 //! ```
 //!
-//! `kind = "guitar"` is Christensen and Vistisen's measured two-mass guitar
-//! ([`BodyParams::guitar`], docs/physics.md §13.5).
+//! `kind = "guitar"` is Christensen and Vistisen's measured two-mass guitar with its top's higher
+//! modes ([`BodyParams::guitar`], docs/physics.md §13.5).
 
 use serde::Deserialize;
 
