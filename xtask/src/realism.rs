@@ -894,7 +894,9 @@ fn readme(
          ## Not shown yet\n\n\
          Each key has its own copy of the soundboard and of its partners, so keys played together do not \
          ring through one bridge. Decay times above C4 have no measured grand beside them, and the string \
-         scale is the rule's, not a measured grand's (docs/physics.md §8.2).\n",
+         scale is the rule's, not a measured grand's (docs/physics.md §8.2). The acoustic guitar's top above \
+         its lowest mode is a mean-value plate drawn from the two-mass model's numbers, not a measured \
+         guitar's modes (docs/physics.md §13.5).\n",
         hammer_speed(0.6),
         PROMPT.0,
         PROMPT.1,
