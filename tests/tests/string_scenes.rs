@@ -265,7 +265,7 @@ fn slide_params(block: usize) -> SlideStringParams {
 /// `ΔH = −Δt(Q_str + Q_o + ΣQ_φ) + Δt(P_H + ΣP_φ)` closes to 1e-12 relative (docs/physics.md §7.4
 /// measured 5.6e-14), for all three solvers, and the contact comes and goes (rattle); and so it
 /// does with the string's end on the acoustic guitar's body (docs/physics.md §13.5), the body's
-/// energy and the coupling's terms counted (measured 9.2e-15).
+/// energy and the coupling's terms counted (measured 9.4e-15).
 #[test]
 fn slide_balance_closes_with_fixed_controls() {
     let params = slide_params(64);
@@ -314,7 +314,7 @@ fn slide_balance_closes_with_fixed_controls() {
 
 /// The shipped slide phrase on the acoustic guitar's body (`[body] kind = "guitar"`, the output
 /// table's pickup left out): it renders finite, its energy balance with the body closes to 1e-9
-/// (measured 3.6e-11), and what the body radiates is another signal than the pickup's velocity
+/// (measured 3.5e-11), and what the body radiates is another signal than the pickup's velocity
 /// (their normalized outputs differ by more than a tenth of the pickup's level).
 #[test]
 fn the_slide_phrase_renders_on_the_acoustic_body() {
