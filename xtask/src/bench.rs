@@ -149,15 +149,17 @@ pub struct BenchLine {
     pub calls: Option<CallStats>,
 }
 
-/// Costs of single process calls, each the fastest over the runs. The first call starts every
-/// note (it prepares each voice's string); the others step the strings and the contacts.
+/// Costs of single process calls, each the fastest over the runs. The first call is the first
+/// after every note began (the note-ons, which prepare each voice's strings, are handled before
+/// it and not timed: docs/performance.md, *Starting a note*); the others step the strings and
+/// the contacts.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct CallStats {
     /// Samples per call.
     pub call: usize,
     /// Mean cost of a call (µs).
     pub call_mean_us: f64,
-    /// The first call, which starts every note (µs).
+    /// The first call after every note began (µs).
     pub first_call_us: f64,
     /// Costliest call after the first (µs).
     pub call_worst_us: f64,
