@@ -11,6 +11,8 @@
 //!   fundamental's T60 beside a measured grand's at C2–C4 with the pedal up and down.
 //! - **Sympathetic resonance**: what the pedal adds to C3 at each key's pitch.
 //! - **A scale at three dynamics**: C4 to C5 at velocities 40, 80 and 120, mono 16-bit WAV.
+//! - **The slide guitar on its two bodies**: each note's loudness on the electric and on the
+//!   acoustic guitar, the acoustic body's transmittance, and a short phrase on each, mono 16-bit WAV.
 //!
 //! The measuring functions here are also what the tests use (`tests/tests/piano_rule.rs`,
 //! `tests/tests/piano_realism.rs`).
@@ -334,6 +336,17 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     for (name, scale) in &scales {
         let path = dir.join(format!("scale-{name}.wav"));
         let scaled: Vec<f64> = scale.iter().map(|x| x * gain).collect();
+        crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scaled))
+            .map_err(|e| e.to_string())?;
+    }
+    let phrases = [("electric", SlideBody::Pickup), ("acoustic", SlideBody::Acoustic)]
+        .map(|(name, body)| (name, guitar_phrase(body)));
+    // One gain for both, the louder peaking at −1 dBFS: the two guitars keep their levels.
+    let peak = phrases.iter().flat_map(|p| p.1.iter()).fold(0.0f64, |m, x| m.max(x.abs()));
+    let gain = 10f64.powf(-1.0 / 20.0) / peak.max(f64::MIN_POSITIVE);
+    for (name, phrase) in &phrases {
+        let path = dir.join(format!("guitar-{name}.wav"));
+        let scaled: Vec<f64> = phrase.iter().map(|x| x * gain).collect();
         crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scaled))
             .map_err(|e| e.to_string())?;
     }
@@ -718,6 +731,37 @@ fn guitar_body(path: &Path) -> Result<(), String> {
     Ok(())
 }
 
+/// A2, C3, E3, A3 and C4 on the slide guitar `body` at velocity 80, the slide following the key,
+/// a note every 0.45 s held 0.4 s and the last 1 s, at [`crate::examples::RATE`] with the limiter
+/// off: the left channel.
+fn guitar_phrase(body: SlideBody) -> Vec<f64> {
+    let fs = f64::from(crate::examples::RATE);
+    let settings = Settings { mode: Mode::Slide, slide_body: body, limiter: false, ..Settings::default() };
+    let mut guitar = Instrument::new(fs, 4, settings);
+    let keys = [45u8, 48, 52, 57, 60];
+    let step = (0.45 * fs) as usize;
+    let n = step * (keys.len() - 1) + (1.2 * fs) as usize;
+    let mut events: Vec<(usize, Event)> = Vec::new();
+    for (i, &key) in keys.iter().enumerate() {
+        events.push((i * step, Event::NoteOn { channel: 0, key, velocity: 80.0 / 127.0 }));
+        let hold = if i + 1 == keys.len() { fs } else { 0.4 * fs } as usize;
+        events.push((i * step + hold, Event::NoteOff { channel: 0, key }));
+    }
+    events.sort_by_key(|e| e.0);
+    let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
+    let mut t = 0;
+    for (at, event) in events.into_iter().chain([(n, Event::AllNotesOff)]) {
+        if at > t {
+            guitar.process(&mut left[t..at], &mut right[t..at]);
+            t = at;
+        }
+        if at < n {
+            guitar.handle(event);
+        }
+    }
+    left.into_iter().map(f64::from).collect()
+}
+
 /// C4 to C5 (C major) at MIDI `velocity`, a note every 0.3 s held 0.28 s, the last held 1.5 s,
 /// at [`crate::examples::RATE`]: what a listener hears, centred (stereo width 0).
 fn scale(velocity: u8) -> Vec<f64> {
@@ -890,7 +934,9 @@ fn readme(
          top's 219 Hz resonance, by {:+.1} LU: the two-mass model alone, flat above its resonances, left A3 \
          9.1 LU out. The second picture shows why: the pair alone is flat above the top's resonance, which \
          stands 30 dB above that plateau; with the top's higher modes the plateau rises, the resonance stands \
-         19 dB above it, and the plate's modes put their own peaks and valleys in it from 300 Hz up.\n\n\
+         19 dB above it, and the plate's modes put their own peaks and valleys in it from 300 Hz up. \
+         A2, C3, E3, A3 and C4 at velocity 80 on each, a note every 0.45 s, 32 kHz mono 16-bit, one gain for \
+         both: [electric](realism/guitar-electric.wav), [acoustic](realism/guitar-acoustic.wav).\n\n\
          ## Not shown yet\n\n\
          Each key has its own copy of the soundboard and of its partners, so keys played together do not \
          ring through one bridge. Decay times above C4 have no measured grand beside them, and the string \
