@@ -747,19 +747,7 @@ fn guitar_phrase(body: SlideBody) -> Vec<f64> {
         let hold = if i + 1 == keys.len() { fs } else { 0.4 * fs } as usize;
         events.push((i * step + hold, Event::NoteOff { channel: 0, key }));
     }
-    events.sort_by_key(|e| e.0);
-    let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
-    let mut t = 0;
-    for (at, event) in events.into_iter().chain([(n, Event::AllNotesOff)]) {
-        if at > t {
-            guitar.process(&mut left[t..at], &mut right[t..at]);
-            t = at;
-        }
-        if at < n {
-            guitar.handle(event);
-        }
-    }
-    left.into_iter().map(f64::from).collect()
+    played_at_samples(&mut guitar, events, n)
 }
 
 /// C4 to C5 (C major) at MIDI `velocity`, a note every 0.3 s held 0.28 s, the last held 1.5 s,
@@ -777,16 +765,22 @@ fn scale(velocity: u8) -> Vec<f64> {
         let hold = if i + 1 == keys.len() { (1.5 * fs) as usize } else { (0.28 * fs) as usize };
         events.push((i * step + hold, Event::NoteOff { channel: 0, key }));
     }
+    played_at_samples(&mut piano, events, n)
+}
+
+/// `n` samples of `instrument`'s left channel playing `events`, each at its sample (in time
+/// order; those at one sample in the order given).
+fn played_at_samples(instrument: &mut Instrument, mut events: Vec<(usize, Event)>, n: usize) -> Vec<f64> {
     events.sort_by_key(|e| e.0);
     let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
     let mut t = 0;
     for (at, event) in events.into_iter().chain([(n, Event::AllNotesOff)]) {
         if at > t {
-            piano.process(&mut left[t..at], &mut right[t..at]);
+            instrument.process(&mut left[t..at], &mut right[t..at]);
             t = at;
         }
         if at < n {
-            piano.handle(event);
+            instrument.handle(event);
         }
     }
     left.into_iter().map(f64::from).collect()
