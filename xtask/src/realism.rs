@@ -329,27 +329,12 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let held = held_ring(0.0);
     let guitars = acoustic(&dir.join("acoustic.png"))?;
     guitar_body(&dir.join("guitar-body.png"))?;
+    // The fortissimo scale peaking at −1 dBFS: the dynamics stay audible.
     let scales = [("pp", 40u8), ("mf", 80), ("ff", 120)].map(|(name, velocity)| (name, scale(velocity)));
-    // One gain for all three, the fortissimo scale peaking at −1 dBFS: the dynamics stay audible.
-    let peak = scales.iter().flat_map(|s| s.1.iter()).fold(0.0f64, |m, x| m.max(x.abs()));
-    let gain = 10f64.powf(-1.0 / 20.0) / peak.max(f64::MIN_POSITIVE);
-    for (name, scale) in &scales {
-        let path = dir.join(format!("scale-{name}.wav"));
-        let scaled: Vec<f64> = scale.iter().map(|x| x * gain).collect();
-        crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scaled))
-            .map_err(|e| e.to_string())?;
-    }
+    write_at_one_gain(&dir, "scale", &scales)?;
     let phrases = [("electric", SlideBody::Pickup), ("acoustic", SlideBody::Acoustic)]
         .map(|(name, body)| (name, guitar_phrase(body)));
-    // One gain for both, the louder peaking at −1 dBFS: the two guitars keep their levels.
-    let peak = phrases.iter().flat_map(|p| p.1.iter()).fold(0.0f64, |m, x| m.max(x.abs()));
-    let gain = 10f64.powf(-1.0 / 20.0) / peak.max(f64::MIN_POSITIVE);
-    for (name, phrase) in &phrases {
-        let path = dir.join(format!("guitar-{name}.wav"));
-        let scaled: Vec<f64> = phrase.iter().map(|x| x * gain).collect();
-        crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scaled))
-            .map_err(|e| e.to_string())?;
-    }
+    write_at_one_gain(&dir, "guitar", &phrases)?;
     let text = readme(&envelopes, &contacts, &decays, &t60, (&sympathy, undamped, held), &guitars);
     let path = args.root.join("docs/report/realism.md");
     std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -728,6 +713,20 @@ fn guitar_body(path: &Path) -> Result<(), String> {
     }
     crate::report::plot::legend(&mut chart, SeriesLabelPosition::LowerRight)?;
     root.present().map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// Write each of `sounds` as `<prefix>-<name>.wav` in `dir`, all raised by the one gain that
+/// brings the loudest peak among them to −1 dBFS: they keep their levels against one another.
+fn write_at_one_gain(dir: &Path, prefix: &str, sounds: &[(&str, Vec<f64>)]) -> Result<(), String> {
+    let peak = sounds.iter().flat_map(|s| s.1.iter()).fold(0.0f64, |m, x| m.max(x.abs()));
+    let gain = 10f64.powf(-1.0 / 20.0) / peak.max(f64::MIN_POSITIVE);
+    for (name, sound) in sounds {
+        let path = dir.join(format!("{prefix}-{name}.wav"));
+        let scaled: Vec<f64> = sound.iter().map(|x| x * gain).collect();
+        crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scaled))
+            .map_err(|e| e.to_string())?;
+    }
     Ok(())
 }
 
