@@ -220,11 +220,11 @@ impl BodyParams {
             let mode = BridgeMode { frequency, mass, loss_factor: 1.0 / q };
             RadiatingMode { mode, radiation: piston * w / (w - helmholtz) }
         });
-        let plate = 4.0 * GUITAR_TOP_MASS;
-        let efficiency = |f: f64| radiation_efficiency(f, GUITAR_TOP_AREA, guitar_top_coincidence());
+        let (plate, coincidence) = (guitar_top_plate_mass(), guitar_top_coincidence());
         let higher = guitar_top_modes().into_iter().enumerate().map(|(j, mode)| {
             let w = std::f64::consts::TAU * mode.frequency;
-            let power = 4.0 * std::f64::consts::PI * GUITAR_TOP_AREA * efficiency(mode.frequency) * mode.mass / plate;
+            let efficiency = radiation_efficiency(mode.frequency, GUITAR_TOP_AREA, coincidence);
+            let power = 4.0 * std::f64::consts::PI * GUITAR_TOP_AREA * efficiency * mode.mass / plate;
             RadiatingMode { mode, radiation: fixed_sign(j) * SPEED_OF_SOUND / w * power.sqrt() }
         });
         let modes = pair.into_iter().chain(higher).collect();
@@ -313,11 +313,16 @@ pub fn guitar_top_density() -> f64 {
     std::f64::consts::FRAC_PI_4 * (GUITAR_TOP_ASPECT + 1.0 / GUITAR_TOP_ASPECT) / guitar_top_closed()
 }
 
-/// The top's mean driving-point conductance (s/kg), Skudrzyk's mean value `n/(4M)`, with the
-/// plate's mass `M = 4m_p` (a simply supported plate's lowest mode weighs a quarter of the plate
-/// at its centre): `n/(16 m_p)`, 4.5·10⁻³ s/kg.
+/// The plate's mass (kg), `M = 4m_p`: a simply supported plate's lowest mode weighs a quarter of
+/// the plate at its centre. 0.45 kg: the top, its braces and bridge and the air they carry.
+pub fn guitar_top_plate_mass() -> f64 {
+    4.0 * GUITAR_TOP_MASS
+}
+
+/// The top's mean driving-point conductance (s/kg), Skudrzyk's mean value `n/(4M)` with the
+/// [`guitar_top_plate_mass`]: `n/(16 m_p)`, 4.5·10⁻³ s/kg.
 pub fn guitar_top_conductance() -> f64 {
-    guitar_top_density() / (16.0 * GUITAR_TOP_MASS)
+    guitar_top_density() / (4.0 * guitar_top_plate_mass())
 }
 
 /// The top's coincidence frequency (Hz), `(c²/2π)√(ρh/D)` with the bending stiffness the lowest
@@ -691,7 +696,7 @@ mod tests {
             modes.iter().filter(|m| m.frequency < 0.8 / (density * (GUITAR_TOP_RATIO - 1.0))).collect();
         assert!(plate.len() >= 6, "{}", plate.len());
         for m in plate {
-            assert!((m.mass / (4.0 * GUITAR_TOP_MASS) - 1.0).abs() < 1e-12, "{m:?}");
+            assert!((m.mass / guitar_top_plate_mass() - 1.0).abs() < 1e-12, "{m:?}");
             assert!((m.loss_factor * GUITAR_Q.1 - 1.0).abs() < 1e-12, "{m:?}");
         }
         let bank = BridgeParams { modes: BodyParams::guitar().modes.iter().map(|m| m.mode).collect() };
