@@ -101,7 +101,7 @@
 //! `A_p ω_±²/(ω_±² − ω_h²)` with `A_p = (4/π²)S`, the lowest mode's volume per unit of its centre's
 //! motion.
 
-use crate::bridge::{BridgeMode, BridgeParams, SOUNDBOARD_BAND, SOUNDBOARD_CONDUCTANCE};
+use crate::bridge::{BridgeMode, BridgeParams, SOUNDBOARD_BAND, SOUNDBOARD_CONDUCTANCE, mean_value_mass, mode_jitter};
 use crate::string::simd::{Chunk, Isa, Kernel, LANES, Lanes, chunks, chunks_mut};
 
 /// Speed of sound in air (m/s) at 20 °C.
@@ -337,10 +337,10 @@ pub fn guitar_top_coincidence() -> f64 {
 /// The top's modes above its lowest (docs/physics.md §13.5), a mean-value bank: from one spacing
 /// above [`GUITAR_TOP`] to [`GUITAR_TOP_HIGHEST`], a mode every `1/n` ([`guitar_top_density`]) as
 /// on the plate, or every `(r − 1)f` ([`GUITAR_TOP_RATIO`]) where that is wider, each moved by a
-/// fixed jitter of up to ±35 % of its spacing. Each mode's mass at the bridge is `n_j/(4G)` from
-/// the bank's own density `n_j` ([`guitar_top_conductance`]); its loss factor is the top's
-/// resonance's, `1/Q₊`, times `n/n_j`, so that where a mode stands for several the bank's modes
-/// overlap as the plate's do.
+/// fixed jitter of up to ±35 % of its spacing ([`mode_jitter`], as the soundboard's). Each mode's
+/// mass at the bridge is `n_j/(4G)` ([`mean_value_mass`]) from the bank's own density `n_j`
+/// ([`guitar_top_conductance`]); its loss factor is the top's resonance's, `1/Q₊`, times `n/n_j`,
+/// so that where a mode stands for several the bank's modes overlap as the plate's do.
 pub fn guitar_top_modes() -> Vec<BridgeMode> {
     let (density, conductance) = (guitar_top_density(), guitar_top_conductance());
     let spacing = |f: f64| (1.0 / density).max((GUITAR_TOP_RATIO - 1.0) * f);
@@ -348,12 +348,10 @@ pub fn guitar_top_modes() -> Vec<BridgeMode> {
     let mut nominal = GUITAR_TOP + spacing(GUITAR_TOP);
     while nominal <= GUITAR_TOP_HIGHEST {
         let step = spacing(nominal);
-        // A fixed low-discrepancy jitter in [−0.35, 0.35) of a step.
-        let jitter = 0.7 * ((modes.len() as f64 * 0.618_033_988_749_895).fract() - 0.5);
         let bank_density = 1.0 / step;
         modes.push(BridgeMode {
-            frequency: nominal + jitter * step,
-            mass: bank_density / (4.0 * conductance),
+            frequency: nominal + mode_jitter(modes.len()) * step,
+            mass: mean_value_mass(bank_density, conductance),
             loss_factor: density / bank_density / GUITAR_Q.1,
         });
         nominal += step;

@@ -33,6 +33,19 @@
 //! where `n_j` is the bank's own modal density at mode `j`. The loss factor is the ~2 % that Ege
 //! and Boutillon measured on a piano soundboard (docs/physics.md §12 has the sources).
 
+/// The fixed jitter of a mean-value bank's `j`-th mode, in [−0.35, 0.35) of its spacing: a
+/// low-discrepancy (golden-ratio) sequence, so that a regular comb does not give every band the
+/// same pattern of peaks and valleys.
+pub fn mode_jitter(j: usize) -> f64 {
+    0.7 * ((j as f64 * 0.618_033_988_749_895).fract() - 0.5)
+}
+
+/// The effective mass (kg) at the bridge of a mean-value bank's mode where the bank has `density`
+/// modes per hertz, for the mean conductance `conductance` (s/kg): Skudrzyk's `n/(4G)`.
+pub fn mean_value_mass(density: f64, conductance: f64) -> f64 {
+    density / (4.0 * conductance)
+}
+
 /// Most bridge modes a bank may have.
 pub const MAX_BRIDGE_MODES: usize = 256;
 
@@ -105,12 +118,10 @@ impl BridgeParams {
         let count = ((high / low).ln() / ratio.ln()).floor() as usize + 1;
         let modes = (0..count)
             .map(|j| {
-                // A fixed low-discrepancy jitter in [−0.35, 0.35) of a step.
-                let jitter = 0.7 * ((j as f64 * 0.618_033_988_749_895).fract() - 0.5);
-                let frequency = low * ratio.powf(j as f64 + jitter);
+                let frequency = low * ratio.powf(j as f64 + mode_jitter(j));
                 // The bank's own modal density there: one mode per spacing `(r − 1)f`.
                 let density = 1.0 / ((ratio - 1.0) * frequency);
-                BridgeMode { frequency, mass: density / (4.0 * conductance), loss_factor }
+                BridgeMode { frequency, mass: mean_value_mass(density, conductance), loss_factor }
             })
             .collect();
         Self { modes }
