@@ -685,10 +685,7 @@ fn guitar_body(path: &Path) -> Result<(), String> {
         .y_label_area_size(60)
         .build_cartesian_2d((low..high).log_scale(), -40.0f64..40.0f64)
         .map_err(|e| e.to_string())?;
-    let hertz = |x: &f64| {
-        let mantissa = x / 10f64.powf(x.log10().floor());
-        if [1.0, 2.0, 5.0].iter().any(|m| (mantissa - m).abs() < 1e-6 * m) { format!("{x:.0}") } else { String::new() }
-    };
+    let hertz = |x: &f64| if crate::report::plot::is_labelled_log_tick(*x) { format!("{x:.0}") } else { String::new() };
     chart
         .configure_mesh()
         .x_desc("frequency (Hz); the air resonance at 104 Hz, the top's at 219 Hz")

@@ -87,12 +87,13 @@ fn short_label(row: &ErrorRow) -> String {
 /// A tick label for a logarithmic axis: `1e-2`, `2e-2`, `5e-2`; the ticks in between stay
 /// unlabelled so the labels never run into each other.
 fn log_tick(x: &f64) -> String {
+    if is_labelled_log_tick(*x) { format!("{x:.0e}") } else { String::new() }
+}
+
+/// Whether a tick of a logarithmic axis gets a label: 1, 2 and 5 times a power of ten.
+pub fn is_labelled_log_tick(x: f64) -> bool {
     let mantissa = x / 10f64.powf(x.log10().floor());
-    if [1.0, 2.0, 5.0].iter().any(|m| (mantissa - m).abs() < 1e-6 * m) || (mantissa - 10.0).abs() < 1e-5 {
-        format!("{x:.0e}")
-    } else {
-        String::new()
-    }
+    [1.0, 2.0, 5.0].iter().any(|m| (mantissa - m).abs() < 1e-6 * m) || (mantissa - 10.0).abs() < 1e-5
 }
 
 /// Error against the reference versus RTF for one case: the contact force (left) and the output
