@@ -166,7 +166,7 @@ fn the_body_drains_each_partial_as_its_conductance_says() {
 
 /// The acoustic guitar is voiced as the electric: D3 at velocity 80 (the note
 /// [`SLIDE_SCALE`](qsa_dsp::instrument::SLIDE_SCALE) is set by) measures the same integrated
-/// loudness on both within 0.5 LU (measured −39.1 on both). Across A2–C5 the body colours the
+/// loudness on both within 0.5 LU (measured −39.1 and −39.0). Across A2–C5 the body colours the
 /// notes without one standing out: against the same note on the electric guitar (relative to
 /// D3 on each), every note lies within 11 LU (measured −9.9 to +2.7), and A3, on the top's 219 Hz
 /// resonance, within 4 LU (measured +2.7). With the two-mass model alone, whose response is flat

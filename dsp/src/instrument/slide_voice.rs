@@ -8,12 +8,14 @@
 //!   when following keys, the played key's distance from the open string, glided towards with time
 //!   constant `glide_time`; plus pitch bend × bend range, glided as well; plus the note's own
 //!   tuning (a host's per-note tuning expression, in semitones, followed as it comes). A hand
-//!   moves a slide at a few metres per second at most, so the slide never travels faster than
-//!   [`SLIDE_SPEED`] (a jump of the setting or the tuning becomes a fast slide); it is kept
-//!   between 5 mm and 0.8 L;
+//!   moves a slide at a few metres per second at most and cannot change its speed at once, so
+//!   the slide never travels faster than [`SLIDE_SPEED`] nor speeds up or slows down faster than
+//!   [`SLIDE_ACCELERATION`] ([`Motion::approach`]: a jump of the setting or the tuning becomes a
+//!   fast slide, a glide whose time jumps from block to block a smooth one); it is kept between
+//!   5 mm and 0.8 L;
 //! - hand height from the setting or a controller (0 lifts the slide by 2 mm, full presses it
 //!   2 mm in: [`HAND_RANGE`]), moving at most [`HAND_SPEED`] and speeding up or slowing down at
-//!   most [`HAND_ACCELERATION`] ([`approach`]): the hand's damping `r_H` passes a change of its
+//!   most [`HAND_ACCELERATION`] (the same law): the hand's damping `r_H` passes a change of its
 //!   speed straight on to a pressed slide and so to the string, and a hand that reversed at once
 //!   (the setting or a controller jumping at every control block) would kick the string with a
 //!   step of force each time, heard as clicks;
@@ -81,6 +83,12 @@ pub const TRAIL: f64 = 0.02;
 /// Fastest the slide travels along the string (m/s).
 pub const SLIDE_SPEED: f64 = 5.0;
 
+/// Largest acceleration of the slide along the string (m/s²): from rest to [`SLIDE_SPEED`] in
+/// 50 ms, and an octave's shift (half the string) in 0.11 s, about as quick as a player's arm
+/// (an estimate). A slide that changed its speed at once would start a kink along the string,
+/// which the bridge passes on as a step (heard as a click on the acoustic guitar's body).
+pub const SLIDE_ACCELERATION: f64 = 100.0;
+
 /// Fastest the hand moves the slide towards or away from the string (m/s).
 pub const HAND_SPEED: f64 = 0.5;
 
@@ -88,26 +96,87 @@ pub const HAND_SPEED: f64 = 0.5;
 /// player's hand (5 g).
 pub const HAND_ACCELERATION: f64 = 50.0;
 
-/// One control block of `span` seconds of a hand at `position` (m) moving at `velocity` (m/s)
-/// towards `target` (m): the new position and velocity. The hand moves at most [`HAND_SPEED`],
-/// changes its speed by at most `Δv = a·span` per block (`a` = [`HAND_ACCELERATION`]), and never
-/// faster than it can still stop at the target: slowing by `Δv` a block from `v` covers
-/// `span·(v²/(2Δv) + v/2)`, so `|v| ≤ (√(Δv² + 8Δv|e|/span) − Δv)/2` for a distance `e` to go; a
-/// hand that would pass the target in this block stops on it (and sheds its last `Δv` in the
-/// next).
-pub fn approach(position: f64, velocity: f64, target: f64, span: f64) -> (f64, f64) {
-    if position == target && velocity == 0.0 {
-        // At rest on the target: what the lines below give, without their root and division.
-        return (target, 0.0);
+/// How fast a player moves what the hand holds: the top speed (m/s) and the largest
+/// acceleration (m/s²).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reach {
+    /// Top speed (m/s).
+    pub speed: f64,
+    /// Largest acceleration (m/s²).
+    pub acceleration: f64,
+}
+
+/// The slide moved along the string.
+pub const SLIDE_REACH: Reach = Reach { speed: SLIDE_SPEED, acceleration: SLIDE_ACCELERATION };
+
+/// The hand pressing the slide onto the string or lifting it.
+pub const HAND_REACH: Reach = Reach { speed: HAND_SPEED, acceleration: HAND_ACCELERATION };
+
+/// The share of the acceleration limit a [`Motion`] brakes with towards a still target. Braking
+/// at the full limit, the block that meets the target can change the speed by up to 9/8 of the
+/// limit (the bound on the speed from the distance left is a block's worth optimistic); at 8/9
+/// of it, that block stays within the limit too, and arriving takes `v/(16a)` longer.
+pub const BRAKING: f64 = 8.0 / 9.0;
+
+/// Something a player's hand moves, block by block: the slide along the string, or the hand
+/// towards it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Motion {
+    /// Where it is at the end of the last block (m).
+    pub position: f64,
+    /// Its speed over the last block (m/s).
+    pub velocity: f64,
+    /// Where it was asked to be at the end of the last block (m).
+    target: f64,
+}
+
+impl Motion {
+    /// At rest at `position` (m), where it was asked to be.
+    pub fn at_rest(position: f64) -> Self {
+        Self { position, velocity: 0.0, target: position }
     }
-    let error = target - position;
-    let dv = HAND_ACCELERATION * span;
-    let stopping = 0.5 * ((dv * dv + 8.0 * dv * error.abs() / span).sqrt() - dv);
-    let wanted = error.signum() * HAND_SPEED.min(stopping);
-    let velocity = velocity + (wanted - velocity).clamp(-dv, dv);
-    let moved = velocity * span;
-    let arrives = if error >= 0.0 { moved >= error } else { moved <= error };
-    (if arrives { target } else { position + moved }, velocity)
+
+    /// Move on by one control block of `span` seconds towards `target` (m), within `reach`. With
+    /// `e` the distance to go, `Δv = a·span` the most the speed may change in a block and `u` the
+    /// target's own speed over the block (at most the top speed):
+    /// - where moving `e` in this block needs a speed `e/span` within the top speed, within `Δv`
+    ///   of the present speed and within `Δv` of `u`, the motion meets the target: a target that
+    ///   moves within the limits (a vibrato, a glide under way, automation drawn as a gesture)
+    ///   is followed as it comes, and a still one is met slowly enough to stop on it in the next
+    ///   block;
+    /// - otherwise the speed changes by at most `Δv`, towards the fastest from which the motion
+    ///   can still stop at a still target braking by `Δb` = [`BRAKING`]`·Δv` a block: slowing by
+    ///   `Δb` a block from `v` covers `span·(v²/(2Δb) + v/2)`, so
+    ///   `|v| ≤ (√(Δb² + 8Δb|e|/span) − Δb)/2`. A motion that would pass the target in this block
+    ///   stops on it, and sheds the speed it had in the next blocks: a target that stops short
+    ///   (the end of a ramp drawn as automation) is met where it stops, never passed.
+    ///
+    /// The position's speed changes by at most `Δv` from block to block (jumps of the target
+    /// included), except where a moving target stops short faster than that: the motion then
+    /// stops with it.
+    pub fn approach(&mut self, target: f64, span: f64, reach: Reach) {
+        let (position, velocity) = (self.position, self.velocity);
+        let previous = std::mem::replace(&mut self.target, target);
+        if position == target && velocity == 0.0 {
+            // At rest on the target: what the lines below give, without their divisions.
+            return;
+        }
+        let error = target - position;
+        let dv = reach.acceleration * span;
+        let meeting = error / span;
+        let own = ((target - previous) / span).clamp(-reach.speed, reach.speed);
+        if meeting.abs() <= reach.speed && (meeting - velocity).abs() <= dv && (meeting - own).abs() <= dv {
+            (self.position, self.velocity) = (target, meeting);
+            return;
+        }
+        let db = BRAKING * dv;
+        let stopping = 0.5 * ((db * db + 8.0 * db * error.abs() / span).sqrt() - db);
+        let wanted = error.signum() * reach.speed.min(stopping);
+        self.velocity = velocity + (wanted - velocity).clamp(-dv, dv);
+        let moved = self.velocity * span;
+        let arrives = moved.abs() >= error.abs() && moved * error >= 0.0;
+        self.position = if arrives { target } else { position + moved };
+    }
 }
 
 /// The right finger's pluck force (N) for a note of `velocity` (0..1): `0.3 + 2.7·velocity`.
@@ -153,11 +222,10 @@ pub struct SlideVoice {
     fresh: bool,
     /// The part of the slide position that keys and bends ask for (semitones), after the glide.
     glided: f64,
-    /// Slide position x_o (m), after the speed limit.
-    x_o: f64,
-    /// Hand height w_H (m) and the hand's speed (m/s), after the limits of [`approach`].
-    hand: f64,
-    hand_velocity: f64,
+    /// The slide along the string: its position `x_o` (m) from the nut, within [`SLIDE_REACH`].
+    slide_motion: Motion,
+    /// The hand: its height `w_H` (m), within [`HAND_REACH`].
+    hand: Motion,
     /// The slide and hand of the current note.
     slide: SlideParams,
     /// The contact law of the current note.
@@ -239,9 +307,8 @@ impl SlideVoice {
             hand_offset: 0.0,
             fresh: false,
             glided: 0.0,
-            x_o,
-            hand: HAND_RANGE.0,
-            hand_velocity: 0.0,
+            slide_motion: Motion::at_rest(x_o),
+            hand: Motion::at_rest(HAND_RANGE.0),
             slide,
             law,
             solver: (settings.method, settings.segments),
@@ -288,7 +355,7 @@ impl SlideVoice {
         }
         if !self.sounding {
             self.glided = self.keys_and_bends(settings, &ChannelState::default());
-            self.x_o = Self::slide_position(self.length, self.semitones(settings));
+            self.slide_motion = Motion::at_rest(Self::slide_position(self.length, self.semitones(settings)));
             self.fresh = true;
         }
         if !self.sounding {
@@ -339,7 +406,7 @@ impl SlideVoice {
     /// offsets put the slide, as if they had come with the note-on.
     fn settle_if_fresh(&mut self, settings: &Settings) {
         if self.fresh && self.sounding {
-            self.x_o = Self::slide_position(self.length, self.semitones(settings));
+            self.slide_motion = Motion::at_rest(Self::slide_position(self.length, self.semitones(settings)));
         }
     }
 
@@ -403,8 +470,7 @@ impl SlideVoice {
     fn rest_lifted(&mut self) {
         let lifted = SlideControls { hand_height: HAND_RANGE.0, left_force: 0.0, right_force: 0.0, ..self.live.0 };
         self.live.0 = lifted;
-        self.hand = lifted.hand_height;
-        self.hand_velocity = 0.0;
+        self.hand = Motion::at_rest(lifted.hand_height);
         self.core.set_body(self.body == SlideBody::Acoustic, lifted);
     }
 
@@ -430,8 +496,7 @@ impl SlideVoice {
         }
         let length = self.length;
         let x_o = self.position_at.get(self.semitones(settings), |semitones| Self::slide_position(length, semitones));
-        let step = SLIDE_SPEED * span;
-        self.x_o += (x_o - self.x_o).clamp(-step, step);
+        self.slide_motion.approach(x_o, span, SLIDE_REACH);
         let pressed = |v: f64| HAND_RANGE.0 + (HAND_RANGE.1 - HAND_RANGE.0) * v.clamp(0.0, 1.0);
         let hand_height = match settings.hand_source {
             HandSource::Parameter => (settings.hand_height + self.hand_offset).clamp(-3e-3, 3e-3),
@@ -439,7 +504,7 @@ impl SlideVoice {
             HandSource::ChannelPressure => pressed(channel.pressure),
             HandSource::PolyPressure => pressed(self.poly_pressure),
         };
-        (self.hand, self.hand_velocity) = approach(self.hand, self.hand_velocity, hand_height, span);
+        self.hand.approach(hand_height, span, HAND_REACH);
         let right_force = match self.pluck {
             Some(t) if t < PLUCK_TIME => {
                 self.pluck = Some(t + span);
@@ -452,10 +517,10 @@ impl SlideVoice {
             None if self.key_down => 0.0,
             None => REST_FORCE,
         };
-        let x_o = self.x_o;
+        let x_o = self.slide_motion.position;
         self.live.0 = SlideControls {
             slide_position: x_o,
-            hand_height: self.hand,
+            hand_height: self.hand.position,
             left_position: (x_o - TRAIL).max(0.002),
             left_force: REST_FORCE,
             right_position: settings.pluck_position * self.length,
@@ -542,32 +607,86 @@ mod tests {
 
     const FS: f64 = 44100.0;
 
-    /// The hand from lifted (−2 mm) to pressed (+2 mm) and back, and a target jumping at every
-    /// 64-sample block (48 kHz): never faster than `HAND_SPEED`, never a change of speed above
-    /// `HAND_ACCELERATION` per block, never past a target it is approaching (beyond 1 nm), and
-    /// on a still target within 20 ms.
-    #[test]
-    fn the_hand_approaches_its_target_with_bounded_speed_and_acceleration() {
-        let span = 64.0 / 48_000.0;
-        let dv = HAND_ACCELERATION * span;
-        let mut rng = Pcg64::seed_from_u64(73);
-        let (mut x, mut v) = (-2e-3, 0.0);
-        for (target, blocks) in [(2e-3, 15), (-2e-3, 15)] {
-            let start = x;
-            for _ in 0..blocks {
-                let (x1, v1) = approach(x, v, target, span);
-                assert!(v1.abs() <= HAND_SPEED + 1e-12 && (v1 - v).abs() <= dv + 1e-12, "v {v} → {v1}");
-                assert!((x1 - start).abs() <= (target - start).abs() + 1e-9, "past {target}: {x1}");
-                (x, v) = (x1, v1);
-            }
-            assert_eq!(x, target, "on the target within {} ms", 15.0 * span * 1e3);
-            assert!(v.abs() <= dv, "arrived at {v} m/s");
+    /// The shortest time (s) in which a motion within `reach` covers `distance` (m) from rest to
+    /// rest: speeding up at the limit `a` and braking at `BRAKING·a`, with a stretch at top speed
+    /// if it is reached.
+    fn shortest_time(distance: f64, reach: Reach) -> f64 {
+        let (v, a, b) = (reach.speed, reach.acceleration, BRAKING * reach.acceleration);
+        if distance < 0.5 * v * v * (1.0 / a + 1.0 / b) {
+            (2.0 * distance * (a + b) / (a * b)).sqrt()
+        } else {
+            distance / v + 0.5 * v / a + 0.5 * v / b
         }
-        for _ in 0..10_000 {
-            let target = rng.random_range(-3e-3..3e-3);
-            let (x1, v1) = approach(x, v, target, span);
-            assert!(v1.abs() <= HAND_SPEED + 1e-12 && (v1 - v).abs() <= dv + 1e-12, "v {v} → {v1}");
-            (x, v) = (x1, v1);
+    }
+
+    /// The hand from lifted (−2 mm) to pressed (+2 mm) and back, the slide along the string from
+    /// 5 mm to 0.49 m and back, then 500 targets drawn at random, each held until the motion
+    /// rests on it, at control blocks of 1, 8, 64 and 256 samples (48 kHz): the position's speed
+    /// never above the reach's and never changing by more than its acceleration allows in a
+    /// block, never past a target, and on it within one block of the shortest time.
+    #[test]
+    fn the_hand_and_the_slide_approach_their_targets_with_bounded_speed_and_acceleration() {
+        for block in [1.0, 8.0, 64.0, 256.0] {
+            let span = block / 48_000.0;
+            for (reach, (near, far)) in [(HAND_REACH, (-2e-3f64, 2e-3f64)), (SLIDE_REACH, (0.005, 0.49))] {
+                let dv = reach.acceleration * span;
+                let mut rng = Pcg64::seed_from_u64(73);
+                let (mut m, mut speed) = (Motion::at_rest(near), 0.0);
+                for leg in 0..502 {
+                    let target = match leg {
+                        0 => far,
+                        1 => near,
+                        _ => rng.random_range(near.min(far)..near.max(far)),
+                    };
+                    let start = m.position;
+                    let shortest = shortest_time((target - start).abs(), reach);
+                    let mut blocks = 0;
+                    while m.position != target || m.velocity != 0.0 {
+                        let x = m.position;
+                        m.approach(target, span, reach);
+                        let now = (m.position - x) / span;
+                        let what = format!("block {block}, {reach:?}, leg {leg}: {m:?}");
+                        assert!(now.abs() <= reach.speed * (1.0 + 1e-12), "{what}: {now} m/s");
+                        assert!((now - speed).abs() <= dv * (1.0 + 1e-9), "{what}: {speed} → {now} m/s");
+                        assert!((m.position - start).abs() <= (target - start).abs(), "{what}: past {target}");
+                        speed = now;
+                        blocks += usize::from(m.position != target);
+                        assert!(blocks < 100_000, "{what}: never arrives");
+                    }
+                    let late = (blocks + 1) as f64 * span - shortest;
+                    assert!(late <= span * (1.0 + 1e-9), "{reach:?}, leg {leg}: {late} s late");
+                }
+            }
+        }
+    }
+
+    /// A target moving within the limits is followed exactly, at every block length: a vibrato
+    /// of the slide from rest at its turning point (±3 mm at 6 Hz: 4.3 m/s² at most) is met at
+    /// the end of every block, its speed changing block by block as the vibrato's does; a ramp at
+    /// 0.5 m/s that stops short is met where it stops, never passed.
+    #[test]
+    fn a_slide_moving_within_its_limits_follows_its_target_exactly() {
+        use std::f64::consts::PI;
+        for block in [1.0, 8.0, 64.0, 256.0] {
+            let span = block / 48_000.0;
+            let vibrato = |t: f64| 0.2 + 3e-3 * (2.0 * PI * 6.0 * t).cos();
+            let mut m = Motion::at_rest(vibrato(0.0));
+            for n in 1..(0.5 / span) as usize {
+                let v = m.velocity;
+                m.approach(vibrato(n as f64 * span), span, SLIDE_REACH);
+                assert_eq!(m.position, vibrato(n as f64 * span), "block {block}, step {n}");
+                assert!(
+                    (m.velocity - v).abs() <= (2.0 * PI * 6.0).powi(2) * 3e-3 * span * 1.01,
+                    "block {block}: {v} → {m:?}"
+                );
+            }
+            let ramp = |t: f64| (0.1 + 0.5 * t).min(0.2);
+            let mut m = Motion::at_rest(0.1);
+            for n in 1..(0.3 / span) as usize {
+                m.approach(ramp(n as f64 * span), span, SLIDE_REACH);
+                assert!(m.position <= 0.2, "block {block}: past the ramp's end: {m:?}");
+            }
+            assert_eq!((m.position, m.velocity), (0.2, 0.0), "block {block}: at rest on the ramp's end");
         }
     }
 
