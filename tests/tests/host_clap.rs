@@ -668,8 +668,9 @@ fn slide_keys_0_and_127_play_the_ends_of_the_slides_range() {
     }
 }
 
-/// Every sample rate from 22.05 to 192 kHz: a note in each mode is finite and at its pitch (the
-/// engine band-limits every string to 20 kHz, or Nyquist below 40 kHz, so the sound is the same).
+/// Every sample rate from 22.05 to 192 kHz: a note in each mode, and on each guitar, is finite
+/// and at its pitch (the engine band-limits every string to 20 kHz, or Nyquist below 40 kHz, so
+/// the sound is the same).
 #[test]
 fn sample_rates_from_22_to_192_khz() {
     let bundle = release_bundle();
@@ -680,11 +681,16 @@ fn sample_rates_from_22_to_192_khz() {
         audio.assert_finite(&format!("piano at {fs} Hz"));
         assert!(audio.peak() > AUDIBLE, "piano at {fs} Hz is silent");
         assert_pitch(piano_pitch(&audio, fs, 69), 440.0, &format!("piano A4 at {fs} Hz"));
-        let mut slide = Plugin::new(&bundle, fs, 4096, &[param("mode", 1.0)]);
-        let audio = slide.render_blocks(&[(0, Ev::On(0, 57, 0.8))], samples, 1024);
-        audio.assert_finite(&format!("slide at {fs} Hz"));
-        assert!(audio.peak() > AUDIBLE, "slide at {fs} Hz is silent");
-        assert_pitch(slide_pitch(&audio.tail((0.15 * fs) as usize), fs, 220.0), 220.0, &format!("slide A3 at {fs} Hz"));
+        let guitars = [("electric", 0.0), ("acoustic", 1.0)].map(|(guitar, body)| {
+            let mut slide = Plugin::new(&bundle, fs, 4096, &[param("mode", 1.0), param("sbody", body)]);
+            let audio = slide.render_blocks(&[(0, Ev::On(0, 57, 0.8))], samples, 1024);
+            let what = format!("{guitar} slide A3 at {fs} Hz");
+            audio.assert_finite(&what);
+            assert!(audio.peak() > AUDIBLE, "{what} is silent");
+            assert_pitch(slide_pitch(&audio.tail((0.15 * fs) as usize), fs, 220.0), 220.0, &what);
+            audio
+        });
+        assert!(bit_identical(&guitars[0], &guitars[1]).is_some(), "the two guitars sound alike at {fs} Hz");
     }
 }
 
