@@ -14,8 +14,8 @@
 //!
 //! Justified from both sides, in the tests below: the same performance without the disturbing
 //! events (repeated notes, releases in contact, stealing, pedal flutter, mode and solver changes,
-//! parameter jumps) stays below a third of it with the electric guitar (10.0 dB against 20) and
-//! below 2.5th of it with the acoustic one (15.3 dB), so the music's own variation never reaches
+//! parameter jumps) stays a factor of three below it with the electric guitar (10.0 dB against
+//! 20) and of 2.5 with the acoustic one (15.3 dB), so the music's own variation never reaches
 //! it; and a step of 20 % of the signal's RMS (−14.0 dB) inserted into a sustained note exceeds
 //! it (21.7 dB on a C4 unison, whose detuned strings keep more above 10 kHz than one string
 //! would), so a discontinuity that a listener hears as a tick is found. The torture itself
