@@ -153,7 +153,8 @@ impl Motion {
     ///
     /// The position's speed changes by at most `Δv` from block to block (jumps of the target
     /// included), except where a moving target stops short faster than that: the motion then
-    /// stops with it.
+    /// stops with it; and, by a few percent, in the block where it catches up with a target that
+    /// slows as it arrives (a glide's tail), since it brakes as for a still one.
     pub fn approach(&mut self, target: f64, span: f64, reach: Reach) {
         let (position, velocity) = (self.position, self.velocity);
         let previous = std::mem::replace(&mut self.target, target);
