@@ -255,13 +255,10 @@ enum Act {
 /// guitar (9.8–11.9 dB over the four seeds), EXP stays below the threshold.
 fn automation(disturb: bool, seed: u64, guitars: &[SlideBody]) -> Vec<(usize, Act)> {
     let s = |t: f64| (t * FS) as usize;
-    let block = 64;
-    let mut piano = ParamValues::default();
     let mut acts = Vec::new();
     if disturb {
         let mut rng = Pcg64::seed_from_u64(!seed);
-        let mut n = 0;
-        while n < s(3.0) {
+        every_block(&mut acts, (0, s(3.0)), ParamValues::default(), |piano, n| {
             piano.method = [Method::Qsa, Method::Exp, Method::Imp][(n / s(0.25)) % 3];
             piano.hardness = rng.random_range(0.1..10.0);
             piano.hammer_mass = rng.random_range(0.25..4.0);
@@ -273,16 +270,13 @@ fn automation(disturb: bool, seed: u64, guitars: &[SlideBody]) -> Vec<(usize, Ac
             piano.stretch = rng.random_range(0.0..2.0);
             piano.stereo_width = rng.random_range(-100.0..100.0);
             piano.gain = 10f32.powf(rng.random_range(-6.0..6.0) / 20.0);
-            acts.push((n, Act::Params(piano)));
-            n += block;
-        }
+        });
     }
-    let mut values = ParamValues { mode: Mode::Slide, slide_body: guitars[0], ..ParamValues::default() };
+    let values = ParamValues { mode: Mode::Slide, slide_body: guitars[0], ..ParamValues::default() };
     acts.push((s(3.0), Act::Params(values)));
     if disturb {
         let mut rng = Pcg64::seed_from_u64(seed);
-        let mut n = s(3.0) + block;
-        while n < s(6.0) {
+        every_block(&mut acts, (s(3.0) + BLOCK, s(6.0)), values, |values, n| {
             values.method = [Method::Qsa, Method::Imp][(n / s(0.25)) % 2];
             values.hardness = rng.random_range(0.1..10.0);
             values.damping = rng.random_range(0.1..10.0);
@@ -296,11 +290,26 @@ fn automation(disturb: bool, seed: u64, guitars: &[SlideBody]) -> Vec<(usize, Ac
             if guitars.len() > 1 {
                 values.slide_body = guitars[rng.random_range(0..guitars.len())];
             }
-            acts.push((n, Act::Params(values)));
-            n += block;
-        }
+        });
     }
     acts
+}
+
+/// The torture's control block (samples): its parameter jumps come once a block.
+const BLOCK: usize = 64;
+
+/// Automation at every [`BLOCK`] from `start` to before `end` (samples): `values` as `jump`
+/// changes them, given the block's first sample, pushed onto `acts`.
+fn every_block(
+    acts: &mut Vec<(usize, Act)>,
+    (start, end): (usize, usize),
+    mut values: ParamValues,
+    mut jump: impl FnMut(&mut ParamValues, usize),
+) {
+    for n in (start..end).step_by(BLOCK) {
+        jump(&mut values, n);
+        acts.push((n, Act::Params(values)));
+    }
 }
 
 /// The performance: the torture file (or its plain track) with the host's automation, in time
