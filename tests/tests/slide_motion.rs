@@ -358,23 +358,28 @@ fn every_way_of_moving_the_slide_stays_within_a_hands_reach() {
     let slide = Settings { mode: Mode::Slide, block: 64, ..Default::default() };
     let on = |key: u8| Event::NoteOn { channel: 0, key, velocity: 0.8 };
     let bend = |value: f32| Event::PitchBend { channel: 0, value };
-    let mut cases: Vec<(String, Vec<f64>)> = Vec::new();
+    // Where the slide stops the string `semitones` above the open string (A2, key 45), kept 5 mm
+    // from the nut.
+    let length = slide_guitar().string.length;
+    let at = |semitones: f64| (length * (1.0 - 2f64.powf(-semitones / 12.0))).max(0.005);
+    let mut cases: Vec<(String, Vec<f64>, f64)> = Vec::new();
     for glide in [0.001, 0.05] {
         let settings = Settings { glide_time: glide, ..slide };
         let mut instrument = Instrument::new(FS, 1, settings);
         let _ = slide_path(&mut instrument, &[on(52)], None, 20);
-        cases.push((format!("legato octave, glide {glide} s"), slide_path(&mut instrument, &[on(64)], None, 800)));
+        let path = slide_path(&mut instrument, &[on(64)], None, 800);
+        cases.push((format!("legato octave, glide {glide} s"), path, at(19.0)));
     }
     let wide = Settings { bend_range: 12.0, glide_time: 0.001, ..slide };
     let mut instrument = Instrument::new(FS, 1, wide);
     let _ = slide_path(&mut instrument, &[on(52)], None, 20);
-    cases.push(("bend to the top".into(), slide_path(&mut instrument, &[bend(1.0)], None, 300)));
-    cases.push(("bend to the bottom".into(), slide_path(&mut instrument, &[bend(-1.0)], None, 300)));
+    cases.push(("bend to the top".into(), slide_path(&mut instrument, &[bend(1.0)], None, 300), at(19.0)));
+    cases.push(("bend to the bottom".into(), slide_path(&mut instrument, &[bend(-1.0)], None, 300), at(-5.0)));
     let mut instrument = Instrument::new(FS, 1, slide);
     let id = Event::NoteOnWithId { channel: 0, key: 52, velocity: 0.8, voice: 5 };
     let _ = slide_path(&mut instrument, &[id], None, 20);
     let tune = Event::NoteTuning { note: NoteTarget::voice(5), semitones: 7.0 };
-    cases.push(("per-note tuning +7 semitones".into(), slide_path(&mut instrument, &[tune], None, 300)));
+    cases.push(("per-note tuning +7 semitones".into(), slide_path(&mut instrument, &[tune], None, 300), at(14.0)));
     let mut instrument = Instrument::new(FS, 1, slide);
     let _ = slide_path(&mut instrument, &[on(52)], None, 20);
     let mut path = slide_path(&mut instrument, &[on(64)], None, 0);
@@ -382,8 +387,8 @@ fn every_way_of_moving_the_slide_stays_within_a_hands_reach() {
         let glide_time = if block % 2 == 0 && block < 600 { 2.0 } else { 0.001 };
         path.extend(slide_path(&mut instrument, &[], Some(&Settings { glide_time, ..slide }), 1).into_iter().skip(1));
     }
-    cases.push(("glide time jumping at every block".into(), path));
-    for (what, path) in &cases {
+    cases.push(("glide time jumping at every block".into(), path, at(19.0)));
+    for (what, path, sent) in &cases {
         let (fastest, worst) = assert_within_a_hands_reach(path, 1.05, what);
         let n = path.len();
         println!(
@@ -394,6 +399,7 @@ fn every_way_of_moving_the_slide_stays_within_a_hands_reach() {
         );
         assert!(fastest > 0.1, "{what}: the slide moved");
         assert_eq!(path[n - 1], path[n - 2], "{what}: at rest at the end");
+        assert!((path[n - 1] - sent).abs() < 1e-9, "{what}: at rest at {} m, sent to {sent} m", path[n - 1]);
     }
 }
 
