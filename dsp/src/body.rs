@@ -100,6 +100,16 @@
 //! its weight is `r_j = s_j (c/ω_j)√(4πSσ_jM_j/M)`, beside the pair's swept volumes
 //! `A_p ω_±²/(ω_±² − ω_h²)` with `A_p = (4/π²)S`, the lowest mode's volume per unit of its centre's
 //! motion.
+//!
+//! # Stereo
+//!
+//! Each mode carries a [`Side`]. The pair moves the top and the air in the sound hole together
+//! and is heard alike from anywhere in front: the centre. Each higher mode of the top radiates
+//! more from some regions than from others, so that two microphones a little apart hear it at
+//! different levels; a mean-value body does not know which mode favours which, as it does not
+//! know their signs, and places neighbouring modes alternately left and right, so that a partial
+//! between two modes is heard between them. The instrument pans each side with constant power by
+//! the stereo width.
 
 use crate::bridge::{BridgeMode, BridgeParams, SOUNDBOARD_BAND, SOUNDBOARD_CONDUCTANCE, mean_value_mass, mode_jitter};
 use crate::string::simd::{Chunk, Isa, Kernel, LANES, Lanes, chunks, chunks_mut};
@@ -114,6 +124,17 @@ pub struct RadiatingMode {
     pub mode: BridgeMode,
     /// Radiation weight `r_j` (kg/s): the output per unit of the mode's velocity at the bridge.
     pub radiation: f64,
+    /// Where the stereo picture places the mode.
+    pub side: Side,
+}
+
+/// Where a body mode is heard in the stereo picture (docs/physics.md §13.6): in the centre, or
+/// panned towards one side by the stereo width, keeping its power.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Side {
+    Centre,
+    Left,
+    Right,
 }
 
 /// What of a body's motion a listener hears (module docs).
@@ -136,8 +157,8 @@ pub struct BodyParams {
 
 impl BodyParams {
     /// A body of `modes`, each radiating with efficiency `efficiency(f)` (0 to 1) and the sign
-    /// `sign(j)`, its gain set so that the transmittance's mean power gain over `band` (Hz, on
-    /// a logarithmic grid) is 1.
+    /// `sign(j)`, heard in the centre, its gain set so that the transmittance's mean power gain
+    /// over `band` (Hz, on a logarithmic grid) is 1.
     pub fn radiating(
         modes: &[BridgeMode],
         efficiency: impl Fn(f64) -> f64,
@@ -150,6 +171,7 @@ impl BodyParams {
             .map(|(j, &mode)| RadiatingMode {
                 mode,
                 radiation: sign(j) * (efficiency(mode.frequency).clamp(0.0, 1.0) * mode.mass).sqrt(),
+                side: Side::Centre,
             })
             .collect();
         Self { modes, heard: Heard::Velocity }.normalized(band)
@@ -210,7 +232,8 @@ impl BodyParams {
     /// measured guitar's [`GUITAR_AIR`], [`GUITAR_HELMHOLTZ`], [`GUITAR_TOP`], [`GUITAR_TOP_MASS`]
     /// and quality factors, then the top's higher modes ([`guitar_top_modes`]), heard as a compact
     /// source (every mode by its acceleration), its power gain 1 over 1–4 kHz (the output is in
-    /// newtons, as the bridge force it replaces).
+    /// newtons, as the bridge force it replaces). The pair is heard in the centre; the top's
+    /// higher modes alternately on the left and on the right (docs/physics.md §13.6).
     pub fn guitar() -> Self {
         let w2 = |f: f64| (std::f64::consts::TAU * f).powi(2);
         let (low, helmholtz, top) = (w2(GUITAR_AIR), w2(GUITAR_HELMHOLTZ), w2(GUITAR_TOP));
@@ -218,14 +241,15 @@ impl BodyParams {
         let pair = [(GUITAR_AIR, low, GUITAR_Q.0), (GUITAR_TOP, top, GUITAR_Q.1)].map(|(frequency, w, q)| {
             let mass = GUITAR_TOP_MASS * (top - low) / (helmholtz - w).abs();
             let mode = BridgeMode { frequency, mass, loss_factor: 1.0 / q };
-            RadiatingMode { mode, radiation: piston * w / (w - helmholtz) }
+            RadiatingMode { mode, radiation: piston * w / (w - helmholtz), side: Side::Centre }
         });
         let (plate, coincidence) = (guitar_top_plate_mass(), guitar_top_coincidence());
         let higher = guitar_top_modes().into_iter().enumerate().map(|(j, mode)| {
             let w = std::f64::consts::TAU * mode.frequency;
             let efficiency = radiation_efficiency(mode.frequency, GUITAR_TOP_AREA, coincidence);
             let power = 4.0 * std::f64::consts::PI * GUITAR_TOP_AREA * efficiency * mode.mass / plate;
-            RadiatingMode { mode, radiation: fixed_sign(j) * SPEED_OF_SOUND / w * power.sqrt() }
+            let radiation = fixed_sign(j) * SPEED_OF_SOUND / w * power.sqrt();
+            RadiatingMode { mode, radiation, side: if j % 2 == 0 { Side::Left } else { Side::Right } }
         });
         let modes = pair.into_iter().chain(higher).collect();
         Self { modes, heard: Heard::Acceleration }.normalized((1000.0, 4000.0))

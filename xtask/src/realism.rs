@@ -602,10 +602,18 @@ fn sympathetic(path: &Path) -> Result<Sympathy, String> {
 }
 
 /// A slide note of `key` at velocity 80 held 2 s on the guitar `body`, at [`FS`] with the limiter
-/// off, the guitar changed to `change_to` 0.21 s in if given (a sounding note keeps its own): the
-/// left channel.
+/// off, the guitar changed to `change_to` 0.21 s in if given (a sounding note keeps its own):
+/// what a listener hears, centred (stereo width 0; the acoustic body's pan keeps each mode's
+/// power).
 pub fn slide_note(body: SlideBody, key: u8, change_to: Option<SlideBody>) -> Vec<f32> {
-    let settings = Settings { mode: Mode::Slide, slide_body: body, limiter: false, ..Settings::default() };
+    let [left, _] = slide_note_heard(body, key, 0.0, change_to);
+    left
+}
+
+/// [`slide_note`] at stereo width `width` (−1..=1): the left and right channels.
+pub fn slide_note_heard(body: SlideBody, key: u8, width: f64, change_to: Option<SlideBody>) -> [Vec<f32>; 2] {
+    let settings =
+        Settings { mode: Mode::Slide, slide_body: body, limiter: false, stereo_width: width, ..Settings::default() };
     let mut guitar = Instrument::new(FS, 4, settings);
     guitar.handle(Event::NoteOn { channel: 0, key, velocity: 80.0 / 127.0 });
     let n = (2.0 * FS) as usize;
@@ -618,7 +626,7 @@ pub fn slide_note(body: SlideBody, key: u8, change_to: Option<SlideBody>) -> Vec
         }
         guitar.process(l, r);
     }
-    left
+    [left, right]
 }
 
 /// The slide guitar's notes A2–C5, each its integrated loudness (LUFS) on the electric and on the
@@ -729,10 +737,11 @@ fn write_at_one_gain(dir: &Path, prefix: &str, sounds: &[(&str, Vec<f64>)]) -> R
 
 /// A2, C3, E3, A3 and C4 on the slide guitar `body` at velocity 80, the slide following the key,
 /// a note every 0.45 s held 0.4 s and the last 1 s, at [`crate::examples::RATE`] with the limiter
-/// off: the left channel.
+/// off: what a listener hears, centred (stereo width 0).
 fn guitar_phrase(body: SlideBody) -> Vec<f64> {
     let fs = f64::from(crate::examples::RATE);
-    let settings = Settings { mode: Mode::Slide, slide_body: body, limiter: false, ..Settings::default() };
+    let settings =
+        Settings { mode: Mode::Slide, slide_body: body, limiter: false, stereo_width: 0.0, ..Settings::default() };
     let mut guitar = Instrument::new(fs, 4, settings);
     let keys = [45u8, 48, 52, 57, 60];
     let step = (0.45 * fs) as usize;

@@ -48,10 +48,12 @@
 //! - the piano's voices, each panned by its key's place along the bridge
 //!   ([`pan_gains`], `Settings::stereo_width`), sum into a left and a right bridge force, each
 //!   radiated through the soundboard ([`crate::body`]), then scaled by [`OUTPUT_SCALE`];
-//! - the slide guitar's voices sum, centred: on the electric guitar through the pickup's circuit
-//!   ([`crate::pickup`]), scaled by [`SLIDE_SCALE`]; on the acoustic guitar
+//! - the slide guitar's voices sum: on the electric guitar, centred, through the pickup's
+//!   circuit ([`crate::pickup`]), scaled by [`SLIDE_SCALE`]; on the acoustic guitar
 //!   (`Settings::slide_body`), what the body their strings end on radiates, scaled by
-//!   [`ACOUSTIC_SCALE`]. A note keeps the guitar it was plucked on.
+//!   [`ACOUSTIC_SCALE`], its two lowest modes in the centre and its higher modes panned
+//!   alternately left and right by the stereo width ([`side_gains`]). A note keeps the guitar
+//!   it was plucked on.
 //!
 //! [`Instrument::set_raw_output`] gives the dry signals instead, centred. Both then pass the
 //! output stage ([`OutputStage`]): the gain, smoothed over a few milliseconds, and the safety
@@ -283,8 +285,14 @@ pub struct Instrument {
     /// The piano's soundboard radiating the left and right channels' bridge forces.
     boards: [Body; 2],
     /// One control block of the piano's bridge forces, left and right, and of the slide
-    /// guitars' signals: the pickup's and the acoustic body's.
-    buses: [Vec<f64>; 4],
+    /// guitars' signals: the pickup's, the acoustic body's, and the shares of it that the body's
+    /// modes on the left and on the right radiate.
+    buses: [Vec<f64>; 6],
+    /// One voice's block of those shares.
+    side_scratch: [Vec<f64>; 2],
+    /// The gains of the acoustic body's modes on the left, in the left and the right channel,
+    /// gliding to [`side_gains`] at the stereo width (the right's are the other way round).
+    sides: [f64; 2],
     /// The slide guitar's pickup circuit, and the resonance it is tuned to now (Hz).
     circuit: PickupCircuit,
     resonance: f64,
@@ -321,7 +329,9 @@ impl Instrument {
             scratch: vec![0.0; MAX_BLOCK],
             partners: PartnerTable::new(sample_rate, &settings),
             boards: [(); 2].map(|_| Body::new(&BodyParams::piano(), sample_rate)),
-            buses: [(); 4].map(|_| vec![0.0; MAX_BLOCK]),
+            buses: [(); 6].map(|_| vec![0.0; MAX_BLOCK]),
+            side_scratch: [(); 2].map(|_| vec![0.0; MAX_BLOCK]),
+            sides: side_gains(settings.stereo_width),
             circuit: PickupCircuit::new(settings.pickup_resonance, sample_rate),
             resonance: settings.pickup_resonance,
             raw: false,
@@ -639,10 +649,13 @@ impl Instrument {
             }
             let len = (self.settings.block - self.in_block).min(n - done);
             let scratch = &mut self.scratch[..len];
-            let [bus_l, bus_r, bus_s, bus_a] = &mut self.buses;
+            let [scratch_x, scratch_y] = &mut self.side_scratch;
+            let (scratch_x, scratch_y) = (&mut scratch_x[..len], &mut scratch_y[..len]);
+            let [bus_l, bus_r, bus_s, bus_a, bus_x, bus_y] = &mut self.buses;
             let (bus_l, bus_r) = (&mut bus_l[..len], &mut bus_r[..len]);
             let (bus_s, bus_a) = (&mut bus_s[..len], &mut bus_a[..len]);
-            for bus in [&mut *bus_l, &mut *bus_r, &mut *bus_s, &mut *bus_a] {
+            let (bus_x, bus_y) = (&mut bus_x[..len], &mut bus_y[..len]);
+            for bus in [&mut *bus_l, &mut *bus_r, &mut *bus_s, &mut *bus_a, &mut *bus_x, &mut *bus_y] {
                 bus.fill(0.0);
             }
             let width = if self.raw { 0.0 } else { self.settings.stereo_width };
@@ -662,12 +675,23 @@ impl Instrument {
                 if !voice.sounding {
                     continue;
                 }
-                voice.render(scratch);
                 let bus = match voice.body {
-                    SlideBody::Pickup => &mut *bus_s,
-                    SlideBody::Acoustic => &mut *bus_a,
+                    SlideBody::Acoustic if !self.raw => {
+                        voice.render_sides(scratch, [&mut *scratch_x, &mut *scratch_y]);
+                        add(bus_x, scratch_x);
+                        add(bus_y, scratch_y);
+                        &mut *bus_a
+                    }
+                    SlideBody::Acoustic => {
+                        voice.render(scratch);
+                        &mut *bus_a
+                    }
+                    SlideBody::Pickup => {
+                        voice.render(scratch);
+                        &mut *bus_s
+                    }
                 };
-                bus.iter_mut().zip(scratch.iter()).for_each(|(b, x)| *b += x);
+                add(bus, scratch);
             }
             if !self.raw {
                 self.boards[0].process(bus_l);
@@ -675,13 +699,20 @@ impl Instrument {
                 self.circuit.process(bus_s);
             }
             let (l, r) = (&mut left[done..done + len], &mut right[done..done + len]);
-            for (((l, r), (pl, pr)), (s, a)) in
-                l.iter_mut().zip(r.iter_mut()).zip(bus_l.iter().zip(bus_r.iter())).zip(bus_s.iter().zip(bus_a.iter()))
-            {
-                let slide = s * SLIDE_SCALE + a * ACOUSTIC_SCALE;
-                *l = (pl * OUTPUT_SCALE + slide) as f32;
-                *r = (pr * OUTPUT_SCALE + slide) as f32;
+            let target = side_gains(width);
+            let [mut to_left, mut to_right] = self.sides;
+            for i in 0..len {
+                to_left += (target[0] - to_left) * self.voicing_rate;
+                to_right += (target[1] - to_right) * self.voicing_rate;
+                // The body's output with each side's share moved from gain 1 to its pan gains.
+                let (x, y) = (bus_x[i], bus_y[i]);
+                let acoustic_l = bus_a[i] + (to_left - 1.0) * x + (to_right - 1.0) * y;
+                let acoustic_r = bus_a[i] + (to_right - 1.0) * x + (to_left - 1.0) * y;
+                let pickup = bus_s[i] * SLIDE_SCALE;
+                l[i] = (bus_l[i] * OUTPUT_SCALE + (pickup + acoustic_l * ACOUSTIC_SCALE)) as f32;
+                r[i] = (bus_r[i] * OUTPUT_SCALE + (pickup + acoustic_r * ACOUSTIC_SCALE)) as f32;
             }
+            self.sides = [to_left, to_right];
             self.output.process(l, r, self.settings.limiter);
             done += len;
             self.now += len as u64;
@@ -764,6 +795,21 @@ pub fn pan_gains(key: u8, width: f64) -> [f64; 2] {
     let place = ((f64::from(key) - 64.5) / 43.5).clamp(-1.0, 1.0) * width.clamp(-1.0, 1.0);
     let angle = (1.0 + place) * std::f64::consts::FRAC_PI_4;
     [std::f64::consts::SQRT_2 * angle.cos(), std::f64::consts::SQRT_2 * angle.sin()]
+}
+
+/// The left and right gains of the acoustic guitar body's modes heard on the left at stereo
+/// width `width` (−1..=1); those on the right take them the other way round. A constant-power pan
+/// to the place `−width` (the gains `cos x + sin x` and `cos x − sin x`, `x = width·π/4`, as
+/// [`pan_gains`]'s): 1 and 1 at width 0, where the guitar is heard as its whole body radiates,
+/// and the same power (`g_L² + g_R² = 2`) at every width.
+pub fn side_gains(width: f64) -> [f64; 2] {
+    let (s, c) = (width.clamp(-1.0, 1.0) * std::f64::consts::FRAC_PI_4).sin_cos();
+    [c + s, c - s]
+}
+
+/// Add `x` to `bus`.
+fn add(bus: &mut [f64], x: &[f64]) {
+    bus.iter_mut().zip(x).for_each(|(b, x)| *b += x);
 }
 
 /// Add `x · g · p_L` and `x · g · p_R` to the buses, with the voicing gain `g` (from `voiced`)

@@ -94,9 +94,17 @@ impl GuardFade {
 
     /// Apply the fade to a rendered block (no change when not fading).
     pub fn apply(&mut self, out: &mut [f64]) {
+        self.apply_together([out]);
+    }
+
+    /// Apply the fade to blocks rendered together, the same gain on each at each sample.
+    pub fn apply_together<const N: usize>(&mut self, mut outs: [&mut [f64]; N]) {
         if let Some((gain, step)) = &mut self.fade {
-            for x in out {
-                *x *= *gain;
+            let len = outs.iter().map(|o| o.len()).min().unwrap_or(0);
+            for i in 0..len {
+                for out in outs.iter_mut() {
+                    out[i] *= *gain;
+                }
                 *gain = (*gain - *step).max(0.0);
             }
         }

@@ -584,17 +584,34 @@ impl SlideVoice {
     /// has caught fades out linearly over its block; a non-finite sample silences it at once, and
     /// the samples rendered with it are silent.
     pub fn render(&mut self, out: &mut [f64]) {
+        self.render_parts(out, None);
+    }
+
+    /// [`render`](Self::render), with the shares of the output that the body's modes heard on
+    /// the left and on the right radiated in `sides` (slices as long as `out`; zero on the
+    /// electric guitar), faded and silenced with it.
+    pub fn render_sides(&mut self, out: &mut [f64], sides: [&mut [f64]; 2]) {
+        self.render_parts(out, Some(sides));
+    }
+
+    fn render_parts(&mut self, out: &mut [f64], mut sides: Option<[&mut [f64]; 2]>) {
         let s = &mut self.solvers;
+        let parts = sides.as_mut().map(|[l, r]| [&mut **l, &mut **r]);
         match s.method {
-            Method::Qsa => self.core.process_output(&mut s.qsa, &mut self.live, out),
-            Method::Imp => self.core.process_output(&mut s.imp, &mut self.live, out),
-            Method::Exp => self.core.process_output(&mut s.exp, &mut self.live, out),
+            Method::Qsa => self.core.process_output(&mut s.qsa, &mut self.live, out, parts),
+            Method::Imp => self.core.process_output(&mut s.imp, &mut self.live, out, parts),
+            Method::Exp => self.core.process_output(&mut s.exp, &mut self.live, out, parts),
         }
-        if !out.iter().all(|x| x.is_finite()) {
+        let finite = |x: &[f64]| x.iter().all(|x| x.is_finite());
+        if !(finite(out) && sides.iter().flatten().all(|x| finite(x))) {
             out.fill(0.0);
+            sides.iter_mut().flatten().for_each(|x| x.fill(0.0));
             self.trip();
         } else {
-            self.guard_fade.apply(out);
+            match sides {
+                None => self.guard_fade.apply(out),
+                Some([left, right]) => self.guard_fade.apply_together([out, left, right]),
+            }
         }
     }
 }

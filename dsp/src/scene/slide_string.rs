@@ -84,7 +84,7 @@
 //! force `Σ_ζ κ_ζ F_ζ − G₀ + (Θ − E)a`. `H` gains the body's energy and the coupling's terms, and
 //! the output is what the body radiates.
 
-use crate::body::{BodyParams, RadiatingMode};
+use crate::body::{BodyParams, RadiatingMode, Side};
 use crate::contact::{ContactProblem, ContactSolution, ContactSolver};
 use crate::control::{ControlSource, Ramp};
 use crate::exciter::{FingerParams, HandMotion, SlideHand, SlideParams, finger};
@@ -453,15 +453,22 @@ struct BodyCoupling {
     sole: Vec<f64>,
     sole_gain: Vec<f64>,
     radiation: Vec<f64>,
+    /// The radiation weights of the modes heard on the left and on the right ([`Side`]), zero
+    /// on the others.
+    sides: [Vec<f64>; 2],
     /// `C_Σ = eᵀ(C∘e)` (m/N).
     compliance: f64,
     /// The string's static share of the bridge's mass `ρAL/3` (kg) and stiffness `T/L` (N/m).
     lift_mass: f64,
     lift_stiffness: f64,
-    /// `(b^{n−1}, b^n)` (m), `(gᵀũ^{n−1}, gᵀũ^n)` (kg·m) and `(rᵀx^{n−1}, rᵀx^n)`.
+    /// `(b^{n−1}, b^n)` (m), `(gᵀũ^{n−1}, gᵀũ^n)` (kg·m), `(rᵀx^{n−1}, rᵀx^n)` and the same of
+    /// each side's weights.
     b: (f64, f64),
     lifted: (f64, f64),
     heard: (f64, f64),
+    heard_sides: [(f64, f64); 2],
+    /// What the modes on each side radiated at the last step.
+    sides_now: [f64; 2],
     /// Whether the string's end moves with the body; else the end is held and the body rests.
     on: bool,
 }
@@ -478,13 +485,20 @@ impl BodyCoupling {
         }
         bank.finish();
         let (mut sole, mut sole_gain, mut radiation) = (Vec::new(), Vec::new(), Vec::new());
-        for v in [&mut sole, &mut sole_gain, &mut radiation] {
+        let mut sides = [Vec::new(), Vec::new()];
+        let [left, right] = &mut sides;
+        for v in [&mut sole, &mut sole_gain, &mut radiation, left, right] {
             bank.fit_vector(v);
         }
         for (j, m) in kept.iter().enumerate() {
             sole[j] = 1.0;
             sole_gain[j] = bank.input_gains()[j];
             radiation[j] = m.radiation;
+            match m.side {
+                Side::Left => sides[0][j] = m.radiation,
+                Side::Right => sides[1][j] = m.radiation,
+                Side::Centre => {}
+            }
         }
         let compliance = bank.project(&sole, &sole_gain);
         let p = string.params();
@@ -493,12 +507,15 @@ impl BodyCoupling {
             sole,
             sole_gain,
             radiation,
+            sides,
             compliance,
             lift_mass: p.linear_density * p.length / 3.0,
             lift_stiffness: p.tension / p.length,
             b: (0.0, 0.0),
             lifted: (0.0, 0.0),
             heard: (0.0, 0.0),
+            heard_sides: [(0.0, 0.0); 2],
+            sides_now: [0.0; 2],
             on: false,
         }
     }
@@ -509,6 +526,8 @@ impl BodyCoupling {
         self.b = (0.0, 0.0);
         self.lifted = (0.0, 0.0);
         self.heard = (0.0, 0.0);
+        self.heard_sides = [(0.0, 0.0); 2];
+        self.sides_now = [0.0; 2];
     }
 
     /// The energy of the body and of the string's motion with its end (J), the numerical
@@ -609,11 +628,11 @@ impl<S: ContactSolver, C: ControlSource<SlideControls>> Scene for SlideString<S,
     }
 
     fn process(&mut self, frames: &mut [Frame]) {
-        self.core.run::<S, C, true>(&mut self.solver, &mut self.controls, frames.len(), |i, f| frames[i] = f);
+        self.core.run::<S, C, true>(&mut self.solver, &mut self.controls, frames.len(), |i, f, _| frames[i] = f);
     }
 
     fn process_output(&mut self, out: &mut [f64]) {
-        self.core.process_output(&mut self.solver, &mut self.controls, out);
+        self.core.process_output(&mut self.solver, &mut self.controls, out, None);
     }
 }
 
@@ -794,6 +813,12 @@ impl SlideCore {
     /// Whether the string's end moves with a body.
     pub fn body_on(&self) -> bool {
         self.body.as_ref().is_some_and(|b| b.on)
+    }
+
+    /// What the body's modes heard on the left and on the right ([`Side`]) radiated at the last
+    /// step: shares of the output, the rest of it heard in the centre (zero without a body).
+    pub fn heard_sides(&self) -> [f64; 2] {
+        self.body.as_ref().filter(|b| b.on).map_or([0.0; 2], |b| b.sides_now)
     }
 
     /// The string, for tests that need to put a state into it by hand (the carried
@@ -1260,8 +1285,9 @@ impl SlideCore {
     }
 
     /// Step the body under the force `force` (N) the string and the contacts put on the bridge,
-    /// returning the radiated `Σ r_j ẍ_j` at this step and, with `MONITOR`, the energy of the
-    /// body and of the coupling at `n + 1/2` and what the body dissipated.
+    /// returning the radiated `Σ r_j ẍ_j` at this step (keeping each side's share of it for
+    /// [`heard_sides`](Self::heard_sides)) and, with `MONITOR`, the energy of the body and of the
+    /// coupling at `n + 1/2` and what the body dissipated.
     #[inline(always)]
     fn advance_body<const MONITOR: bool>(&mut self, force: f64) -> (f64, StringEnergy) {
         let dt = self.dt;
@@ -1275,6 +1301,11 @@ impl SlideCore {
         };
         let heard_next = body.bank.project_state(&body.radiation).1;
         let heard = (heard_next - 2.0 * body.heard.1 + body.heard.0) / (dt * dt);
+        for (side, (weights, sum)) in body.sides.iter().zip(&mut body.heard_sides).enumerate() {
+            let next = body.bank.project_state(weights).1;
+            body.sides_now[side] = (next - 2.0 * sum.1 + sum.0) / (dt * dt);
+            *sum = (sum.1, next);
+        }
         if MONITOR {
             // The lift has moved on already: `lifted` holds `(gᵀũ^n, gᵀũ^{n+1})`.
             let (db, mean) = ((b_next - body.b.1) / dt, 0.5 * (b_next + body.b.1));
@@ -1318,14 +1349,14 @@ impl SlideCore {
     }
 
     /// Run `count` steps with `solver`, starting blocks where they fall and asking `controls`
-    /// for their targets, handing each frame to `sink`.
+    /// for their targets, handing each frame, and the core after its step, to `sink`.
     #[inline]
     pub fn run<S: ContactSolver, C: ControlSource<SlideControls>, const MONITOR: bool>(
         &mut self,
         solver: &mut S,
         controls: &mut C,
         count: usize,
-        mut sink: impl FnMut(usize, Frame),
+        mut sink: impl FnMut(usize, Frame, &Self),
     ) {
         let mut done = 0;
         while done < count {
@@ -1341,20 +1372,30 @@ impl SlideCore {
             with_count!(self.plan.count, |V| {
                 let slots = self.plan.slots::<V>();
                 for i in done..done + run {
-                    sink(i, self.step::<S, MONITOR, V>(solver, slots));
+                    let frame = self.step::<S, MONITOR, V>(solver, slots);
+                    sink(i, frame, self);
                 }
             });
             done += run;
         }
     }
 
-    /// Advance `out.len()` samples writing only the output signal.
+    /// Advance `out.len()` samples writing only the output signal, and with `sides` what the
+    /// body's modes on the left and on the right radiated ([`heard_sides`](Self::heard_sides);
+    /// slices as long as `out`).
     pub fn process_output<S: ContactSolver, C: ControlSource<SlideControls>>(
         &mut self,
         solver: &mut S,
         controls: &mut C,
         out: &mut [f64],
+        sides: Option<[&mut [f64]; 2]>,
     ) {
-        self.run::<S, C, false>(solver, controls, out.len(), |i, f| out[i] = f.output);
+        match sides {
+            None => self.run::<S, C, false>(solver, controls, out.len(), |i, f, _| out[i] = f.output),
+            Some([left, right]) => self.run::<S, C, false>(solver, controls, out.len(), |i, f, core| {
+                out[i] = f.output;
+                [left[i], right[i]] = core.heard_sides();
+            }),
+        }
     }
 }
