@@ -45,7 +45,7 @@
 //! | `sbody` | Guitar | Electric, Acoustic | Electric | [`Settings::slide_body`] (new notes) |
 //! | `gain` | Output gain | -36..=12 dB | 0 dB | [`Settings::gain`] (linear) |
 //! | `limit` | Safety limiter | on/off | on | [`Settings::limiter`] |
-//! | `width` | Stereo width | -100..=100 % | 60 % | [`Settings::stereo_width`] (×0.01; the piano's keys panned along the bridge) |
+//! | `width` | Stereo width | -100..=100 % | 60 % | [`Settings::stereo_width`] (×0.01; the piano's keys panned along the bridge, the acoustic guitar body's higher modes left and right) |
 
 use std::sync::Arc;
 

@@ -205,8 +205,10 @@ fn the_acoustic_guitar_spreads_its_higher_modes_across_the_picture_and_keeps_its
     };
     let centred = slide_note_heard(SlideBody::Acoustic, 50, 0.0, None);
     assert!(centred[0] == centred[1], "width 0 is mono");
-    let (wide, mirrored) =
-        (slide_note_heard(SlideBody::Acoustic, 50, width, None), slide_note_heard(SlideBody::Acoustic, 50, -width, None));
+    let (wide, mirrored) = (
+        slide_note_heard(SlideBody::Acoustic, 50, width, None),
+        slide_note_heard(SlideBody::Acoustic, 50, -width, None),
+    );
     assert!(wide[0] == mirrored[1] && wide[1] == mirrored[0], "a negative width mirrors the picture");
     let mut changes = Vec::new();
     for key in 45..=72u8 {

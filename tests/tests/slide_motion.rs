@@ -464,7 +464,7 @@ fn a_slide_back_where_it_was_after_the_block_shrank_meets_current_vectors() {
     let e0 = core.energy() + solver.stored_energy(n, p);
     let (mut worst, mut scale) = (0.0f64, 0.0f64);
     let mut run = |core: &mut SlideCore, live: &mut Live, samples: usize| {
-        core.run::<_, _, true>(&mut solver, live, samples, |_, f| {
+        core.run::<_, _, true>(&mut solver, live, samples, |_, f, _| {
             worst = worst.max((f.balance() - e0).abs());
             scale = scale.max(f.energy.abs());
         })
@@ -494,7 +494,7 @@ fn a_slide_back_where_it_was_after_the_block_shrank_meets_current_vectors() {
     println!("balance drift {drift:e}; slide height from the carried compression {slide:e} m, force {force} N");
     assert!(drift <= 1e-10, "balance drift {drift:e}");
     let mut probe = Frame::default();
-    core.run::<_, _, true>(&mut solver, &mut live, 1, |_, f| probe = f);
+    core.run::<_, _, true>(&mut solver, &mut live, 1, |_, f, _| probe = f);
     assert!(
         (slide - probe.displacement).abs() <= 1e-12,
         "carried compression off by {:e} m",

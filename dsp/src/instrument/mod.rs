@@ -285,14 +285,10 @@ pub struct Instrument {
     /// The piano's soundboard radiating the left and right channels' bridge forces.
     boards: [Body; 2],
     /// One control block of the piano's bridge forces, left and right, and of the slide
-    /// guitars' signals: the pickup's, the acoustic body's, and the shares of it that the body's
-    /// modes on the left and on the right radiate.
-    buses: [Vec<f64>; 6],
-    /// One voice's block of those shares.
-    side_scratch: [Vec<f64>; 2],
-    /// The gains of the acoustic body's modes on the left, in the left and the right channel,
-    /// gliding to [`side_gains`] at the stereo width (the right's are the other way round).
-    sides: [f64; 2],
+    /// guitars' signals: the pickup's and the acoustic body's.
+    buses: [Vec<f64>; 4],
+    /// The acoustic body's sides and their pan.
+    sides: BodySides,
     /// The slide guitar's pickup circuit, and the resonance it is tuned to now (Hz).
     circuit: PickupCircuit,
     resonance: f64,
@@ -329,9 +325,8 @@ impl Instrument {
             scratch: vec![0.0; MAX_BLOCK],
             partners: PartnerTable::new(sample_rate, &settings),
             boards: [(); 2].map(|_| Body::new(&BodyParams::piano(), sample_rate)),
-            buses: [(); 6].map(|_| vec![0.0; MAX_BLOCK]),
-            side_scratch: [(); 2].map(|_| vec![0.0; MAX_BLOCK]),
-            sides: side_gains(settings.stereo_width),
+            buses: [(); 4].map(|_| vec![0.0; MAX_BLOCK]),
+            sides: BodySides::new(),
             circuit: PickupCircuit::new(settings.pickup_resonance, sample_rate),
             resonance: settings.pickup_resonance,
             raw: false,
@@ -649,15 +644,14 @@ impl Instrument {
             }
             let len = (self.settings.block - self.in_block).min(n - done);
             let scratch = &mut self.scratch[..len];
-            let [scratch_x, scratch_y] = &mut self.side_scratch;
-            let (scratch_x, scratch_y) = (&mut scratch_x[..len], &mut scratch_y[..len]);
-            let [bus_l, bus_r, bus_s, bus_a, bus_x, bus_y] = &mut self.buses;
+            let [bus_l, bus_r, bus_s, bus_a] = &mut self.buses;
             let (bus_l, bus_r) = (&mut bus_l[..len], &mut bus_r[..len]);
             let (bus_s, bus_a) = (&mut bus_s[..len], &mut bus_a[..len]);
-            let (bus_x, bus_y) = (&mut bus_x[..len], &mut bus_y[..len]);
-            for bus in [&mut *bus_l, &mut *bus_r, &mut *bus_s, &mut *bus_a, &mut *bus_x, &mut *bus_y] {
+            for bus in [&mut *bus_l, &mut *bus_r, &mut *bus_s, &mut *bus_a] {
                 bus.fill(0.0);
             }
+            self.sides.heard_before = self.sides.heard;
+            self.sides.heard = false;
             let width = if self.raw { 0.0 } else { self.settings.stereo_width };
             // Only the voices with live notes can sound: the others are not looked at.
             for i in self.notes.live_in(pianos.clone()) {
@@ -677,9 +671,7 @@ impl Instrument {
                 }
                 let bus = match voice.body {
                     SlideBody::Acoustic if !self.raw => {
-                        voice.render_sides(scratch, [&mut *scratch_x, &mut *scratch_y]);
-                        add(bus_x, scratch_x);
-                        add(bus_y, scratch_y);
+                        self.sides.render(voice, scratch);
                         &mut *bus_a
                     }
                     SlideBody::Acoustic => {
@@ -699,20 +691,38 @@ impl Instrument {
                 self.circuit.process(bus_s);
             }
             let (l, r) = (&mut left[done..done + len], &mut right[done..done + len]);
-            let target = side_gains(width);
-            let [mut to_left, mut to_right] = self.sides;
-            for i in 0..len {
-                to_left += (target[0] - to_left) * self.voicing_rate;
-                to_right += (target[1] - to_right) * self.voicing_rate;
-                // The body's output with each side's share moved from gain 1 to its pan gains.
-                let (x, y) = (bus_x[i], bus_y[i]);
-                let acoustic_l = bus_a[i] + (to_left - 1.0) * x + (to_right - 1.0) * y;
-                let acoustic_r = bus_a[i] + (to_right - 1.0) * x + (to_left - 1.0) * y;
-                let pickup = bus_s[i] * SLIDE_SCALE;
-                l[i] = (bus_l[i] * OUTPUT_SCALE + (pickup + acoustic_l * ACOUSTIC_SCALE)) as f32;
-                r[i] = (bus_r[i] * OUTPUT_SCALE + (pickup + acoustic_r * ACOUSTIC_SCALE)) as f32;
+            if self.sides.heard {
+                let [bus_x, bus_y] = &self.sides.buses;
+                let target = side_gains(width);
+                if !self.sides.heard_before {
+                    // Nothing was heard through the gains: they start where the width puts them.
+                    self.sides.gains = target;
+                }
+                let [mut to_left, mut to_right] = self.sides.gains;
+                for i in 0..len {
+                    to_left += (target[0] - to_left) * self.voicing_rate;
+                    to_right += (target[1] - to_right) * self.voicing_rate;
+                    // The body's output with each side's share moved from gain 1 to its pan gains.
+                    let (x, y) = (bus_x[i], bus_y[i]);
+                    let acoustic_l = bus_a[i] + (to_left - 1.0) * x + (to_right - 1.0) * y;
+                    let acoustic_r = bus_a[i] + (to_right - 1.0) * x + (to_left - 1.0) * y;
+                    let pickup = bus_s[i] * SLIDE_SCALE;
+                    l[i] = (bus_l[i] * OUTPUT_SCALE + (pickup + acoustic_l * ACOUSTIC_SCALE)) as f32;
+                    r[i] = (bus_r[i] * OUTPUT_SCALE + (pickup + acoustic_r * ACOUSTIC_SCALE)) as f32;
+                }
+                self.sides.gains = [to_left, to_right];
+            } else {
+                for (((l, r), (pl, pr)), (s, a)) in l
+                    .iter_mut()
+                    .zip(r.iter_mut())
+                    .zip(bus_l.iter().zip(bus_r.iter()))
+                    .zip(bus_s.iter().zip(bus_a.iter()))
+                {
+                    let slide = s * SLIDE_SCALE + a * ACOUSTIC_SCALE;
+                    *l = (pl * OUTPUT_SCALE + slide) as f32;
+                    *r = (pr * OUTPUT_SCALE + slide) as f32;
+                }
             }
-            self.sides = [to_left, to_right];
             self.output.process(l, r, self.settings.limiter);
             done += len;
             self.now += len as u64;
@@ -810,6 +820,50 @@ pub fn side_gains(width: f64) -> [f64; 2] {
 /// Add `x` to `bus`.
 fn add(bus: &mut [f64], x: &[f64]) {
     bus.iter_mut().zip(x).for_each(|(b, x)| *b += x);
+}
+
+/// The acoustic guitar body's sides (docs/physics.md §13.6): the shares of the body's output that
+/// its modes on the left and on the right radiate, summed over the voices for one control block,
+/// and the gains that pan them.
+#[derive(Debug, Clone)]
+struct BodySides {
+    /// One voice's block of the two shares, and their sums over the voices.
+    scratch: [Vec<f64>; 2],
+    buses: [Vec<f64>; 2],
+    /// Whether a voice has put its shares on the buses in this block, and in the block before.
+    heard: bool,
+    heard_before: bool,
+    /// The gains of the modes on the left in the left and the right channel, gliding to
+    /// [`side_gains`] at the stereo width (the right's are the other way round).
+    gains: [f64; 2],
+}
+
+impl BodySides {
+    fn new() -> Self {
+        let block = || vec![0.0; MAX_BLOCK];
+        Self {
+            scratch: [block(), block()],
+            buses: [block(), block()],
+            heard: false,
+            heard_before: false,
+            gains: [1.0; 2],
+        }
+    }
+
+    /// Render `voice` into `out` and add its shares to the buses (the first voice of a block
+    /// clears them).
+    fn render(&mut self, voice: &mut SlideVoice, out: &mut [f64]) {
+        let len = out.len();
+        if !self.heard {
+            self.buses.iter_mut().for_each(|b| b[..len].fill(0.0));
+            self.heard = true;
+        }
+        let [x, y] = &mut self.scratch;
+        voice.render_sides(out, [&mut x[..len], &mut y[..len]]);
+        for (bus, share) in self.buses.iter_mut().zip(&self.scratch) {
+            add(&mut bus[..len], &share[..len]);
+        }
+    }
 }
 
 /// Add `x · g · p_L` and `x · g · p_R` to the buses, with the voicing gain `g` (from `voiced`)

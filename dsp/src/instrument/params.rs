@@ -503,7 +503,7 @@ pub const PARAMETERS: [ParamSpec; 32] = [
         name: "Stereo width",
         group: Group::Output,
         kind: float(-100.0, 100.0, 60.0, " %", Scale::Linear, ValueDisplay::Rounded(0)),
-        maps_to: "[`Settings::stereo_width`] (×0.01; the piano's keys panned along the bridge)",
+        maps_to: "[`Settings::stereo_width`] (×0.01; the piano's keys panned along the bridge, the acoustic guitar body's higher modes left and right)",
         get: |v| v.stereo_width,
         put: |v, x| v.stereo_width = x,
     },

@@ -90,9 +90,10 @@ pub struct Settings {
     pub gain: f64,
     /// Whether the safety limiter holds the output at or below its ceiling (0 dBFS).
     pub limiter: bool,
-    /// Stereo width of the piano, −1..=1: each key is panned by its place along the bridge, the
-    /// lowest key to the left and the highest to the right at 1 (the pianist's view), mirrored
-    /// below 0 (the audience's), all keys centred at 0.
+    /// Stereo width, −1..=1: each piano key is panned by its place along the bridge, the lowest
+    /// key to the left and the highest to the right at 1 (the pianist's view), mirrored below 0
+    /// (the audience's), all keys centred at 0; the acoustic guitar body's higher modes are
+    /// panned alternately left and right as far (docs/physics.md §13.6).
     pub stereo_width: f64,
     /// Slide position in semitones above the open string, 0..=24 (when not following the key).
     pub slide_position: f64,

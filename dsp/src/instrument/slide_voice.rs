@@ -710,7 +710,12 @@ mod tests {
 
     /// A voice plucked and rendered for `blocks` blocks of the default 64 samples.
     fn plucked(blocks: usize) -> (SlideVoice, Settings) {
-        let settings = Settings { mode: crate::instrument::Mode::Slide, ..Settings::default() };
+        plucked_on(SlideBody::Pickup, blocks)
+    }
+
+    /// [`plucked`] on the guitar `body`.
+    fn plucked_on(body: SlideBody, blocks: usize) -> (SlideVoice, Settings) {
+        let settings = Settings { mode: crate::instrument::Mode::Slide, slide_body: body, ..Settings::default() };
         let mut voice = SlideVoice::new(FS, &settings);
         voice.play(Strike { channel: 0, key: 52, velocity: 0.8 }, &settings, false, 0);
         let mut out = [0.0; 64];
@@ -778,6 +783,41 @@ mod tests {
         println!("silenced after {blocks} one-sample blocks");
         assert!(!voice.sounding, "still sounding after {blocks} blocks");
         assert!(blocks <= ENERGY_INTERVAL + 1, "{blocks} blocks");
+        assert_eq!(voice.guard_trips(), 1);
+    }
+
+    /// On the acoustic body the shares of the output from the modes on either side are rendered
+    /// with it, and the guard treats them as the output: a voice over its bound fades all three
+    /// by the same gain at each sample, and a non-finite state silences all three at once.
+    #[test]
+    fn the_sides_of_the_acoustic_body_fade_and_fall_silent_with_the_voice() {
+        let render = |voice: &mut SlideVoice, settings: &Settings| {
+            let (mut out, mut left, mut right) = ([0.0; 64], [0.0; 64], [0.0; 64]);
+            voice.begin_block(settings, &ChannelState::default(), 64);
+            voice.render_sides(&mut out, [&mut left, &mut right]);
+            [out, left, right]
+        };
+        let (mut voice, settings) = plucked_on(SlideBody::Acoustic, 20);
+        let plain = render(&mut voice.clone(), &settings);
+        for (i, share) in plain.iter().enumerate() {
+            assert!(share.iter().all(|x| x.is_finite()) && share.iter().any(|&x| x != 0.0), "signal {i}");
+        }
+        let mut tripped = voice.clone();
+        tripped.energy_at_pluck = voice.energy() * 1e-7 / GUARD_FACTOR;
+        tripped.reference_energy = 0.0;
+        tripped.work_at_pluck = voice.core.control_work() + 1.0;
+        let faded = render(&mut tripped, &settings);
+        for (f, p) in faded.iter().zip(&plain) {
+            for (i, (f, p)) in f.iter().zip(p).enumerate() {
+                assert_eq!(*f, p * (1.0 - i as f64 / 64.0), "sample {i}");
+            }
+        }
+        let m = voice.core.string().modes();
+        let bad = vec![f64::NAN; m];
+        voice.core.string_mut().set_state(&bad, &bad);
+        let silenced = render(&mut voice, &settings);
+        assert!(silenced.iter().flatten().all(|&x| x == 0.0));
+        assert!(!voice.sounding);
         assert_eq!(voice.guard_trips(), 1);
     }
 

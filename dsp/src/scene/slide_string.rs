@@ -1299,11 +1299,11 @@ impl SlideCore {
         } else {
             (body.bank.advance_projecting(forces, &body.sole, []).0, StringEnergy::default())
         };
-        let heard_next = body.bank.project_state(&body.radiation).1;
+        let [heard_next, sides_next @ ..] =
+            body.bank.project_now_each([&body.radiation, &body.sides[0], &body.sides[1]]);
         let heard = (heard_next - 2.0 * body.heard.1 + body.heard.0) / (dt * dt);
-        for (side, (weights, sum)) in body.sides.iter().zip(&mut body.heard_sides).enumerate() {
-            let next = body.bank.project_state(weights).1;
-            body.sides_now[side] = (next - 2.0 * sum.1 + sum.0) / (dt * dt);
+        for ((now, sum), next) in body.sides_now.iter_mut().zip(&mut body.heard_sides).zip(sides_next) {
+            *now = (next - 2.0 * sum.1 + sum.0) / (dt * dt);
             *sum = (sum.1, next);
         }
         if MONITOR {
