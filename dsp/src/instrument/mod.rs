@@ -650,8 +650,7 @@ impl Instrument {
             for bus in [&mut *bus_l, &mut *bus_r, &mut *bus_s, &mut *bus_a] {
                 bus.fill(0.0);
             }
-            self.sides.heard_before = self.sides.heard;
-            self.sides.heard = false;
+            self.sides.begin();
             let width = if self.raw { 0.0 } else { self.settings.stereo_width };
             // Only the voices with live notes can sound: the others are not looked at.
             for i in self.notes.live_in(pianos.clone()) {
@@ -691,38 +690,14 @@ impl Instrument {
                 self.circuit.process(bus_s);
             }
             let (l, r) = (&mut left[done..done + len], &mut right[done..done + len]);
-            if self.sides.heard {
-                let [bus_x, bus_y] = &self.sides.buses;
-                let target = side_gains(width);
-                if !self.sides.heard_before {
-                    // Nothing was heard through the gains: they start where the width puts them.
-                    self.sides.gains = target;
-                }
-                let [mut to_left, mut to_right] = self.sides.gains;
-                for i in 0..len {
-                    to_left += (target[0] - to_left) * self.voicing_rate;
-                    to_right += (target[1] - to_right) * self.voicing_rate;
-                    // The body's output with each side's share moved from gain 1 to its pan gains.
-                    let (x, y) = (bus_x[i], bus_y[i]);
-                    let acoustic_l = bus_a[i] + (to_left - 1.0) * x + (to_right - 1.0) * y;
-                    let acoustic_r = bus_a[i] + (to_right - 1.0) * x + (to_left - 1.0) * y;
-                    let pickup = bus_s[i] * SLIDE_SCALE;
-                    l[i] = (bus_l[i] * OUTPUT_SCALE + (pickup + acoustic_l * ACOUSTIC_SCALE)) as f32;
-                    r[i] = (bus_r[i] * OUTPUT_SCALE + (pickup + acoustic_r * ACOUSTIC_SCALE)) as f32;
-                }
-                self.sides.gains = [to_left, to_right];
-            } else {
-                for (((l, r), (pl, pr)), (s, a)) in l
-                    .iter_mut()
-                    .zip(r.iter_mut())
-                    .zip(bus_l.iter().zip(bus_r.iter()))
-                    .zip(bus_s.iter().zip(bus_a.iter()))
-                {
-                    let slide = s * SLIDE_SCALE + a * ACOUSTIC_SCALE;
-                    *l = (pl * OUTPUT_SCALE + slide) as f32;
-                    *r = (pr * OUTPUT_SCALE + slide) as f32;
-                }
+            for (((l, r), (pl, pr)), (s, a)) in
+                l.iter_mut().zip(r.iter_mut()).zip(bus_l.iter().zip(bus_r.iter())).zip(bus_s.iter().zip(bus_a.iter()))
+            {
+                let slide = s * SLIDE_SCALE + a * ACOUSTIC_SCALE;
+                *l = (pl * OUTPUT_SCALE + slide) as f32;
+                *r = (pr * OUTPUT_SCALE + slide) as f32;
             }
+            self.sides.pan(l, r, width, self.voicing_rate);
             self.output.process(l, r, self.settings.limiter);
             done += len;
             self.now += len as u64;
@@ -850,6 +825,12 @@ impl BodySides {
         }
     }
 
+    /// Start a block: no voice has put its shares on the buses yet.
+    fn begin(&mut self) {
+        self.heard_before = self.heard;
+        self.heard = false;
+    }
+
     /// Render `voice` into `out` and add its shares to the buses (the first voice of a block
     /// clears them).
     fn render(&mut self, voice: &mut SlideVoice, out: &mut [f64]) {
@@ -863,6 +844,29 @@ impl BodySides {
         for (bus, share) in self.buses.iter_mut().zip(&self.scratch) {
             add(&mut bus[..len], &share[..len]);
         }
+    }
+
+    /// Pan the block's shares in `left` and `right`, which hold the body's output centred: each
+    /// share moves from gain 1 in both channels to its gains at stereo `width`, gliding there by
+    /// `rate` of the way each sample. Nothing to do when no voice put its shares on the buses.
+    fn pan(&mut self, left: &mut [f32], right: &mut [f32], width: f64, rate: f64) {
+        if !self.heard {
+            return;
+        }
+        let target = side_gains(width);
+        if !self.heard_before {
+            // Nothing was heard through the gains: they start where the width puts them.
+            self.gains = target;
+        }
+        let [mut to_left, mut to_right] = self.gains;
+        let [x, y] = &self.buses;
+        for (((l, r), x), y) in left.iter_mut().zip(right.iter_mut()).zip(x).zip(y) {
+            to_left += (target[0] - to_left) * rate;
+            to_right += (target[1] - to_right) * rate;
+            *l += (((to_left - 1.0) * x + (to_right - 1.0) * y) * ACOUSTIC_SCALE) as f32;
+            *r += (((to_right - 1.0) * x + (to_left - 1.0) * y) * ACOUSTIC_SCALE) as f32;
+        }
+        self.gains = [to_left, to_right];
     }
 }
 
