@@ -372,7 +372,7 @@ param_group! {
         gain: FloatParam = "gain",
         /// Safety limiter on the output.
         limiter: BoolParam = "limit",
-        /// Stereo width of the piano (%).
+        /// Stereo width of the piano's keys and of the acoustic guitar body's modes (%).
         stereo_width: FloatParam = "width",
     }
 }
