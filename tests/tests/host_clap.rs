@@ -385,7 +385,8 @@ fn parameters_have_the_documented_ids() {
 // ------------------------------------------------------------------------------------------------
 
 /// A phrase over both modes: notes, pedal, pitch bend, mod wheel and parameter automation at
-/// fixed sample times (some landing inside a control block).
+/// fixed sample times (some landing inside a control block); the slide on the acoustic guitar,
+/// whose stereo width moves while it sounds.
 fn phrase() -> Score {
     vec![
         (0, Ev::On(0, 60, 0.7)),
@@ -399,8 +400,10 @@ fn phrase() -> Score {
         (9_000, param("mode", 1.0)),
         (9_000, param("follow", 0.0)),
         (9_000, param("slide", slide_value(3.0))),
+        (9_000, param("sbody", 1.0)),
         (9_500, Ev::On(1, 50, 0.8)),
         (11_111, Ev::Midi([0xE1, 0, 80])),
+        (11_500, param("width", 0.1)),
         (12_000, param("slide", slide_value(5.5))),
         (13_000, Ev::Midi([0xB1, 1, 70])),
         (14_000, Ev::Off(1, 50)),
