@@ -253,11 +253,6 @@ impl ModalBank {
         (kernel::dot(self.isa, &self.u_prev, v), kernel::dot(self.isa, &self.u_now, v))
     }
 
-    /// `vᵀu^n`: [`project_state`](Self::project_state)'s second sum alone, bit for bit.
-    pub fn project_now(&self, v: &[f64]) -> f64 {
-        kernel::dot(self.isa, &self.u_now, v)
-    }
-
     /// `v_kᵀu^n` for each of `vectors`, in one pass over the modes.
     pub fn project_now_each<const K: usize>(&self, vectors: [&[f64]; K]) -> [f64; K] {
         kernel::projections(self.isa, &self.u_now, vectors)
