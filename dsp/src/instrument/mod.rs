@@ -709,8 +709,9 @@ impl Instrument {
     }
 
     /// Output the dry signals (`true`): each piano key's bridge force and each slide voice's
-    /// string velocity at the pickup, centred, without the soundboard's radiation, the stereo
-    /// pan or the pickup's circuit; what research renders compare against the scenes.
+    /// string velocity at the pickup (on the acoustic guitar, what its body radiates, which its
+    /// string is coupled to), centred, without the soundboard's radiation, the stereo pan or the
+    /// pickup's circuit; what research renders compare against the scenes.
     pub fn set_raw_output(&mut self, raw: bool) {
         self.raw = raw;
     }
