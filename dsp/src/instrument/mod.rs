@@ -668,19 +668,14 @@ impl Instrument {
                 if !voice.sounding {
                     continue;
                 }
+                if voice.body == SlideBody::Acoustic && !self.raw {
+                    self.sides.render(voice, scratch);
+                } else {
+                    voice.render(scratch);
+                }
                 let bus = match voice.body {
-                    SlideBody::Acoustic if !self.raw => {
-                        self.sides.render(voice, scratch);
-                        &mut *bus_a
-                    }
-                    SlideBody::Acoustic => {
-                        voice.render(scratch);
-                        &mut *bus_a
-                    }
-                    SlideBody::Pickup => {
-                        voice.render(scratch);
-                        &mut *bus_s
-                    }
+                    SlideBody::Pickup => &mut *bus_s,
+                    SlideBody::Acoustic => &mut *bus_a,
                 };
                 add(bus, scratch);
             }

@@ -726,6 +726,19 @@ mod tests {
         (voice, settings)
     }
 
+    /// Put `voice` far over its energy bound: a bound made a million times too small.
+    fn over_its_bound(voice: &mut SlideVoice) {
+        voice.energy_at_pluck = voice.energy() * 1e-7 / GUARD_FACTOR;
+        voice.reference_energy = 0.0;
+        voice.work_at_pluck = voice.core.control_work() + 1.0;
+    }
+
+    /// Give `voice`'s string a non-finite state.
+    fn corrupt(voice: &mut SlideVoice) {
+        let bad = vec![f64::NAN; voice.core.string().modes()];
+        voice.core.string_mut().set_state(&bad, &bad);
+    }
+
     /// A healthy voice stays well inside its bound: its energy after the pluck is far below
     /// [`GUARD_FACTOR`] times the pluck's energy plus the controls' work (in fact below the bound
     /// itself, as the balance says: measured 0.036 of it after 100 blocks).
@@ -750,9 +763,7 @@ mod tests {
         let mut twin = voice.clone();
         twin.begin_block(&settings, &ChannelState::default(), 64);
         twin.render(&mut plain);
-        voice.energy_at_pluck = voice.energy() * 1e-7 / GUARD_FACTOR;
-        voice.reference_energy = 0.0;
-        voice.work_at_pluck = voice.core.control_work() + 1.0;
+        over_its_bound(&mut voice);
         voice.begin_block(&settings, &ChannelState::default(), 64);
         voice.render(&mut faded);
         for (i, (f, p)) in faded.iter().zip(&plain).enumerate() {
@@ -770,9 +781,7 @@ mod tests {
     #[test]
     fn the_guard_weighs_one_sample_blocks_every_energy_interval() {
         let (mut voice, settings) = plucked(20);
-        voice.energy_at_pluck = voice.energy() * 1e-7 / GUARD_FACTOR;
-        voice.reference_energy = 0.0;
-        voice.work_at_pluck = voice.core.control_work() + 1.0;
+        over_its_bound(&mut voice);
         let mut out = [0.0; 1];
         let mut blocks = 0;
         while voice.sounding && blocks < 2 * ENERGY_INTERVAL {
@@ -803,18 +812,14 @@ mod tests {
             assert!(share.iter().all(|x| x.is_finite()) && share.iter().any(|&x| x != 0.0), "signal {i}");
         }
         let mut tripped = voice.clone();
-        tripped.energy_at_pluck = voice.energy() * 1e-7 / GUARD_FACTOR;
-        tripped.reference_energy = 0.0;
-        tripped.work_at_pluck = voice.core.control_work() + 1.0;
+        over_its_bound(&mut tripped);
         let faded = render(&mut tripped, &settings);
         for (f, p) in faded.iter().zip(&plain) {
             for (i, (f, p)) in f.iter().zip(p).enumerate() {
                 assert_eq!(*f, p * (1.0 - i as f64 / 64.0), "sample {i}");
             }
         }
-        let m = voice.core.string().modes();
-        let bad = vec![f64::NAN; m];
-        voice.core.string_mut().set_state(&bad, &bad);
+        corrupt(&mut voice);
         let silenced = render(&mut voice, &settings);
         assert!(silenced.iter().flatten().all(|&x| x == 0.0));
         assert!(!voice.sounding);
@@ -826,9 +831,7 @@ mod tests {
     #[test]
     fn a_non_finite_state_is_silenced_at_once() {
         let (mut voice, _) = plucked(20);
-        let m = voice.core.string().modes();
-        let bad = vec![f64::NAN; m];
-        voice.core.string_mut().set_state(&bad, &bad);
+        corrupt(&mut voice);
         let mut out = [1.0; 64];
         voice.render(&mut out);
         assert!(out.iter().all(|&x| x == 0.0));
