@@ -377,12 +377,14 @@ fn the_presets_command_lists_id_category_and_description() {
     }
 }
 
-/// `cargo xtask examples` writes, per category, a mono 16-bit WAV at 32 kHz under 300 kB peaking
-/// at −1 dBFS and its spectrogram PNG, and a README linking them all; a second run gives the same
-/// bytes (deterministic).
+/// `cargo xtask examples` writes, per showcase (every category's, the slide's electric and
+/// acoustic guitar), a stereo 16-bit WAV at 32 kHz under 500 kB peaking at −1 dBFS and its
+/// spectrogram PNG, and a README linking them all; a second run gives the same bytes
+/// (deterministic). The examples are heard as the plugin plays them: the electric guitar's pickup
+/// in the centre (the channels the same), the acoustic guitar's body across the picture (its
+/// channels correlated at most 0.9, as its D3 in the stereo test of `slide_body.rs`).
 #[test]
-fn the_examples_command_writes_a_wav_and_spectrogram_per_category() {
-    use qsa_dsp::instrument::CATEGORIES;
+fn the_examples_command_writes_a_stereo_wav_and_spectrogram_per_showcase() {
     use xtask::examples::SHOWCASES;
 
     let runs: Vec<tempfile::TempDir> = (0..2).map(|_| tempfile::tempdir().unwrap()).collect();
@@ -391,7 +393,7 @@ fn the_examples_command_writes_a_wav_and_spectrogram_per_category() {
         let args = ["examples", "--out", dir.path().to_str().unwrap(), "--scenes", scenes.to_str().unwrap()];
         let (code, out, err) = xtask(&args);
         assert_eq!(code, 0, "{err}");
-        assert_eq!(out.lines().count(), CATEGORIES.len(), "{out}");
+        assert_eq!(out.lines().count(), SHOWCASES.len(), "{out}");
     }
     let readme = std::fs::read_to_string(runs[0].path().join("README.md")).unwrap();
     for s in SHOWCASES {
@@ -400,12 +402,25 @@ fn the_examples_command_writes_a_wav_and_spectrogram_per_category() {
         let size = std::fs::metadata(&wav).unwrap().len();
         let mut reader = hound::WavReader::open(&wav).unwrap();
         let spec = reader.spec();
-        assert_eq!((spec.channels, spec.bits_per_sample, spec.sample_rate), (1, 16, 32_000), "{}", s.preset);
+        assert_eq!((spec.channels, spec.bits_per_sample, spec.sample_rate), (2, 16, 32_000), "{}", s.preset);
         let samples: Vec<i16> = reader.samples::<i16>().map(Result::unwrap).collect();
-        let peak = samples.iter().map(|v| f64::from(v.unsigned_abs())).fold(0.0, f64::max) / 32767.0;
-        println!("{}: {size} bytes, {:.2} s, peak {:.2} dBFS", s.preset, samples.len() as f64 / 32e3, db(peak));
-        assert!(size < 300_000, "{}: {size} bytes", s.preset);
+        let (left, right): (Vec<f64>, Vec<f64>) =
+            samples.chunks_exact(2).map(|f| (f64::from(f[0]) / 32767.0, f64::from(f[1]) / 32767.0)).unzip();
+        let peak = left.iter().chain(&right).map(|v| v.abs()).fold(0.0, f64::max);
+        let correlation = xtask::examples::correlation(&left, &right);
+        println!(
+            "{}: {size} bytes, {:.2} s, peak {:.2} dBFS, channels correlated {correlation:.3}",
+            s.preset,
+            left.len() as f64 / 32e3,
+            db(peak)
+        );
+        assert!(size < 500_000, "{}: {size} bytes", s.preset);
         assert!((db(peak) + 1.0).abs() < 0.01, "{}: peak {:.3} dBFS", s.preset, db(peak));
+        match s.preset {
+            "lap-steel" => assert_eq!(left, right, "the electric guitar is heard in the centre"),
+            "acoustic-slide" => assert!(correlation <= 0.9, "the acoustic guitar's channels correlate {correlation}"),
+            _ => {}
+        }
         let image = std::fs::read(&png).unwrap();
         assert_eq!(&image[..8], b"\x89PNG\r\n\x1a\n", "{}: a PNG", s.preset);
         assert!(readme.contains(&format!("]({}.wav)", s.preset)) && readme.contains(&format!("]({}.png)", s.preset)));

@@ -12,6 +12,7 @@ use qsa_dsp::scene::{Frame, Scene, SlideString};
 use qsa_dsp::scene_file::SlideAutomation;
 use qsa_dsp::string::ModalString;
 use qsa_tests::seeded_rng;
+use xtask::examples::correlation;
 use xtask::loudness::{integrated_lufs, integrated_lufs_stereo};
 use xtask::realism::{slide_note, slide_note_heard};
 use xtask::report::gestures::{self, Trajectory};
@@ -199,10 +200,6 @@ fn the_acoustic_guitar_is_voiced_as_the_electric_and_its_body_colours_every_note
 #[test]
 fn the_acoustic_guitar_spreads_its_higher_modes_across_the_picture_and_keeps_its_loudness() {
     let width = 0.6;
-    let correlation = |[l, r]: &[Vec<f32>; 2]| {
-        let dot = |a: &[f32], b: &[f32]| a.iter().zip(b).map(|(x, y)| f64::from(*x) * f64::from(*y)).sum::<f64>();
-        dot(l, r) / (dot(l, l) * dot(r, r)).sqrt()
-    };
     let centred = slide_note_heard(SlideBody::Acoustic, 50, 0.0, None);
     assert!(centred[0] == centred[1], "width 0 is mono");
     let (wide, mirrored) = (
@@ -215,7 +212,7 @@ fn the_acoustic_guitar_spreads_its_higher_modes_across_the_picture_and_keeps_its
         let heard = slide_note_heard(SlideBody::Acoustic, key, width, None);
         let change = integrated_lufs_stereo(&heard[0], &heard[1], REALISM_FS)
             - integrated_lufs(&slide_note(SlideBody::Acoustic, key, None), REALISM_FS);
-        let rho = correlation(&heard);
+        let rho = correlation(&heard[0], &heard[1]);
         println!("key {key}: {change:+.2} LU against centred, channels correlate {rho:.3}");
         assert!(change.abs() <= 2.0, "key {key}: {change:+.2} LU");
         match key {

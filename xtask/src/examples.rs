@@ -1,13 +1,15 @@
-//! `cargo xtask examples [--out DIR] [--scenes DIR]`: one short audio example per preset category,
-//! with its spectrogram, for the documentation (`docs/examples/`).
+//! `cargo xtask examples [--out DIR] [--scenes DIR]`: short audio examples of the preset
+//! categories, with their spectrograms, for the documentation (`docs/examples/`).
 //!
-//! Each category has a showcase preset ([`SHOWCASES`]) played on one of the phrases in `scenes/`
-//! through the MIDI renderer ([`crate::render::midi`]: the plugin's engine and parameter mapping).
-//! For each it writes
-//! - `<preset>.wav`: the first seconds of the render, mono, 16-bit, [`RATE`] Hz, peak-normalised to
-//!   −1 dBFS, the last 50 ms faded out (about 220 kB);
-//! - `<preset>.png`: its spectrogram, time against log frequency, dB relative to its peak;
-//! - `README.md`: a table linking them, with each render's own peak level and spectral centroid.
+//! Each category has a showcase preset ([`SHOWCASES`]; the slide two, the electric and the
+//! acoustic guitar) played on one of the phrases in `scenes/` through the MIDI renderer
+//! ([`crate::render::midi`]: the plugin's engine and parameter mapping). For each it writes
+//! - `<preset>.wav`: the first seconds of the render in stereo, as the plugin plays it, 16-bit,
+//!   [`RATE`] Hz, peak-normalised to −1 dBFS, the last 50 ms faded out (about 440 kB);
+//! - `<preset>.png`: the spectrogram of its mid signal `(L + R)/2`, time against log frequency, dB
+//!   relative to its peak;
+//! - `README.md`: a table linking them, with each render's own peak level, the mid signal's
+//!   spectral centroid and the correlation of the two channels (1 for a centred sound).
 //!
 //! Everything is deterministic: the same sources give the same files. Files are written to
 //! temporary files and renamed into place.
@@ -47,11 +49,13 @@ pub struct Showcase {
     pub seconds: f64,
 }
 
-/// One showcase per category, in [`CATEGORIES`] order.
-pub const SHOWCASES: [Showcase; 4] = [
+/// The showcases: every category's, in [`CATEGORIES`] order (the slide's electric and acoustic
+/// guitar).
+pub const SHOWCASES: [Showcase; 5] = [
     Showcase { category: "Paper", preset: "slide-phrase", midi: "slide-phrase.mid", seconds: 3.4 },
     Showcase { category: "Piano", preset: "concert-grand", midi: "piano-phrase.mid", seconds: 3.4 },
     Showcase { category: "Slide", preset: "lap-steel", midi: "slide-phrase.mid", seconds: 3.4 },
+    Showcase { category: "Slide", preset: "acoustic-slide", midi: "slide-phrase.mid", seconds: 3.4 },
     Showcase { category: "Contact", preset: "steel-hammer", midi: "piano-phrase.mid", seconds: 3.4 },
 ];
 
@@ -95,14 +99,32 @@ pub struct Example {
     pub preset: &'static Preset,
     /// The render's own peak before normalising (dBFS).
     pub peak_dbfs: f64,
-    /// Spectral centroid of the example (Hz).
+    /// Spectral centroid of the example's mid signal (Hz).
     pub centroid: f64,
-    /// The normalised mono signal written to the WAV (before 16-bit rounding).
-    pub signal: Vec<f64>,
+    /// Correlation coefficient of the two channels (1: the same signal in both).
+    pub correlation: f64,
+    /// The normalised left and right channels written to the WAV (before 16-bit rounding).
+    pub channels: [Vec<f64>; 2],
 }
 
-/// Render the showcase `s` from the phrases in `scenes`: the mono signal at [`RATE`], normalised
-/// and faded.
+impl Example {
+    /// The mid signal `(L + R)/2`.
+    pub fn mid(&self) -> Vec<f64> {
+        let [left, right] = &self.channels;
+        left.iter().zip(right).map(|(l, r)| 0.5 * (l + r)).collect()
+    }
+}
+
+/// Correlation coefficient `Σlr/√(Σl²·Σr²)` of two channels (1 when either is silent), summed in
+/// `f64`.
+pub fn correlation<T: Copy + Into<f64>>(left: &[T], right: &[T]) -> f64 {
+    let dot = |x: &[T], y: &[T]| x.iter().zip(y).map(|(&a, &b)| a.into() * b.into()).sum::<f64>();
+    let power = dot(left, left) * dot(right, right);
+    if power > 0.0 { dot(left, right) / power.sqrt() } else { 1.0 }
+}
+
+/// Render the showcase `s` from the phrases in `scenes`: the two channels at [`RATE`], normalised
+/// together and faded.
 pub fn render_showcase(s: &Showcase, scenes: &Path) -> Result<Example, ExamplesError> {
     let preset = find_preset(s.preset)
         .ok_or_else(|| ExamplesError::Setup(format!("showcase of {}: no preset {}", s.category, s.preset)))?;
@@ -114,26 +136,36 @@ pub fn render_showcase(s: &Showcase, scenes: &Path) -> Result<Example, ExamplesE
     let samples = (s.seconds * fs).round() as usize;
     let last = score.events.last().map_or(0, |e| e.0) as f64 / fs;
     let (left, right, _) = midi::render(&score, &preset.values, fs, (s.seconds - last).max(0.0), 512);
-    let mut signal: Vec<f64> =
-        left.iter().zip(&right).take(samples).map(|(l, r)| 0.5 * (f64::from(*l) + f64::from(*r))).collect();
-    signal.resize(samples, 0.0);
-    if let Some(bad) = signal.iter().position(|v| !v.is_finite()) {
+    let mut channels = [left, right].map(|c| {
+        let mut c: Vec<f64> = c.iter().take(samples).map(|&v| f64::from(v)).collect();
+        c.resize(samples, 0.0);
+        c
+    });
+    if let Some(bad) = channels.iter().find_map(|c| c.iter().position(|v| !v.is_finite())) {
         return Err(ExamplesError::Setup(format!("{}: non-finite sample at {bad}", s.preset)));
     }
-    let peak = signal.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let peak = channels.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     if peak == 0.0 {
         return Err(ExamplesError::Setup(format!("{}: the render is silent", s.preset)));
     }
     let scale = 10f64.powf(PEAK_DBFS / 20.0) / peak;
     let fade = (FADE * fs) as usize;
-    for (i, v) in signal.iter_mut().enumerate() {
-        let to_end = samples - i;
-        let ramp =
-            if to_end < fade { 0.5 - 0.5 * (std::f64::consts::PI * to_end as f64 / fade as f64).cos() } else { 1.0 };
-        *v *= scale * ramp;
+    for channel in &mut channels {
+        for (i, v) in channel.iter_mut().enumerate() {
+            let to_end = samples - i;
+            let ramp = if to_end < fade {
+                0.5 - 0.5 * (std::f64::consts::PI * to_end as f64 / fade as f64).cos()
+            } else {
+                1.0
+            };
+            *v *= scale * ramp;
+        }
     }
-    let centroid = spectral_centroid(&signal, fs);
-    Ok(Example { showcase: *s, preset, peak_dbfs: 20.0 * peak.log10(), centroid, signal })
+    let correlation = correlation(&channels[0], &channels[1]);
+    let mut example =
+        Example { showcase: *s, preset, peak_dbfs: 20.0 * peak.log10(), centroid: 0.0, correlation, channels };
+    example.centroid = spectral_centroid(&example.mid(), fs);
+    Ok(example)
 }
 
 /// Energy-weighted mean frequency of `x` (Hz).
@@ -162,20 +194,22 @@ pub fn run(args: &ExamplesArgs, out: &mut dyn Write) -> Result<Vec<Example>, Exa
         let example = render_showcase(s, &args.scenes)?;
         let wav = args.out.join(format!("{}.wav", s.preset));
         let png = args.out.join(format!("{}.png", s.preset));
-        write_atomically(&wav, |file| write_wav(file, &example.signal))?;
-        let title = format!("{} ({}): {}", example.preset.name, s.category, s.midi);
+        let [left, right] = &example.channels;
+        write_atomically(&wav, |file| write_wav(file, &[left, right]))?;
+        let title = format!("{} ({}): {}, mid", example.preset.name, s.category, s.midi);
         let temp = temp_beside(&png)?;
-        spectrogram_png(temp.path(), &example.signal, f64::from(RATE), &title)
+        spectrogram_png(temp.path(), &example.mid(), f64::from(RATE), &title)
             .map_err(|message| ExamplesError::Io { path: png.clone(), message })?;
         persist(temp, &png)?;
         writeln!(
             out,
-            "{}: {} and {} (render peak {:.1} dBFS, centroid {:.0} Hz)",
+            "{}: {} and {} (render peak {:.1} dBFS, centroid {:.0} Hz, channels correlated {:.2})",
             s.category,
             wav.display(),
             png.display(),
             example.peak_dbfs,
-            example.centroid
+            example.centroid,
+            example.correlation
         )
         .map_err(io(Path::new("<stdout>")))?;
         made.push(example);
@@ -190,23 +224,29 @@ pub fn run(args: &ExamplesArgs, out: &mut dyn Write) -> Result<Vec<Example>, Exa
 pub fn readme_text(examples: &[Example]) -> String {
     let mut text = String::from(
         "# Audio examples\n\n\
-         One example per preset category, made by `cargo xtask examples` (do not edit by hand: run it\n\
-         again). Each is the showcase preset playing the start of a phrase from `scenes/` through the\n\
-         MIDI renderer, the plugin's own engine and parameter mapping (`cargo xtask render --midi\n\
-         scenes/FILE --preset ID` renders the whole phrase).\n\n",
+         An example per preset category, two for the slide (the electric and the acoustic guitar),\n\
+         made by `cargo xtask examples` (do not edit by hand: run it again). Each is the showcase\n\
+         preset playing the start of a phrase from `scenes/` through the MIDI renderer, the plugin's\n\
+         own engine and parameter mapping (`cargo xtask render --midi scenes/FILE --preset ID` renders\n\
+         the whole phrase).\n\n",
     );
     text += &format!(
-        "The WAVs are mono, 16-bit, {} kHz, peak-normalised to {PEAK_DBFS} dBFS (the render's own peak is\n\
-         listed), with a 50 ms fade-out. The spectrograms show time against log frequency, in dB below\n\
-         the example's peak (2048-point Hann windows, 80 dB range).\n\n",
+        "The WAVs are stereo, as the plugin plays them at its default stereo width (the piano's keys\n\
+         across the picture, the acoustic guitar's body in the centre and its higher modes left and\n\
+         right, the electric guitar's pickup in the centre), 16-bit, {} kHz, peak-normalised to\n\
+         {PEAK_DBFS} dBFS (the render's own peak is listed), with a 50 ms fade-out. The correlation of\n\
+         the two channels is 1 for a sound in the centre and falls as the picture widens. The\n\
+         spectrograms are of the mid signal (L + R)/2: time against log frequency, in dB below its\n\
+         peak (2048-point Hann windows, 80 dB range).\n\n",
         RATE / 1000
     );
-    text += "| category | preset | phrase | audio | spectrogram | render peak | spectral centroid |\n";
-    text += "|---|---|---|---|---|---|---|\n";
+    text +=
+        "| category | preset | phrase | audio | spectrogram | render peak | spectral centroid | L/R correlation |\n";
+    text += "|---|---|---|---|---|---|---|---|\n";
     for e in examples {
         let s = &e.showcase;
         text += &format!(
-            "| {} | {} (`{}`): {} | `scenes/{}`, first {} s | [{id}.wav]({id}.wav) | [{id}.png]({id}.png) | {:.1} dBFS | {:.0} Hz |\n",
+            "| {} | {} (`{}`): {} | `scenes/{}`, first {} s | [{id}.wav]({id}.wav) | [{id}.png]({id}.png) | {:.1} dBFS | {:.0} Hz | {:.2} |\n",
             s.category,
             e.preset.name,
             s.preset,
@@ -215,6 +255,7 @@ pub fn readme_text(examples: &[Example]) -> String {
             s.seconds,
             e.peak_dbfs,
             e.centroid,
+            e.correlation,
             id = s.preset,
         );
     }
@@ -252,16 +293,24 @@ pub(crate) fn write_atomically(
     persist(temp, path)
 }
 
-/// `signal` as a mono 16-bit WAV at [`RATE`].
-pub(crate) fn write_wav(file: &mut std::fs::File, signal: &[f64]) -> std::io::Result<()> {
-    let spec =
-        hound::WavSpec { channels: 1, sample_rate: RATE, bits_per_sample: 16, sample_format: hound::SampleFormat::Int };
-    let mut buffer = std::io::Cursor::new(Vec::with_capacity(44 + 2 * signal.len()));
+/// `channels` (one, or left and right, of one length) as a 16-bit WAV at [`RATE`].
+pub(crate) fn write_wav(file: &mut std::fs::File, channels: &[&[f64]]) -> std::io::Result<()> {
+    let count = u16::try_from(channels.len()).map_err(std::io::Error::other)?;
+    let spec = hound::WavSpec {
+        channels: count,
+        sample_rate: RATE,
+        bits_per_sample: 16,
+        sample_format: hound::SampleFormat::Int,
+    };
+    let frames = channels.iter().map(|c| c.len()).min().unwrap_or(0);
+    let mut buffer = std::io::Cursor::new(Vec::with_capacity(44 + 2 * channels.len() * frames));
     {
         let mut writer = hound::WavWriter::new(&mut buffer, spec).map_err(std::io::Error::other)?;
-        for &v in signal {
-            let sample = (v * 32767.0).round().clamp(-32768.0, 32767.0) as i16;
-            writer.write_sample(sample).map_err(std::io::Error::other)?;
+        for i in 0..frames {
+            for channel in channels {
+                let sample = (channel[i] * 32767.0).round().clamp(-32768.0, 32767.0) as i16;
+                writer.write_sample(sample).map_err(std::io::Error::other)?;
+            }
         }
         writer.finalize().map_err(std::io::Error::other)?;
     }
@@ -369,15 +418,31 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_category_has_one_showcase_of_its_own() {
-        let categories: Vec<&str> = SHOWCASES.iter().map(|s| s.category).collect();
+    fn every_category_has_a_showcase_and_each_is_a_small_file() {
+        let mut categories: Vec<&str> = SHOWCASES.iter().map(|s| s.category).collect();
+        categories.dedup();
         assert_eq!(categories, CATEGORIES);
         for s in SHOWCASES {
             let preset = find_preset(s.preset).unwrap_or_else(|| panic!("no preset {}", s.preset));
             assert_eq!(preset.category, s.category, "{} is in {}", s.preset, s.category);
-            let size = 44.0 + 2.0 * s.seconds * f64::from(RATE);
-            assert!(size < 300e3, "{}: {size} bytes", s.preset);
+            let size = 44.0 + 2.0 * 2.0 * s.seconds * f64::from(RATE);
+            assert!(size < 500e3, "{}: {size} bytes", s.preset);
         }
+    }
+
+    #[test]
+    fn channels_correlate_as_their_signals_do() {
+        // Ten whole periods in 1000 samples.
+        let w = 2.0 * std::f64::consts::PI * 10.0 / 1000.0;
+        let x: Vec<f64> = (0..1000).map(|n| (w * n as f64).sin()).collect();
+        let minus: Vec<f64> = x.iter().map(|v| -v).collect();
+        let half: Vec<f64> = x.iter().map(|v| 0.5 * v).collect();
+        let y: Vec<f64> = (0..1000).map(|n| (w * n as f64).cos()).collect();
+        assert!((correlation(&x, &half) - 1.0).abs() < 1e-12);
+        assert!((correlation(&x, &minus) + 1.0).abs() < 1e-12);
+        // Sine and cosine over whole periods are orthogonal.
+        assert!(correlation(&x, &y).abs() < 1e-12, "{}", correlation(&x, &y));
+        assert_eq!(correlation(&x, &[0.0; 1000]), 1.0);
     }
 
     #[test]

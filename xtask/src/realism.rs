@@ -729,7 +729,7 @@ fn write_at_one_gain(dir: &Path, prefix: &str, sounds: &[(&str, Vec<f64>)]) -> R
     for (name, sound) in sounds {
         let path = dir.join(format!("{prefix}-{name}.wav"));
         let scaled: Vec<f64> = sound.iter().map(|x| x * gain).collect();
-        crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &scaled))
+        crate::examples::write_atomically(&path, |f| crate::examples::write_wav(f, &[&scaled]))
             .map_err(|e| e.to_string())?;
     }
     Ok(())
