@@ -12,7 +12,9 @@
 //! - **Sympathetic resonance**: what the pedal adds to C3 at each key's pitch.
 //! - **A scale at three dynamics**: C4 to C5 at velocities 40, 80 and 120, mono 16-bit WAV.
 //! - **The slide guitar on its two bodies**: each note's loudness on the electric and on the
-//!   acoustic guitar, the acoustic body's transmittance, and a short phrase on each, mono 16-bit WAV.
+//!   acoustic guitar, the acoustic body's transmittance, and a short phrase on each, mono 16-bit WAV;
+//!   the acoustic guitar's notes in stereo at the default width (their channels' correlation and
+//!   loudness against centred).
 //!
 //! The measuring functions here are also what the tests use (`tests/tests/piano_rule.rs`,
 //! `tests/tests/piano_realism.rs`).
@@ -328,6 +330,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let undamped = undamped_ring();
     let held = held_ring(0.0);
     let guitars = acoustic(&dir.join("acoustic.png"))?;
+    let stereo = stereo_guitar();
     guitar_body(&dir.join("guitar-body.png"))?;
     // The fortissimo scale peaking at −1 dBFS: the dynamics stay audible.
     let scales = [("pp", 40u8), ("mf", 80), ("ff", 120)].map(|(name, velocity)| (name, scale(velocity)));
@@ -335,7 +338,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let phrases = [("electric", SlideBody::Pickup), ("acoustic", SlideBody::Acoustic)]
         .map(|(name, body)| (name, guitar_phrase(body)));
     write_at_one_gain(&dir, "guitar", &phrases)?;
-    let text = readme(&envelopes, &contacts, &decays, &t60, (&sympathy, undamped, held), &guitars);
+    let text = readme(&envelopes, &contacts, &decays, &t60, (&sympathy, undamped, held), (&guitars, &stereo));
     let path = args.root.join("docs/report/realism.md");
     std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     writeln!(out, "{}", serde_json::json!({ "written": path.display().to_string() })).map_err(|e| e.to_string())
@@ -670,6 +673,24 @@ fn acoustic(path: &Path) -> Result<Guitars, String> {
     Ok(rows)
 }
 
+/// The acoustic guitar's notes A2–C5 heard in stereo at the default width, each the correlation
+/// of its two channels and its integrated loudness against the same note centred (LU):
+/// `(key, correlation, change)`.
+type StereoGuitar = Vec<(u8, f64, f64)>;
+
+fn stereo_guitar() -> StereoGuitar {
+    let width = Settings::default().stereo_width;
+    (45..=72u8)
+        .map(|key| {
+            let [left, right] = slide_note_heard(SlideBody::Acoustic, key, width, None);
+            let centred = slide_note(SlideBody::Acoustic, key, None);
+            let change = crate::loudness::integrated_lufs_stereo(&left, &right, FS)
+                - crate::loudness::integrated_lufs(&centred, FS);
+            (key, crate::examples::correlation(&left, &right), change)
+        })
+        .collect()
+}
+
 /// The acoustic guitar's body as a listener hears it: the transmittance's power gain (dB, 1 over
 /// 1–4 kHz) from 60 Hz to 10 kHz, of the whole body and of the two-mass pair alone (normalised
 /// alike), the air and top resonances marked.
@@ -800,7 +821,7 @@ fn readme(
     decays: &[Decay],
     t60: &[T60Row],
     (sympathy, undamped, held): (&Sympathy, [(u8, f64); 2], [HeldRing; 3]),
-    guitars: &Guitars,
+    (guitars, stereo): (&Guitars, &StereoGuitar),
 ) -> String {
     let spread = Settings::default().unison_detune;
     let at = |levels: &[f64], span| -decay_rate(levels, span);
@@ -865,6 +886,25 @@ fn readme(
     let colour =
         guitars.iter().map(colour_of).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| (lo.min(c), hi.max(c)));
     let a3 = guitars.iter().find(|r| r.0 == 57).map_or(f64::NAN, colour_of);
+    let span = |pick: fn(&(u8, f64, f64)) -> f64| {
+        stereo.iter().map(pick).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
+    };
+    let (correlations, changes) = (span(|r| r.1), span(|r| r.2));
+    let correlation_of = |key: u8| stereo.iter().find(|r| r.0 == key).map_or(f64::NAN, |r| r.1);
+    let stereo_text = format!(
+        "Heard in stereo at the default width ({:.0} %), the top's higher modes alternately on the left and on \
+         the right and its lowest two in the centre (docs/physics.md §13.6), the notes' channels correlate \
+         {:.2} to {:.2}: D3 {:.2}, whose partials lie on the top's higher modes, A3 {:.2}, on the top's \
+         resonance; each note is {:+.1} to {:+.1} LU against its loudness centred (the figures above are \
+         centred). The [audio examples](../examples/README.md) are in stereo.",
+        100.0 * Settings::default().stereo_width,
+        correlations.0,
+        correlations.1,
+        correlation_of(50),
+        correlation_of(57),
+        changes.0,
+        changes.1,
+    );
     format!(
         "# How the piano compares with real grands\n\n\
          Written by `cargo xtask realism` (`xtask/src/realism.rs`); the model is in docs/physics.md §12, the \
@@ -936,6 +976,7 @@ fn readme(
          19 dB above it, and the plate's modes put their own peaks and valleys in it from 300 Hz up. \
          A2, C3, E3, A3 and C4 at velocity 80 on each, a note every 0.45 s, 32 kHz mono 16-bit, one gain for \
          both: [electric](realism/guitar-electric.wav), [acoustic](realism/guitar-acoustic.wav).\n\n\
+         {stereo_text}\n\n\
          ## Not shown yet\n\n\
          Each key has its own copy of the soundboard and of its partners, so keys played together do not \
          ring through one bridge. Decay times above C4 have no measured grand beside them, and the string \
