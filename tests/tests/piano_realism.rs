@@ -29,7 +29,7 @@ fn a_mistuned_unison_decays_in_two_stages() {
 
 /// The same C4 with its three strings tuned exactly alike: the hammer moves them together, the
 /// aftersound's antisymmetric motion is never excited, and the second partial decays in one
-/// stage (the two rates within 15 % of each other; measured 6 %).
+/// stage (the two rates within 15 % of each other; measured 21.0 and 20.9 dB/s, 0.5 %).
 #[test]
 fn an_exact_unison_decays_in_one_stage() {
     let (prompt, after) = stages(60, 2, 0.0);

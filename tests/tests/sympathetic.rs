@@ -19,9 +19,9 @@ fn fall(x: &[f64], from: f64, key: u8) -> f64 {
 /// C3 held with the pedal down against the same C3 with the pedal up: the difference is what the
 /// other keys' free strings add (and what C3's own partials give up to them). Over 1–3 s it is at
 /// least 15 dB stronger at the pitch of each of C4, G4, C5 and E5 (C3's 2nd to 5th partials) than
-/// at the pitch of its upper neighbour, whose partials C3 does not meet (measured 33.7, 43.0, 43.5
-/// and 17.2 dB); and each of those strings is heard: its part is at most 30 dB below everything
-/// the piano sounds at that pitch (measured −0.7, 5.7, 2.2 and −8.8 dB: the partner and the
+/// at the pitch of its upper neighbour, whose partials C3 does not meet (measured 32.9, 43.4, 45.0
+/// and 17.7 dB); and each of those strings is heard: its part is at most 30 dB below everything
+/// the piano sounds at that pitch (measured −1.2, 5.5, 5.4 and −7.1 dB: the partner and the
 /// partial it shares beat).
 #[test]
 fn c3_sets_the_strings_of_its_partials_ringing() {
@@ -41,8 +41,8 @@ fn c3_sets_the_strings_of_its_partials_ringing() {
 /// The pedal pressed 0.25 s after C3 is struck (the usual legato pedalling) still sets the
 /// strings of its partials ringing: against the pedal up, over 1–3 s, the difference is at least
 /// 15 dB stronger at the pitch of each of C4, G4 and C5 than at its upper neighbour's (measured
-/// 34.7, 43.1 and 42.4 dB), and within 6 dB of what the pedal down from the strike gives them
-/// (measured +0.2, −1.1 and +0.9 dB): the partials have lost little by then, and the partners'
+/// 34.2, 43.4 and 43.8 dB), and within 6 dB of what the pedal down from the strike gives them
+/// (measured +0.5, −1.1 and +1.4 dB): the partials have lost little by then, and the partners'
 /// dampers lift within the damper's time constant (10 ms).
 #[test]
 fn the_pedal_pressed_after_the_strike_sets_the_partners_ringing() {
@@ -94,7 +94,7 @@ fn lifting_the_pedal_damps_only_the_partners_with_dampers() {
 /// with the pedal up: C3 struck and let go after 0.2 s, with C4 or G4 held down (pressed as
 /// softly as MIDI can, before C3 or 0.1 s after it), still sounds 0.5–1.5 s later at the held
 /// key's pitch (C3's 2nd and 3rd partials), at least 15 dB above the pitch a semitone higher, as
-/// for the pedal (measured 32.1 and 33.9 dB, pressed before or after). With C♯4
+/// for the pedal (measured 32.1 and 33.8 dB, pressed before or after). With C♯4
 /// held, whose strings no partial of C3 meets, what C3 adds there is at least 60 dB below what it
 /// adds at C4's pitch with C4 held (measured: nothing; C3's voice ends as it would alone).
 #[test]
@@ -135,8 +135,8 @@ fn letting_a_held_key_go_damps_its_strings_as_a_partner() {
 /// held down (pressed as softly as MIDI can), C3 let go after 0.1 s, the pedal lifted after 1 s.
 /// Between 0.3–1 s and 1.3–2.3 s what C3 adds at the pitch of G4 (a partner whose damper falls
 /// with the pedal, and none of whose modes C4's strings share) falls at least 30 dB more than at
-/// C4's (one whose key holds its damper off) (measured: G4 falls 56.5 dB, to where C4's ring leaks
-/// into its pitch; C4 6.4 dB).
+/// C4's (one whose key holds its damper off) (measured: G4 falls 56.0 dB, to where C4's ring leaks
+/// into its pitch; C4 7.5 dB).
 #[test]
 fn lifting_the_pedal_leaves_the_held_keys_strings_ringing() {
     let pedal = [(0.0, Event::Sustain { channel: 0, down: true }), (1.0, Event::Sustain { channel: 0, down: false })];
