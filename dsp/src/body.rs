@@ -218,8 +218,9 @@ impl BodyParams {
             / n as f64
     }
 
-    /// The piano's soundboard as it radiates: the strings' soundboard (its band, mean
-    /// conductance and loss factor) with the modes [`RADIATING_RATIO`] apart, each radiating with
+    /// The piano's soundboard as it radiates: the strings' soundboard (its band and mean
+    /// conductance) with the modes [`RADIATING_RATIO`] apart, close enough for the measured loss
+    /// factor to give the board's modal overlap ([`BridgeParams::mean_value`]), each radiating with
     /// the efficiency [`soundboard_radiation_efficiency`], signs from a fixed pattern (the lowest
     /// three in phase: the board's lowest modes move it as one), power gain 1 over 1–4 kHz.
     pub fn piano() -> Self {

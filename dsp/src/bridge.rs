@@ -31,7 +31,8 @@
 //! (`1/(8√(Bm''))` for an infinite plate of bending stiffness `B` and surface mass `m''`). Each
 //! mode's effective mass is therefore `M_j = n_j/(4 G)` for a chosen mean conductance `G`,
 //! where `n_j` is the bank's own modal density at mode `j`. The loss factor is the ~2 % that Ege
-//! and Boutillon measured on a piano soundboard (docs/physics.md §12 has the sources).
+//! and Boutillon measured on a piano soundboard or, for a bank sparser than the board, the larger
+//! one that gives it the board's modal overlap (docs/physics.md §12.2 has the sources).
 
 /// The fixed jitter of a mean-value bank's `j`-th mode, in [−0.35, 0.35) of its spacing: a
 /// low-discrepancy (golden-ratio) sequence, so that a regular comb does not give every band the
