@@ -167,7 +167,7 @@ pub fn advance<const K: usize, const J: usize>(
 }
 
 /// The modes of a bank from `start` on, with forces and projected vectors of their own (a
-/// piano key's bridge after its strings): see [`advance_split`].
+/// piano key's bridge after its strings): see `advance_split`.
 #[derive(Debug)]
 pub struct Tail<'a, const K: usize, const J: usize> {
     /// The first mode of the tail.
