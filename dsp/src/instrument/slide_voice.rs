@@ -112,11 +112,11 @@ pub const SLIDE_REACH: Reach = Reach { speed: SLIDE_SPEED, acceleration: SLIDE_A
 /// The hand pressing the slide onto the string or lifting it.
 pub const HAND_REACH: Reach = Reach { speed: HAND_SPEED, acceleration: HAND_ACCELERATION };
 
-/// The share of the acceleration limit a `Motion` (the slide's glide) brakes with towards a still
-/// target. Braking at the full limit, the block that meets the target can change the speed by up
-/// to 9/8 of the limit (the bound on the speed from the distance left is a block's worth
-/// optimistic); at 8/9 of it, that block stays within the limit too, and arriving takes
-/// `v/(16a)` longer.
+/// The share of the acceleration limit a `Motion` (the slide along the string, or the hand towards
+/// it) brakes with towards a still target. Braking at the full limit, the block that meets the
+/// target can change the speed by up to 9/8 of the limit (the bound on the speed from the distance
+/// left is a block's worth optimistic); at 8/9 of it, that block stays within the limit too, and
+/// arriving takes `v/(16a)` longer.
 pub const BRAKING: f64 = 8.0 / 9.0;
 
 /// Something a player's hand moves, block by block: the slide along the string, or the hand
