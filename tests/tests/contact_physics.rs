@@ -127,7 +127,7 @@ fn energy_is_conserved_over_1000_steps_on_fig4() {
 /// Sustained soft contact: κ is chosen so that the analytic contact lasts T_c = 1.2 s (52,920
 /// samples at 44.1 kHz) for a 10 g mass at 1 cm/s, so all 40,000 steps are in contact and rounding
 /// accumulates in every step. docs/physics.md §9.4 suggests 1e-9 for long sustained contacts (worst
-/// measured 8.8e-11 over its sweep).
+/// measured 8.8e-11 over its sweep; this case 3.8e-12).
 #[test]
 fn energy_is_conserved_over_40000_step_sustained_contacts() {
     let (mass, v0, fs, contact_time) = (0.01, 0.01, 44_100.0, 1.2);
@@ -377,12 +377,13 @@ fn spline_errors(spline: &QuadSpline, lo: f64, hi: f64, points: usize) -> (f64, 
     (value, slope)
 }
 
-/// For α = 1 the recursion gives A_j = κ/2 and D_j = κ y_j, so V̂ ≡ V (docs/physics.md §1.5; the prototype
-/// measured |V̂ − V| ≤ 8e-16·V(y_ref) for N up to 1000). Tolerance 1e-14·V(y_ref) on a grid of
-/// 20,000 points (18 or more per segment) over [−0.1 y_ref, y_ref]. The slope V̂' is exact too,
-/// but the knot slopes D_j = D_{j−1} + 2A_jΔy accumulate the rounding of each A_j (whose numerator
-/// Vk_j − Vk_{j−1} − D_{j−1}Δy cancels), so its error grows linearly with N: asserted
-/// |V̂' − V'| ≤ 16·N·ε·V'(y_ref) (measured ≤ 6.5·N·ε, i.e. 1.4e-12 at N = 1000).
+/// For α = 1 the recursion gives A_j = κ/2 and D_j = κ y_j, so V̂ ≡ V (docs/physics.md §1.5; the
+/// prototype measured |V̂ − V| ≤ 8e-16·V(y_ref) for N up to 1000; this test 8.7e-16 at N = 1000).
+/// Tolerance 1e-14·V(y_ref) on a grid of 20,000 points (18 or more per segment) over [−0.1 y_ref,
+/// y_ref]. The slope V̂' is exact too, but the knot slopes D_j = D_{j−1} + 2A_jΔy accumulate the
+/// rounding of each A_j (whose numerator Vk_j − Vk_{j−1} − D_{j−1}Δy cancels), so its error grows
+/// linearly with N: asserted |V̂' − V'| ≤ 16·N·ε·V'(y_ref) (measured ≤ 6.5·N·ε, i.e. 1.4e-12 at N =
+/// 1000).
 #[test]
 fn spline_is_exact_for_alpha_one() {
     let law = PowerLaw::new(1e8, 1.0).expect("valid law");
@@ -549,7 +550,7 @@ fn spline_secant(spline: &QuadSpline, y0: f64, y1: f64) -> f64 {
 ///    are not errors of the root: (a) G's sensitivity to the rounding of y^{n+1},
 ///    G' ≤ 1 + q·max A_j, times max(|y^{n−1}|, |y^{n+1}|); (b) the neighbouring quadratics agree at
 ///    a knot only to ε·V̂, which the difference quotient turns into ε·q(V̂(y^{n−1}) + V̂(y^{n+1}))/|s|.
-///    (Measured worst: 1.1ε of that scale. A wrong root or segment gives an O(1) residual.)
+///    (Measured worst: 0.76ε of that scale. A wrong root or segment gives an O(1) residual.)
 /// 3. the per-step energy balance s(s + z) + q(V̂(y^{n+1}) − V̂(y^{n−1})) = 2q·ΔH vanishes to
 ///    8ε of its terms plus the sensitivity term max(|y^{n−1}|,|y^{n+1}|)·(|2s + z| + qV̂'(y^{n+1}));
 /// 4. the three searches agree bit for bit, and `last_work() ≤ max_sign_tests()`;
@@ -724,13 +725,13 @@ fn qsa_force_approaches_imp_as_segments_increase() {
 // Robustness sweep
 // ------------------------------------------------------------------------------------------------
 
-/// 540 extreme QSA combinations (docs/physics.md §3.5): κ ∈ {1e5, 1e8, 1e12, 1e15}, α ∈ {1, 1.5, 2.5, 3, 4},
-/// v0 ∈ {1e-3, 2, 50} m/s, fs ∈ {22.05k, 44.1k, 192k}, N ∈ {1, 5, 30}; mass 10 g, entry 2.5 samples
-/// after the start, run until 5 samples after the contact or 40,000 steps. IMP and EXP run the 180
-/// (κ, α, v0, fs) combinations. Every frame must be finite, the energy drift ≤ 1e-7 relative
-/// (docs/physics.md §3.5 measured 1.8e-8 worst with the re-centred root), and where the contact finished
-/// inside the run, the rebound speed equals v0 to 1e-7 (a drift d changes it by d/2; docs/physics.md §9.4
-/// measured ≤ 2e-8).
+/// 540 extreme QSA combinations (docs/physics.md §3.5): κ ∈ {1e5, 1e8, 1e12, 1e15}, α ∈ {1, 1.5,
+/// 2.5, 3, 4}, v0 ∈ {1e-3, 2, 50} m/s, fs ∈ {22.05k, 44.1k, 192k}, N ∈ {1, 5, 30}; mass 10 g, entry
+/// 2.5 samples after the start, run until 5 samples after the contact or 40,000 steps. IMP and EXP
+/// run the 180 (κ, α, v0, fs) combinations. Every frame must be finite, the energy drift ≤ 1e-7
+/// relative (docs/physics.md §3.5 measured 1.8e-8 worst with the re-centred root; this sweep
+/// 1.6e-11), and where the contact finished inside the run, the rebound speed equals v0 to 1e-7 (a
+/// drift d changes it by d/2; docs/physics.md §9.4 measured ≤ 2e-8).
 #[test]
 fn extreme_parameter_sweep_is_finite_and_conserves_energy() {
     let mass = 0.01;

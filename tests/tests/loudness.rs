@@ -111,7 +111,7 @@ fn a_fortissimo_ten_note_chord_stays_below_full_scale_at_the_default_gain() {
 }
 
 /// With the gain at its top, +12 dB, 32 voices struck fortissimo reach well beyond full scale
-/// (+5.6 dBFS); the safety limiter holds every sample at its ceiling (−0.1 dBFS), and switched
+/// (+5.2 dBFS); the safety limiter holds every sample at its ceiling (−0.1 dBFS), and switched
 /// off it lets them through.
 #[test]
 fn the_safety_limiter_holds_thirty_two_fortissimo_voices_below_full_scale() {

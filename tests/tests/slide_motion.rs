@@ -406,7 +406,7 @@ fn every_way_of_moving_the_slide_stays_within_a_hands_reach() {
 /// A held slide note carries no DC: the slide presses the string statically (about 1.5 mm at
 /// the slide), which a displacement output heard as an offset 0 dB below the note's RMS; the
 /// pickup senses velocity, so over the held note (0.3 to 2.5 s) the DC component is below
-/// −60 dB of the RMS (measured −185 dB), and after note-off, while the muting finger holds the
+/// −60 dB of the RMS (measured −191 dB), and after note-off, while the muting finger holds the
 /// string down, the output's mean stays below −60 dB of the held note's RMS as well.
 #[test]
 fn a_held_slide_note_has_no_dc() {
@@ -536,18 +536,17 @@ fn pluck_after_change(
     (left.iter().fold(0.0f32, |m, v| m.max(v.abs())), instrument.guard_trips())
 }
 
-/// A new note never inherits a pressed slide under a stiffer contact, hand or another solver:
-/// with the hand pressing 3 mm on a stiff hand spring (1e6 N/m) and a soft contact (κ 1e6, α 3),
-/// raising κ to 1e13 just before the next note re-weighed the energy the pressed slide held, by
-/// up to joules (+32 dBFS against −9 dBFS for the same notes without the change), whether the
-/// note re-plucked the sounding voice or started on the released one; and on the stiffest linear
-/// contact (κ 1e13, α 1) a switch from EXP to QSA at a re-pluck evaluated the potential at the
-/// compression EXP had reached (its auxiliary variable, not the compression, carries the
-/// potential): thousands of joules. A sounding voice keeps its note's law, slide and solver, and
-/// a silent one starts from rest with the new ones, so the peak stays within 6 dB of the render
-/// without the change and under +6 dBFS (one voice at the corner settings reaches +4.8 dBFS; a
-/// re-pluck restarting EXP from the compression gave +47 dBFS even without a change), and the
-/// guard never fires.
+/// A new note never inherits a pressed slide under a stiffer contact, hand or another solver: with
+/// the hand pressing 3 mm on a stiff hand spring (1e6 N/m) and a soft contact (κ 1e6, α 3), raising
+/// κ to 1e13 just before the next note re-weighed the energy the pressed slide held, by up to
+/// joules (+32 dBFS, where the same notes without the change peak near −22 dBFS), whether the note
+/// re-plucked the sounding voice or started on the released one; and on the stiffest linear contact
+/// (κ 1e13, α 1) a switch from EXP to QSA at a re-pluck evaluated the potential at the compression
+/// EXP had reached (its auxiliary variable, not the compression, carries the potential): thousands
+/// of joules. A sounding voice keeps its note's law, slide and solver, and a silent one starts from
+/// rest with the new ones, so the peak stays within 6 dB of the render without the change and under
+/// +6 dBFS (one voice at the corner settings reaches +4.8 dBFS; a re-pluck restarting EXP from the
+/// compression gave +47 dBFS even without a change), and the guard never fires.
 #[test]
 fn a_stiffer_contact_or_another_solver_set_between_notes_adds_no_energy() {
     let base = Settings {

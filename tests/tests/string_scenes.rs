@@ -140,8 +140,9 @@ fn lossless_partials_follow_the_stiff_string_formula() {
     assert!((params.partial(3) - 787.902).abs() < 1e-3, "docs/physics.md §9.3: f3 = 787.902 Hz");
 }
 
-/// Lossless hammer strike: `H^{n+1/2}` is conserved to 1e-12 (docs/physics.md §6.3 measured 2.5e-14) by
-/// QSA and IMP over the whole strike and 0.25 s of ringing.
+/// Lossless hammer strike: `H^{n+1/2}` is conserved to 1e-12 by QSA and IMP over the whole strike
+/// and 0.25 s of ringing (measured 4.3e-14 and 8.8e-14; the prototype 2.5e-14, docs/physics.md
+/// §6.3).
 #[test]
 fn lossless_hammer_strike_conserves_energy() {
     let mut params = fig5(3.5);
@@ -260,12 +261,12 @@ fn slide_params(block: usize) -> SlideStringParams {
     xtask::report::gestures::preset_params(block)
 }
 
-/// Slide–string with fixed positions and constant controls (slide pressed, both fingers
-/// pressing and damping, lossy string): the per-step balance
-/// `ΔH = −Δt(Q_str + Q_o + ΣQ_φ) + Δt(P_H + ΣP_φ)` closes to 1e-12 relative (docs/physics.md §7.4
-/// measured 5.6e-14), for all three solvers, and the contact comes and goes (rattle); and so it
-/// does with the string's end on the acoustic guitar's body (docs/physics.md §13.5), the body's
-/// energy and the coupling's terms counted (measured 9.4e-15).
+/// Slide–string with fixed positions and constant controls (slide pressed, both fingers pressing
+/// and damping, lossy string): the per-step balance `ΔH = −Δt(Q_str + Q_o + ΣQ_φ) + Δt(P_H + ΣP_φ)`
+/// closes to 1e-12 relative (measured 9.4e-15; the prototype 5.6e-14, docs/physics.md §7.4), for
+/// all three solvers, and the contact comes and goes (rattle); and so it does with the string's end
+/// on the acoustic guitar's body (docs/physics.md §13.5), the body's energy and the coupling's
+/// terms counted (measured 9.4e-15).
 #[test]
 fn slide_balance_closes_with_fixed_controls() {
     let params = slide_params(64);
