@@ -330,7 +330,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let undamped = undamped_ring();
     let held = held_ring(0.0);
     let guitars = acoustic(&dir.join("acoustic.png"))?;
-    let stereo = stereo_guitar();
+    let stereo = stereo_guitar(&guitars);
     guitar_body(&dir.join("guitar-body.png"))?;
     // The fortissimo scale peaking at −1 dBFS: the dynamics stay audible.
     let scales = [("pp", 40u8), ("mf", 80), ("ff", 120)].map(|(name, velocity)| (name, scale(velocity)));
@@ -678,14 +678,14 @@ fn acoustic(path: &Path) -> Result<Guitars, String> {
 /// `(key, correlation, change)`.
 type StereoGuitar = Vec<(u8, f64, f64)>;
 
-fn stereo_guitar() -> StereoGuitar {
+/// [`StereoGuitar`] for the notes of `guitars`, whose acoustic loudness is the centred one.
+fn stereo_guitar(guitars: &Guitars) -> StereoGuitar {
     let width = Settings::default().stereo_width;
-    (45..=72u8)
-        .map(|key| {
+    guitars
+        .iter()
+        .map(|&(key, _, centred)| {
             let [left, right] = slide_note_heard(SlideBody::Acoustic, key, width, None);
-            let centred = slide_note(SlideBody::Acoustic, key, None);
-            let change = crate::loudness::integrated_lufs_stereo(&left, &right, FS)
-                - crate::loudness::integrated_lufs(&centred, FS);
+            let change = crate::loudness::integrated_lufs_stereo(&left, &right, FS) - centred;
             (key, crate::examples::correlation(&left, &right), change)
         })
         .collect()
