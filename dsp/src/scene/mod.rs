@@ -13,7 +13,9 @@ mod unison;
 pub use hammer_string::{HammerCore, HammerString, HammerStringParams, OutputKind, Pickup};
 pub use mass_barrier::{MassBarrier, MassBarrierParams};
 pub use slide_string::{SlideControls, SlideCore, SlideString, SlideStringParams};
-pub use unison::{HammerUnison, MAX_PARTNERS, MAX_UNISON, PARTNER_MODES, UnisonCore, UnisonError, UnisonParams};
+pub use unison::{
+    HammerUnison, MAX_PARTNERS, MAX_UNISON, PARTNER_MODES, Shared, UnisonCore, UnisonError, UnisonParams, Watch,
+};
 
 /// One sample `n` of a scene's signals.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
