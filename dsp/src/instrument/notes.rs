@@ -160,7 +160,7 @@ impl NoteBook {
     /// The voices among the flat indices `voices` with a live note, in the order of their indices,
     /// counted from `voices.start`: a pass over one pool's sounding voices that does not look at
     /// the others (every voice that sounds or fades has a live note until it is checked silent).
-    pub(crate) fn live_in(&self, voices: Range<usize>) -> impl Iterator<Item = usize> + '_ {
+    pub(crate) fn live_in(&self, voices: Range<usize>) -> impl Iterator<Item = usize> + Clone + '_ {
         let start = voices.start;
         (start / 64..voices.end.div_ceil(64))
             .flat_map(move |word| {

@@ -31,6 +31,11 @@
 //!   ([`UnisonCore::add_partners`]), their dampers lifting as the pedal's do. Lifting the pedal,
 //!   or letting their keys go, lets their dampers down; they stay on the bridge until the key's
 //!   next strike from silence.
+//! - **Strings ringing elsewhere.** A key's strings may already ring as a partner on other
+//!   voices' bridges when it is struck. The hammer meets them where they are in all the copies
+//!   (docs/physics.md §14.3): the instrument hands the voice their motion there at the striking
+//!   point, at the strike ([`PianoVoice::meet`]) and at every step while the hammer can still
+//!   touch ([`PianoVoice::render_shared`]), and renders those voices first.
 //! - **Release.** A voice is free again once its strings are silent: their energy and its
 //!   partners' (the hammer flying off and the bridge's slowest modes do not count) below
 //!   [`RELEASE_ENERGY`] of its latest strike's, with the hammer flying away (a silent string cannot
@@ -57,7 +62,7 @@ use crate::instrument::partners::PartnerTable;
 use crate::instrument::settings::{Settings, hammer_speed};
 use crate::instrument::solvers::Solvers;
 use crate::preset::{piano_note, stretch_cents};
-use crate::scene::{MAX_PARTNERS, UnisonCore, UnisonParams};
+use crate::scene::{MAX_PARTNERS, Shared, UnisonCore, UnisonParams};
 use crate::string::{Damping, ModalString, StringParams};
 
 /// Energy below which a voice that is not touching its hammer is released, relative to the
@@ -279,6 +284,9 @@ pub struct PianoVoice {
     reference_energy: f64,
     /// Striking position of the latest strike (fraction of the length).
     position: f64,
+    /// What the next strike meets of the strings' motion on other voices' bridges:
+    /// `((β^{n−1}, β^n) (m), its reach (m))` ([`meet`](Self::meet)).
+    meets: ((f64, f64), f64),
     /// Samples of steal fade left before `pending` starts.
     fade_left: usize,
     /// A note waiting for the fade to finish.
@@ -328,6 +336,7 @@ impl PianoVoice {
             unweighed: 0,
             reference_energy: 0.0,
             position: note.strike_position,
+            meets: ((0.0, 0.0), 0.0),
             fade_left: 0,
             pending: None,
             pending_released: false,
@@ -354,7 +363,7 @@ impl PianoVoice {
     }
 
     /// Where the hammer strikes `key`'s strings under `settings` (fraction of the length).
-    fn striking_point(key: u8, settings: &Settings) -> f64 {
+    pub fn striking_point(key: u8, settings: &Settings) -> f64 {
         (piano_note(key).strike_position * settings.strike_position).clamp(0.02, 0.5)
     }
 
@@ -394,6 +403,8 @@ impl PianoVoice {
         // The felt starts two samples of travel beyond the string, so the hammer lands almost at once.
         let hammer = HammerParams { mass, velocity, position, gap: 2.0 * velocity / fs };
         let string_energy = self.core.own_energy();
+        let (motion, reach) = std::mem::take(&mut self.meets);
+        self.core.set_background(motion, reach);
         self.core.strike(&hammer);
         self.position = position;
         let Ok(law) = PowerLaw::new(note.kappa * settings.hardness * strings, note.alpha) else { return };
@@ -521,6 +532,12 @@ impl PianoVoice {
         self.core.set_partner_decays(&[Some(STEAL_RATE); MAX_PARTNERS]);
         self.partner_applied = [f64::NAN; MAX_PARTNERS];
         self.applied = f64::NAN;
+    }
+
+    /// The key of the pending note this voice starts at the coming block's start, its steal fade
+    /// over.
+    pub fn starts_now(&self) -> Option<u8> {
+        self.pending.filter(|_| self.fade_left == 0).map(|p| p.key)
     }
 
     /// The key this voice will sound once any steal fade is over.
@@ -702,13 +719,66 @@ impl PianoVoice {
         (y, f, self.position)
     }
 
+    /// The strings' motion on other voices' bridges that the next strike of this voice meets
+    /// at its striking point: `(β^{n−1}, β^n)` (m) and how far it can reach (m), the sum of
+    /// [`partner_motion`](Self::partner_motion) over the voices that ring the key. Cleared by
+    /// the strike.
+    pub fn meet(&mut self, motion: (f64, f64), reach: f64) {
+        self.meets = (motion, reach);
+    }
+
+    /// Whether the hammer can still touch the strings of a sounding voice (not retired).
+    pub fn hammer_live(&self) -> bool {
+        self.sounding && self.pending.is_none() && !self.core.retired()
+    }
+
+    /// The motion of the strings on other voices' bridges that the hammer last met, `β^n` (m).
+    pub fn background(&self) -> f64 {
+        self.core.background()
+    }
+
+    /// Striking position of the latest strike (fraction of the length).
+    pub fn striking_position(&self) -> f64 {
+        self.position
+    }
+
+    /// The index of `key` among the partners on this voice's bridge, if it sounds them.
+    pub fn partner_index(&self, key: u8) -> Option<usize> {
+        if !self.sounding {
+            return None;
+        }
+        self.partner_keys[..self.core.partners()].iter().position(|&k| k == key)
+    }
+
+    /// The keys of the partners on this voice's bridge, one bit per MIDI key (none when silent).
+    pub fn partner_mask(&self) -> u128 {
+        if !self.sounding {
+            return 0;
+        }
+        self.partner_keys[..self.core.partners()].iter().fold(0, |m, &k| m | bit(k))
+    }
+
+    /// Partner `j`'s displacement at its key's striking point `ell`, `(u^{n−1}, u^n)` (m), and
+    /// how far it can reach (m): its bound per `√(2H)` times the most energy this voice's
+    /// strings and bridge can hold, its strike's (docs/physics.md §14.3).
+    pub fn partner_motion(&self, j: usize, ell: f64) -> ((f64, f64), f64) {
+        let energy = self.reference_energy.max(self.core.own_energy());
+        (self.core.partner_motion(j, ell), self.core.partner_reach(j, ell) * (2.0 * energy).sqrt())
+    }
+
     /// Render `out.len()` samples of bridge force (N).
     pub fn render(&mut self, out: &mut [f64]) {
+        self.render_shared(out, Shared::default());
+    }
+
+    /// [`render`](Self::render), the hammer meeting the strings' motion on other voices'
+    /// bridges and the watched partners' motion handed on ([`UnisonCore::process_shared`]).
+    pub fn render_shared(&mut self, out: &mut [f64], shared: Shared) {
         let s = &mut self.solvers;
         match s.method {
-            Method::Qsa => self.core.process_output(&mut s.qsa, out),
-            Method::Imp => self.core.process_output(&mut s.imp, out),
-            Method::Exp => self.core.process_output(&mut s.exp, out),
+            Method::Qsa => self.core.process_shared(&mut s.qsa, out, shared),
+            Method::Imp => self.core.process_shared(&mut s.imp, out, shared),
+            Method::Exp => self.core.process_shared(&mut s.exp, out, shared),
         }
         if !out.is_empty() {
             self.loudness = out.iter().map(|x| x * x).sum::<f64>() / out.len() as f64;
