@@ -835,6 +835,10 @@ fn render_piano(
     later: usize,
     out: &mut [f64],
 ) {
+    if meeting.is_empty() {
+        voices[index].render(out);
+        return;
+    }
     let mut watches = [Watch::default(); MAX_PARTNERS];
     let mut count = 0;
     for &c in &meeting[later.min(meeting.len())..] {

@@ -62,7 +62,7 @@ use crate::instrument::partners::PartnerTable;
 use crate::instrument::settings::{Settings, hammer_speed};
 use crate::instrument::solvers::Solvers;
 use crate::preset::{piano_note, stretch_cents};
-use crate::scene::{MAX_PARTNERS, Shared, UnisonCore, UnisonParams};
+use crate::scene::{MAX_PARTNERS, Shared, UnisonCore, UnisonParams, Watch};
 use crate::string::{Damping, ModalString, StringParams};
 
 /// Energy below which a voice that is not touching its hammer is released, relative to the
@@ -762,8 +762,9 @@ impl PianoVoice {
     /// how far it can reach (m): its bound per `√(2H)` times the most energy this voice's
     /// strings and bridge can hold, its strike's (docs/physics.md §14.3).
     pub fn partner_motion(&self, j: usize, ell: f64) -> ((f64, f64), f64) {
+        let watch = Watch::new(j, ell, 0);
         let energy = self.reference_energy.max(self.core.own_energy());
-        (self.core.partner_motion(j, ell), self.core.partner_reach(j, ell) * (2.0 * energy).sqrt())
+        (self.core.partner_motion(&watch), self.core.partner_reach(&watch) * (2.0 * energy).sqrt())
     }
 
     /// Render `out.len()` samples of bridge force (N).

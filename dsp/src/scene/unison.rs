@@ -200,6 +200,13 @@ impl Watch {
         }
         Self { partner, ell, sines, sink }
     }
+
+    /// The partner's displacement at the striking point (m) for its modes' state `u` and the
+    /// bridge's displacement `b`: `Σ_i sin(iπℓ_p) u_i + ℓ_p b`.
+    #[inline]
+    fn along(&self, u: &[f64], b: f64) -> f64 {
+        u.iter().zip(&self.sines).map(|(u, s)| u * s).sum::<f64>() + self.ell * b
+    }
 }
 
 /// What a key shares over one block with the other keys' copies of its strings and of its
@@ -273,6 +280,11 @@ struct Coupling {
     lift_stiffness: f64,
     /// `ρ = ρ_V + ½Δt ρ_T` (m/√J): how far the striking point can be from rest per `√(2H)`.
     reach: f64,
+    /// What the bounds over other contact vectors share with it: `Σ g²/m` over the strings' and
+    /// partners' modes (kg), `Σ 1/K` (m/N) and `Σ 1/m` (1/kg) over the bridge's.
+    lifts_over_mass: f64,
+    bridge_flexibility: f64,
+    bridge_mobility: f64,
     /// `1/Δt²` (1/s²), `1/Δ` with `Δ = Δt² + C_Σ(E − Θ)` (s²) and `Θ − E` (kg), for the step
     /// after the hammer retires: it multiplies by them, so no division lies on the chain from one
     /// sample to the next.
@@ -627,41 +639,42 @@ impl UnisonCore {
         self.next_retired = None;
     }
 
-    /// `ρ_V + ½Δt ρ_T` (module docs).
-    fn reach(&self) -> f64 {
-        let shapes = [&self.coupled.shape[..], &self.free.shape[..]];
-        self.reach_of(|part, i| shapes[part][i], self.ell)
-    }
-
-    /// `ρ_V + ½Δt ρ_T` for the contact vector `c`, with `shape(part, i)` on mode `i` of the
-    /// coupled (`part` 0) or free part (1) and `ell` on the bridge's modes (module docs).
-    fn reach_of(&self, shape: impl Fn(usize, usize) -> f64, ell: f64) -> f64 {
-        let parts = [(&self.coupled, &self.coupled_bank), (&self.free, &self.free_bank)];
-        let mut potential = 0.0;
-        for (p, (part, bank)) in parts.iter().enumerate() {
-            for (i, (k, e)) in bank.stiffness().iter().zip(&part.sole).enumerate() {
-                let weight = shape(p, i) + ell * e;
-                if *k > 0.0 {
-                    potential += weight * weight / k;
-                }
-            }
-        }
-        // cᵀM⁻¹c for the coupled mass matrix, in closed form.
-        let (mut cc, mut gc, mut gg, mut bridge) = (0.0, 0.0, 0.0, 0.0);
-        for (p, (part, bank)) in parts.iter().enumerate() {
-            for (i, ((g, e), m)) in part.lift.iter().zip(&part.sole).zip(bank.masses()).enumerate() {
-                let h = shape(p, i);
+    /// `ρ_V + ½Δt ρ_T` (module docs), keeping the sums over the bridge's modes and the lifts
+    /// that the partners' bounds share with it.
+    fn reach(&mut self) -> f64 {
+        let (mut potential, mut cc, mut gc) = (0.0, 0.0, 0.0);
+        let (mut lifts, mut flexibility, mut mobility) = (0.0, 0.0, 0.0);
+        for (part, bank) in [(&self.coupled, &self.coupled_bank), (&self.free, &self.free_bank)] {
+            let modes = part.shape.iter().zip(&part.lift).zip(&part.sole);
+            for (((h, g), e), (k, m)) in modes.zip(bank.stiffness().iter().zip(bank.masses())) {
                 if *e > 0.0 {
-                    bridge += 1.0 / m;
+                    if *k > 0.0 {
+                        flexibility += 1.0 / k;
+                    }
+                    mobility += 1.0 / m;
                 } else {
+                    if *k > 0.0 {
+                        potential += h * h / k;
+                    }
                     cc += h * h / m;
                     gc += g * h / m;
-                    gg += g * g / m;
+                    lifts += g * g / m;
                 }
             }
         }
-        let (r, mu) = (ell - gc, self.coupling.lift_mass - gg);
-        let beta = r * bridge / (1.0 + mu * bridge);
+        let c = &mut self.coupling;
+        (c.lifts_over_mass, c.bridge_flexibility, c.bridge_mobility) = (lifts, flexibility, mobility);
+        self.bound(potential, cc, gc, self.ell)
+    }
+
+    /// `ρ_V + ½Δt ρ_T` for the contact vector `c` that is `h` on the strings' and partners' modes
+    /// and `ell` on the bridge's, from `Σ h²/K`, `Σ h²/m` and `Σ gh/m` over the former: the
+    /// potential part `Σ c²/K` and `cᵀM⁻¹c` for the coupled mass matrix, in closed form.
+    fn bound(&self, potential: f64, cc: f64, gc: f64, ell: f64) -> f64 {
+        let c = &self.coupling;
+        let potential = potential + ell * ell * c.bridge_flexibility;
+        let (r, mu) = (ell - gc, c.lift_mass - c.lifts_over_mass);
+        let beta = r * c.bridge_mobility / (1.0 + mu * c.bridge_mobility);
         let kinetic = (cc - beta * gc + ell * beta).max(0.0);
         let reach = potential.sqrt() + 0.5 * self.dt * kinetic.sqrt();
         if reach.is_finite() { reach } else { f64::INFINITY }
@@ -702,29 +715,36 @@ impl UnisonCore {
         self.background_work = 0.0;
     }
 
-    /// Partner `j`'s displacement at its own key's striking point `ell` (fraction of the length),
-    /// `(u^{n−1}, u^n)` (m): its modes' there and its end's share of the bridge's motion (module
-    /// docs). Zero for a partner the unison does not have.
-    pub fn partner_motion(&self, j: usize, ell: f64) -> (f64, f64) {
-        if j >= self.partners {
+    /// The watched partner's displacement at its own key's striking point, `(u^{n−1}, u^n)` (m):
+    /// its modes' there and its end's share of the bridge's motion (module docs). Zero for a
+    /// partner the unison does not have.
+    pub fn partner_motion(&self, watch: &Watch) -> (f64, f64) {
+        if watch.partner >= self.partners {
             return (0.0, 0.0);
         }
-        let watch = Watch::new(j, ell, 0);
-        let (prev, now) = self.coupled_bank.state(self.partner_ranges[j].clone());
-        let dot = |u: &[f64]| u.iter().zip(&watch.sines).map(|(u, s)| u * s).sum::<f64>();
-        (dot(prev) + ell * self.b.0, dot(now) + ell * self.b.1)
+        let (prev, now) = self.coupled_bank.state(self.partner_ranges[watch.partner].clone());
+        (watch.along(prev, self.b.0), watch.along(now, self.b.1))
     }
 
-    /// How far partner `j`'s displacement at its key's striking point `ell` can be from rest per
-    /// `√(2H)` (m/√J), `H` the energy of this key's strings and bridge: the hammer's bound
+    /// How far the watched partner's displacement at its key's striking point can be from rest
+    /// per `√(2H)` (m/√J), `H` the energy of this key's strings and bridge: the hammer's bound
     /// (module docs) over the partner's vector.
-    pub fn partner_reach(&self, j: usize, ell: f64) -> f64 {
-        if j >= self.partners {
+    pub fn partner_reach(&self, watch: &Watch) -> f64 {
+        if watch.partner >= self.partners {
             return 0.0;
         }
-        let watch = Watch::new(j, ell, 0);
-        let range = self.partner_ranges[j].clone();
-        self.reach_of(|part, i| if part == 0 && range.contains(&i) { watch.sines[i - range.start] } else { 0.0 }, ell)
+        let range = self.partner_ranges[watch.partner].clone();
+        let (bank, lift) = (&self.coupled_bank, &self.coupled.lift[range.clone()]);
+        let (k, m) = (&bank.stiffness()[range.clone()], &bank.masses()[range]);
+        let (mut potential, mut cc, mut gc) = (0.0, 0.0, 0.0);
+        for (((h, g), k), m) in watch.sines.iter().zip(lift).zip(k).zip(m) {
+            if *k > 0.0 {
+                potential += h * h / k;
+            }
+            cc += h * h / m;
+            gc += g * h / m;
+        }
+        self.bound(potential, cc, gc, watch.ell)
     }
 
     /// Recompute every projection of the state (the hammer is judged again).
@@ -1078,15 +1098,26 @@ impl UnisonCore {
         if !rest.is_empty() {
             // The free part's outputs at n+1, n+2, …; the coupled part's added step by step.
             self.free_bank.free_steps(&self.free.pickup, rest);
-            for (k, o) in rest.iter_mut().enumerate() {
-                let next = *o + self.retired_step();
-                *o = self.out_now;
-                self.out_now = next;
-                self.hammer.advance(0.0);
-                self.report(watches, sinks, done + k);
+            if watches.is_empty() {
+                rest.iter_mut().for_each(|o| self.retired_sample(o));
+            } else {
+                for (k, o) in rest.iter_mut().enumerate() {
+                    self.retired_sample(o);
+                    self.report(watches, sinks, done + k);
+                }
             }
         }
         self.mirror();
+    }
+
+    /// One sample once the hammer is retired: `o` holds the free part's output at `n+1` and
+    /// becomes the whole output at `n`.
+    #[inline]
+    fn retired_sample(&mut self, o: &mut f64) {
+        let next = *o + self.retired_step();
+        *o = self.out_now;
+        self.out_now = next;
+        self.hammer.advance(0.0);
     }
 
     /// Add each watched partner's motion after step `k` to its sink.
@@ -1094,9 +1125,8 @@ impl UnisonCore {
     fn report(&self, watches: &[Watch], sinks: &mut [Vec<f64>], k: usize) {
         for w in watches.iter().filter(|w| w.partner < self.partners) {
             let (_, now) = self.coupled_bank.state(self.partner_ranges[w.partner].clone());
-            let motion = now.iter().zip(&w.sines).map(|(u, s)| u * s).sum::<f64>() + w.ell * self.b.1;
             if let Some(x) = sinks.get_mut(w.sink).and_then(|sink| sink.get_mut(k)) {
-                *x += motion;
+                *x += w.along(now, self.b.1);
             }
         }
     }
@@ -1323,7 +1353,7 @@ mod tests {
         let energy = core.energy();
         let ells = [0.12, 0.1];
         let watches = [Watch::new(0, ells[0], 0), Watch::new(1, ells[1], 1)];
-        let bounds = [0, 1].map(|j| core.partner_reach(j, ells[j]) * (2.0 * energy).sqrt());
+        let bounds = [0, 1].map(|j| core.partner_reach(&watches[j]) * (2.0 * energy).sqrt());
         let (mut out, mut sinks) = (vec![0.0; 64], vec![vec![0.0; 64]; 2]);
         let mut most = [0.0f64; 2];
         for _ in 0..750 {
@@ -1331,7 +1361,7 @@ mod tests {
             let shared = Shared { background: &[], watches: &watches, sinks: &mut sinks };
             core.process_shared(&mut solver, &mut out, shared);
             for j in 0..2 {
-                assert_eq!(sinks[j][63].to_bits(), core.partner_motion(j, ells[j]).1.to_bits(), "partner {j}");
+                assert_eq!(sinks[j][63].to_bits(), core.partner_motion(&watches[j]).1.to_bits(), "partner {j}");
                 most[j] = most[j].max(sinks[j].iter().fold(0.0f64, |m, x| m.max(x.abs())) / bounds[j]);
             }
         }
