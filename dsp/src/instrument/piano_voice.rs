@@ -759,11 +759,12 @@ impl PianoVoice {
     }
 
     /// Partner `j`'s displacement at its key's striking point `ell`, `(u^{n−1}, u^n)` (m), and
-    /// how far it can reach (m): its bound per `√(2H)` times the most energy this voice's
-    /// strings and bridge can hold, its strike's (docs/physics.md §14.3).
+    /// how far it can reach (m): its bound per `√(2H)` times the most energy the guard lets this
+    /// voice's strings and bridge hold, [`GUARD_FACTOR`] times its strike's (docs/physics.md
+    /// §14.3).
     pub fn partner_motion(&self, j: usize, ell: f64) -> ((f64, f64), f64) {
         let watch = Watch::new(j, ell, 0);
-        let energy = self.reference_energy.max(self.core.own_energy());
+        let energy = GUARD_FACTOR * self.reference_energy;
         (self.core.partner_motion(&watch), self.core.partner_reach(&watch) * (2.0 * energy).sqrt())
     }
 
