@@ -7,8 +7,9 @@
 //!   ([`UnisonCore::strike`]): on a string at rest that is the usual small gap; on a string still
 //!   swinging from an earlier strike (a repeated note), the felt meets it wherever it is, at the
 //!   relative speed of the two, as a hammer flying free from the action does. The QSA fit spans
-//!   the hammer's kinetic energy plus the string's energy: all the energy there is, so no
-//!   compression the contact can reach lies beyond the fit's last knot.
+//!   the hammer's kinetic energy plus the string's energy and that of its motion on other
+//!   voices' bridges: all the energy there is, so no compression the contact can reach lies
+//!   beyond the fit's last knot.
 //! - **Damper.** Note-off lets the damper down unless the sustain pedal holds it, on every key
 //!   below [`FIRST_UNDAMPED_KEY`]: the top strings have none and ring on. A damper is a
 //!   felt pad pressing along the string beside the strike point ([`DAMPER_WIDTH`] long): a
@@ -231,6 +232,27 @@ impl<'a> PartnerList<'a> {
     }
 }
 
+/// A key's strings as they move on other voices' bridges, at its striking point: what its hammer
+/// meets besides its own strings (docs/physics.md §14.3).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Elsewhere {
+    /// `(β^{n−1}, β^n)` (m).
+    pub motion: (f64, f64),
+    /// How far from rest it can reach (m).
+    pub reach: f64,
+    /// The energy of the strings and bridges that move it (J).
+    pub energy: f64,
+}
+
+impl std::ops::Add for Elsewhere {
+    type Output = Self;
+
+    fn add(self, other: Self) -> Self {
+        let motion = (self.motion.0 + other.motion.0, self.motion.1 + other.motion.1);
+        Self { motion, reach: self.reach + other.reach, energy: self.energy + other.energy }
+    }
+}
+
 /// One piano voice.
 #[derive(Debug, Clone)]
 pub struct PianoVoice {
@@ -284,9 +306,9 @@ pub struct PianoVoice {
     reference_energy: f64,
     /// Striking position of the latest strike (fraction of the length).
     position: f64,
-    /// What the next strike meets of the strings' motion on other voices' bridges:
-    /// `((β^{n−1}, β^n) (m), its reach (m))` ([`meet`](Self::meet)).
-    meets: ((f64, f64), f64),
+    /// What the next strike meets of the strings' motion on other voices' bridges
+    /// ([`meet`](Self::meet)).
+    meets: Elsewhere,
     /// Samples of steal fade left before `pending` starts.
     fade_left: usize,
     /// A note waiting for the fade to finish.
@@ -336,7 +358,7 @@ impl PianoVoice {
             unweighed: 0,
             reference_energy: 0.0,
             position: note.strike_position,
-            meets: ((0.0, 0.0), 0.0),
+            meets: Elsewhere::default(),
             fade_left: 0,
             pending: None,
             pending_released: false,
@@ -403,13 +425,17 @@ impl PianoVoice {
         // The felt starts two samples of travel beyond the string, so the hammer lands almost at once.
         let hammer = HammerParams { mass, velocity, position, gap: 2.0 * velocity / fs };
         let string_energy = self.core.own_energy();
-        let (motion, reach) = std::mem::take(&mut self.meets);
-        self.core.set_background(motion, reach);
+        let elsewhere = std::mem::take(&mut self.meets);
+        self.core.set_background(elsewhere.motion, elsewhere.reach);
         self.core.strike(&hammer);
         self.position = position;
         let Ok(law) = PowerLaw::new(note.kappa * settings.hardness * strings, note.alpha) else { return };
-        // All the energy there is: the hammer's and the string's (a re-strike meets a moving string).
-        self.reference_energy = (hammer.kinetic_energy() + string_energy).max(f64::MIN_POSITIVE);
+        // All the energy there is: the hammer's and the string's (a re-strike meets a moving
+        // string), and what the strings' motion elsewhere can bring: with `E` that motion's
+        // energy, the key's copy holds at most `(√(E_hammer + E_string + E) + √E)²`, the copies'
+        // sum and the motion elsewhere each bounded in the energy's norm.
+        let carried = hammer.kinetic_energy() + string_energy + elsewhere.energy;
+        self.reference_energy = (carried.sqrt() + elsewhere.energy.sqrt()).powi(2).max(f64::MIN_POSITIVE);
         let y_ref = law.compression_at_energy(self.reference_energy);
         if !self.solvers.restart(settings.method, law, y_ref, settings.segments, self.core.compressions()) {
             return;
@@ -561,6 +587,12 @@ impl PianoVoice {
     pub fn release(&mut self) {
         self.key_down = false;
         self.pending_released = true;
+    }
+
+    /// The strings' and bridge's energy over the latest strike's reference, all the energy the
+    /// strike had to give (the guard's premise: at most 1).
+    pub fn energy_share(&self) -> f64 {
+        self.core.own_energy() / self.reference_energy
     }
 
     /// How many times the guard has silenced this voice.
@@ -723,8 +755,8 @@ impl PianoVoice {
     /// at its striking point: `(β^{n−1}, β^n)` (m) and how far it can reach (m), the sum of
     /// [`partner_motion`](Self::partner_motion) over the voices that ring the key. Cleared by
     /// the strike.
-    pub fn meet(&mut self, motion: (f64, f64), reach: f64) {
-        self.meets = (motion, reach);
+    pub fn meet(&mut self, elsewhere: Elsewhere) {
+        self.meets = elsewhere;
     }
 
     /// Whether the hammer can still touch the strings of a sounding voice (not retired).
@@ -758,14 +790,14 @@ impl PianoVoice {
         self.partner_keys[..self.core.partners()].iter().fold(0, |m, &k| m | bit(k))
     }
 
-    /// Partner `j`'s displacement at its key's striking point `ell`, `(u^{n−1}, u^n)` (m), and
-    /// how far it can reach (m): its bound per `√(2H)` times the most energy the guard lets this
-    /// voice's strings and bridge hold, [`GUARD_FACTOR`] times its strike's (docs/physics.md
-    /// §14.3).
-    pub fn partner_motion(&self, j: usize, ell: f64) -> ((f64, f64), f64) {
+    /// Partner `j` at its key's striking point `ell` (docs/physics.md §14.3): its displacement
+    /// there, how far it can reach (its bound per `√(2H)` times the most energy the guard lets
+    /// this voice's strings and bridge hold, [`GUARD_FACTOR`] times its strike's) and its energy
+    /// with the bridge's.
+    pub fn partner_motion(&self, j: usize, ell: f64) -> Elsewhere {
         let watch = Watch::new(j, ell, 0);
-        let energy = GUARD_FACTOR * self.reference_energy;
-        (self.core.partner_motion(&watch), self.core.partner_reach(&watch) * (2.0 * energy).sqrt())
+        let reach = self.core.partner_reach(&watch) * (2.0 * GUARD_FACTOR * self.reference_energy).sqrt();
+        Elsewhere { motion: self.core.partner_motion(&watch), reach, energy: self.core.partner_energy(j) }
     }
 
     /// Render `out.len()` samples of bridge force (N).

@@ -608,6 +608,16 @@ impl UnisonCore {
         }
     }
 
+    /// Partner `j`'s energy and the bridge's, weighed with their own stiffnesses (J): the
+    /// energy of what moves the partner at a striking point (module docs).
+    pub fn partner_energy(&self, j: usize) -> f64 {
+        if j >= self.partners {
+            return 0.0;
+        }
+        let bank = &self.coupled_bank;
+        bank.own_energy(self.partner_ranges[j].clone()) + bank.own_energy(self.bridge_range.clone())
+    }
+
     /// The partner strings' energy weighed with their own stiffnesses (J).
     pub fn partners_energy(&self) -> f64 {
         self.partner_ranges[..self.partners].iter().map(|r| self.coupled_bank.own_energy(r.clone())).sum()
