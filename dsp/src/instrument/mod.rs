@@ -1084,10 +1084,10 @@ mod tests {
         assert_eq!(play(&mut instrument, 71), Some(2), "B4");
     }
 
-    /// Play C2 and C3 at velocity 0.7 with the pedal down, then C4 at velocity 0.7 `delay`
+    /// Play the keys `lower` at velocity 0.7 with the pedal down, then C4 at velocity 0.7 `delay`
     /// seconds later (host buffers of `buffer` samples until then). Returns the instrument and
     /// C4's voice.
-    fn c4_after_c2_and_c3(lower: &[u8], delay: f64, buffer: usize) -> (Instrument, usize) {
+    fn c4_after(lower: &[u8], delay: f64, buffer: usize) -> (Instrument, usize) {
         let mut instrument = Instrument::new(48_000.0, 8, Settings::default());
         instrument.handle(Event::Sustain { channel: 0, down: true });
         for &key in lower {
@@ -1112,7 +1112,7 @@ mod tests {
     #[test]
     fn a_key_struck_while_its_strings_ring_on_other_bridges_meets_them_there() {
         let forces = |sizes: &[usize]| {
-            let (mut instrument, c4) = c4_after_c2_and_c3(&[36, 48], 0.5, 64);
+            let (mut instrument, c4) = c4_after(&[36, 48], 0.5, 64);
             let ell = instrument.voices[c4].striking_position();
             let (mut worst, mut largest, mut forces) = (0.0f64, 0.0f64, vec![]);
             let (mut left, mut right) = ([0.0f32; 256], [0.0f32; 256]);
@@ -1164,7 +1164,7 @@ mod tests {
     #[test]
     fn a_hammer_strikes_strings_ringing_from_another_key_harder_or_softer_by_their_phase() {
         let peak = |lower: &[u8], delay: f64| {
-            let (mut instrument, c4) = c4_after_c2_and_c3(lower, delay, 64);
+            let (mut instrument, c4) = c4_after(lower, delay, 64);
             let (mut left, mut right) = ([0.0f32; 1], [0.0f32; 1]);
             let mut peak = 0.0f64;
             for _ in 0..480 {

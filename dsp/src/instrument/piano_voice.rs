@@ -752,7 +752,7 @@ impl PianoVoice {
     }
 
     /// The strings' motion on other voices' bridges that the next strike of this voice meets
-    /// at its striking point: `(β^{n−1}, β^n)` (m) and how far it can reach (m), the sum of
+    /// at its striking point, with how far it can reach and the energy that moves it: the sum of
     /// [`partner_motion`](Self::partner_motion) over the voices that ring the key. Cleared by
     /// the strike.
     pub fn meet(&mut self, elsewhere: Elsewhere) {
