@@ -697,12 +697,6 @@ impl UnisonCore {
         (self.hv.0 + self.ell * b.0 + beta.0, self.hv.1 + self.ell * b.1 + beta.1)
     }
 
-    /// The strings' displacement at the striking point now, `u_h^n` (m): their mean, with the
-    /// bridge's share and the background.
-    pub fn under_hammer_now(&self) -> f64 {
-        self.under_hammer().1
-    }
-
     /// The background `β^n` (m): the strings' motion at the striking point in the other keys'
     /// copies, as the hammer last met it (module docs).
     pub fn background(&self) -> f64 {
@@ -1321,7 +1315,7 @@ mod tests {
             let (mut force, mut output, mut drift, mut peak) = (0.0f64, 0.0f64, 0.0f64, initial);
             for frame in &whole {
                 let rung = copy.step::<S, true>(&mut idle);
-                fresh.background_next = copy.under_hammer_now();
+                fresh.background_next = copy.under_hammer().1;
                 let struck = fresh.step::<S, true>(&mut solver);
                 force = force.max((struck.force - frame.force).abs());
                 output = output.max((struck.output + rung.output - frame.output).abs());
