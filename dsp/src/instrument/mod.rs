@@ -678,19 +678,12 @@ impl Instrument {
             let (voices, backgrounds, meeting) = (&mut self.voices, &mut self.backgrounds, &mut self.meeting);
             order_meetings(voices, self.notes.live_in(pianos.clone()), meeting, backgrounds, len);
             let meets = meeting.iter().fold(0u128, |m, &i| m | 1 << i);
-            for i in self.notes.live_in(pianos.clone()) {
-                if !self.voices[i].sounding || meets & 1 << i != 0 {
+            let others = self.notes.live_in(pianos.clone()).filter(move |&i| meets & 1 << i == 0).map(|i| (i, 0));
+            for (i, later) in others.chain(self.meeting.iter().enumerate().map(|(k, &i)| (i, k + 1))) {
+                if !self.voices[i].sounding {
                     continue;
                 }
-                render_piano(&mut self.voices, &mut self.backgrounds, &self.meeting, i, 0, scratch);
-                let voice = &mut self.voices[i];
-                let pan = pan_gains(voice.strike.key, width);
-                let gains = Gains { voicing: voice.voicing, pan, rate: self.voicing_rate };
-                mix_voiced(scratch, &gains, &mut voice.voiced, &mut voice.pan, bus_l, bus_r);
-            }
-            for k in 0..self.meeting.len() {
-                let i = self.meeting[k];
-                render_piano(&mut self.voices, &mut self.backgrounds, &self.meeting, i, k + 1, scratch);
+                render_piano(&mut self.voices, &mut self.backgrounds, &self.meeting, i, later, scratch);
                 let voice = &mut self.voices[i];
                 let pan = pan_gains(voice.strike.key, width);
                 let gains = Gains { voicing: voice.voicing, pan, rate: self.voicing_rate };
