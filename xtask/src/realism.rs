@@ -978,8 +978,11 @@ fn readme(
          both: [electric](realism/guitar-electric.wav), [acoustic](realism/guitar-acoustic.wav).\n\n\
          {stereo_text}\n\n\
          ## Not shown yet\n\n\
-         Each key has its own copy of the soundboard and of its partners, so keys played together do not \
-         ring through one bridge. Decay times above C4 have no measured grand beside them, and the string \
+         Each key has its own copy of the soundboard and of its partners. The copies add up to one shared \
+         bridge, and a key struck meets its strings where the other copies ring them, but a partner is its \
+         key's unison moving in phase, with its lowest modes only, and of keys struck in the same instant \
+         each meets only what the ones rendered before it give its strings (docs/physics.md §14.3, §14.4). \
+         Decay times above C4 have no measured grand beside them, and the string \
          scale is the rule's, not a measured grand's (docs/physics.md §8.2). The acoustic guitar's top above \
          its lowest mode is a mean-value plate drawn from the two-mass model's numbers, not a measured \
          guitar's modes (docs/physics.md §13.5).\n",
