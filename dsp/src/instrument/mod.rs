@@ -1208,7 +1208,7 @@ mod tests {
     /// each), host buffers of 1 to 4,096 samples, and over half of each run every piano
     /// parameter, the solver and the control block sent to either end of its range or anywhere
     /// between before one event in twenty. No voice's strings and bridge ever hold more than its
-    /// latest strike's reference energy, all the energy it had to give (measured at most 0.999
+    /// latest strike's reference energy, all the energy it had to give (measured at most 0.996
     /// of it), the guard never fires and every sample is finite. A voice fading out for a stolen
     /// note is left out: its fade's damping weighs its energy anew, and the guard does not read
     /// it.
