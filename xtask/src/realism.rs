@@ -6,7 +6,9 @@
 //! - **Contact duration** against key at mezzo-forte and forte, beside the string's period and
 //!   the published measurements of docs/physics.md §8.4.
 //! - **Inharmonicity** `B` against key beside the grands measured by Lehtonen et al. and Rigaud
-//!   et al.
+//!   et al., and Young's plain strings of six pianos.
+//! - **String scale**: the rule's speaking lengths beside a measured grand's, and its strings as
+//!   steel wires.
 //! - **Decay rates** of the first two partials against key, prompt sound and aftersound, and the
 //!   fundamental's T60 beside a measured grand's at C2–C4 with the pedal up and down.
 //! - **Sympathetic resonance**: what the pedal adds to C3 at each key's pitch.
@@ -152,6 +154,51 @@ pub const MEASURED_B: [(u8, f64, f64, &str); 6] = [
     (84, 2.8e-3, 3.2e-3, "Rigaud et al. 2013"),
     (108, 2.6e-2, 3.1e-2, "Rigaud et al. 2013"),
 ];
+
+/// Speaking lengths (mm) of a grand's plain strings, B2 (MIDI key 47) to C8 (108): a Steinway
+/// model M (1.70 m) from 1936, measured by a piano technician (P. Stewart, RPT, on the Piano
+/// Technicians Guild's Pianotech list, thread "String lengths?", 16 October 2019).
+pub const MEASURED_LENGTHS: (u8, [u16; 62]) = (
+    47,
+    [
+        1009, 1001, 990, 979, 965, 948, 922, 900, 847, 798, 756, 715, 678, 640, 607, 572, 542, 511, 482, 456, 432, 412,
+        392, 374, 355, 340, 327, 312, 290, 274, 259, 245, 232, 219, 208, 196, 186, 176, 164, 156, 149, 142, 135, 129,
+        123, 114, 109, 102, 95, 90, 85, 80, 75, 71, 68, 64, 61, 58, 56, 54, 52, 50,
+    ],
+);
+
+/// The Steinway model M's speaking length at `key` (m), where [`MEASURED_LENGTHS`] has it.
+pub fn measured_length(key: u8) -> Option<f64> {
+    let (first, lengths) = MEASURED_LENGTHS;
+    lengths.get(usize::from(key.checked_sub(first)?)).map(|&mm| f64::from(mm) * 1e-3)
+}
+
+/// A concert grand's speaking lengths at its lowest and highest modelled keys (m): Chabassier,
+/// Chaigne and Joly's strings from a Steinway D's scale (JASA 134(1), 2013), D♯1 and F♯7.
+pub const CONCERT_GRAND_LENGTHS: [(u8, f64); 2] = [(27, 1.965), (102, 0.069)];
+
+/// Young's inharmonicity of plain steel strings (JASA 24(3), 1952, six pianos of several makes
+/// and sizes), as `B`: "about 1.2 cents" for the second mode of C4, doubling every eight semitones
+/// above. His cents are a mode's departure from `n` times the flexible string's fundamental,
+/// `1200·log2 √(1 + Bn²) ≈ (600/ln 2)·Bn²`, so C4's `B` is `1.2 ln 2/(600·4)`.
+pub fn young_inharmonicity(key: u8) -> f64 {
+    1.2 * std::f64::consts::LN_2 / (600.0 * 4.0) * 2f64.powf((f64::from(key) - 60.0) / 8.0)
+}
+
+/// Steel's density (kg/m³) and its Young's modulus over density (m²/s²; Young 1952 took
+/// 25.5·10¹⁰ cm²/s²).
+const STEEL: (f64, f64) = (7850.0, 2.55e7);
+
+/// The diameters (m) of the solid steel wires that have `key`'s string's mass per length and its
+/// bending stiffness per mass: `ρA = ρπd²/4` and `EI/ρA = (E/ρ)d²/16`. For a plain string the two
+/// agree; a wound string is heavier than its core's stiffness says.
+pub fn steel_diameters(key: u8) -> (f64, f64) {
+    let string = piano_note(key).string;
+    let (density, specific_modulus) = STEEL;
+    let by_mass = (4.0 * string.linear_density / (std::f64::consts::PI * density)).sqrt();
+    let by_stiffness = 4.0 * (string.bending_stiffness / (string.linear_density * specific_modulus)).sqrt();
+    (by_mass, by_stiffness)
+}
 
 /// Published decay times of a grand's fundamental: `(key, T60 with the pedal up, T60 with the
 /// pedal down)` (s). Lehtonen, Penttinen, Rauhala & Välimäki, JASA 122(3), 2007, Table III (one
@@ -324,6 +371,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let envelopes = envelopes(&dir.join("envelopes.png"))?;
     let contacts = contacts(&dir.join("contact.png"))?;
     inharmonicity(&dir.join("inharmonicity.png"))?;
+    lengths(&dir.join("lengths.png"))?;
     let decays = decays(&dir.join("decay.png"))?;
     let t60 = MEASURED_T60.map(|m| (m, fundamental_t60(m.0, false), fundamental_t60(m.0, true)));
     let sympathy = sympathetic(&dir.join("sympathetic.png"))?;
@@ -466,6 +514,12 @@ fn inharmonicity(path: &Path) -> Result<(), String> {
         .map_err(|e| e.to_string())?
         .label("the per-note rule")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE.stroke_width(2)));
+    let young: Vec<(f64, f64)> = (60..=108u8).map(|k| (f64::from(k), young_inharmonicity(k))).collect();
+    chart
+        .draw_series(DashedLineSeries::new(young, 6, 4, BLACK.stroke_width(2)))
+        .map_err(|e| e.to_string())?
+        .label("plain wire, six pianos: Young 1952")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
     for (source, colour) in [("Lehtonen et al. 2007", RED), ("Rigaud et al. 2013", GREEN)] {
         let marks: Vec<_> = MEASURED_B.iter().filter(|m| m.3 == source).collect();
         for m in &marks {
@@ -484,6 +538,46 @@ fn inharmonicity(path: &Path) -> Result<(), String> {
             .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
     }
     crate::report::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+    root.present().map_err(|e| e.to_string())
+}
+
+fn lengths(path: &Path) -> Result<(), String> {
+    let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("Speaking length against key", ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(70)
+        .build_cartesian_2d(20f64..109f64, (0.04f64..2.5f64).log_scale())
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc("MIDI key (21 = A0, 60 = C4, 108 = C8)")
+        .y_desc("speaking length (m)")
+        .y_labels(12)
+        .light_line_style(WHITE)
+        .y_label_formatter(&|l| format!("{l:.2}"))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let model: Vec<(f64, f64)> = (21..=108u8).map(|k| (f64::from(k), piano_note(k).string.length)).collect();
+    chart
+        .draw_series(LineSeries::new(model, BLUE.stroke_width(2)))
+        .map_err(|e| e.to_string())?
+        .label("the per-note rule")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE.stroke_width(2)));
+    let measured = (21..=108u8).filter_map(|k| Some((f64::from(k), measured_length(k)?)));
+    chart
+        .draw_series(measured.map(|p| Circle::new(p, 3, RED.filled())))
+        .map_err(|e| e.to_string())?
+        .label("measured: Steinway M (1936)")
+        .legend(|(x, y)| Circle::new((x + 10, y), 3, RED.filled()));
+    chart
+        .draw_series(CONCERT_GRAND_LENGTHS.iter().map(|&(k, l)| Circle::new((f64::from(k), l), 5, GREEN.filled())))
+        .map_err(|e| e.to_string())?
+        .label("Steinway D (Chabassier et al. 2013)")
+        .legend(|(x, y)| Circle::new((x + 10, y), 5, GREEN.filled()));
+    crate::report::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     root.present().map_err(|e| e.to_string())
 }
 
@@ -851,6 +945,29 @@ fn readme(
     let crossover = contacts.iter().find(|c| c.1 * 1e-3 * pitch(c.0) >= 1.0).map_or(0, |c| c.0);
     let two_stage = decays.iter().filter(|d| d.1[1].0 >= 2.0 * d.1[1].1).count();
     let b = |key: u8| piano_note(key).string.inharmonicity();
+    let percent = |ratio: f64| 100.0 * (ratio - 1.0);
+    let span = |values: &mut dyn Iterator<Item = f64>| {
+        values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
+    };
+    let (young_low, young_high) = span(&mut (60..=108u8).map(|k| percent(b(k) / young_inharmonicity(k))));
+    let (grands_low, grands_high) = span(
+        &mut MEASURED_B
+            .iter()
+            .filter(|m| m.0 >= 60)
+            .flat_map(|m| [m.1, m.2].map(|measured| percent(measured / young_inharmonicity(m.0)))),
+    );
+    let length = |key: u8| piano_note(key).string.length;
+    let against_m = |key: u8| measured_length(key).map(|m| percent(length(key) / m));
+    let (treble_low, treble_high) = span(&mut (60..=108u8).filter_map(against_m));
+    let (tenor_low, tenor_high) = span(&mut (47..60u8).filter_map(against_m).map(|d| -d));
+    let (concert_f7, m_f7) = (CONCERT_GRAND_LENGTHS[1].1, measured_length(102).unwrap_or(f64::NAN));
+    let (f7, grands_f7) = (percent(length(102) / concert_f7), percent(concert_f7 / m_f7));
+    let steel_treble = (60..=108u8)
+        .map(steel_diameters)
+        .map(|(mass, stiff)| 100.0 * (mass.max(stiff) / mass.min(stiff) - 1.0))
+        .fold(0.0, f64::max);
+    let ((c4_mass, c4_stiff), (c3_mass, c3_stiff)) = (steel_diameters(60), steel_diameters(48));
+    let [c4_mass, c4_stiff, c3_mass, c3_stiff] = [c4_mass, c4_stiff, c3_mass, c3_stiff].map(|d| 1e3 * d);
     let added = |key: u8| sympathy.iter().find(|r| r.0 == key).map_or(f64::NAN, |r| r.1);
     let names = [(60u8, "C4"), (67, "G4"), (72, "C5"), (76, "E5")];
     let sympathy_rows = names
@@ -946,7 +1063,21 @@ fn readme(
          The rule's B beside Lehtonen et al. (JASA 122(3), 2007, one grand) and Rigaud et al. (JASA 133(5), \
          2013, the spread of their fit). The rule takes C2 and C4 from Lehtonen's grand ({:.2e} and {:.2e}) \
          and lies within Rigaud's spread widened by 10 % at C4, C6 and C8; below C2 it falls to \
-         its clamp, where no measured bass string was found.\n\n\
+         its clamp, where no measured bass string was found. The dashed line is what Young measured on the \
+         plain strings of six pianos (JASA 24(3), 1952: about 1.2 cents on C4's second mode, doubling every \
+         eight semitones): from C4 to C8 the rule lies {young_low:+.0} % to {young_high:+.0} % from it, the \
+         measured grands above {grands_low:+.0} % to {grands_high:+.0} %.\n\n\
+         ## String scale\n\n\
+         ![speaking lengths](realism/lengths.png)\n\n\
+         The rule's speaking lengths beside a measured grand's, a Steinway M from 1936 (B2 to C8, by a piano \
+         technician; docs/physics.md §8.4), and the two ends of a Steinway D's modelled by Chabassier et al. \
+         (JASA 134(1), 2013). From C4 to C8 the rule lies {treble_low:+.1} % to {treble_high:+.1} % from the M \
+         (at F♯7 {f7:+.1} % from the D, whose string is {grands_f7:.0} % longer than the M's). From B2 to B3 it is \
+         {tenor_low:.0} % to {tenor_high:.0} % shorter than the M, a smaller grand. The rule's strings as \
+         steel wires: from C4 up, the wire with a string's mass and the wire with its bending stiffness \
+         differ by at most {steel_treble:.0} % ({c4_mass:.2} and {c4_stiff:.2} mm at C4); at C3 the string weighs as a \
+         {c3_mass:.2} mm wire but bends like a {c3_stiff:.2} mm one, as a wound string would, where a grand's \
+         tenor has plain wire (docs/physics.md §8.4 says what this may change).\n\n\
          ## A scale at three dynamics\n\n\
          C4 to C5 at MIDI velocities 40, 80 and 120, each note held 0.28 s, 32 kHz mono 16-bit, all three \
          raised by one gain that brings the fortissimo scale's peak to −1 dBFS: [pianissimo](realism/scale-pp.wav), [mezzo-forte](realism/scale-mf.wav), \
