@@ -1077,7 +1077,7 @@ fn readme(
          steel wires: from C4 up, the wire with a string's mass and the wire with its bending stiffness \
          differ by at most {steel_treble:.0} % ({c4_mass:.2} and {c4_stiff:.2} mm at C4); at C3 the string weighs as a \
          {c3_mass:.2} mm wire but bends like a {c3_stiff:.2} mm one, as a wound string would, where a grand's \
-         tenor has plain wire (docs/physics.md §8.4 says what this may change).\n\n\
+         tenor has plain wire (docs/physics.md §8.4; given the M's lengths, the tenor's decay barely moves).\n\n\
          ## A scale at three dynamics\n\n\
          C4 to C5 at MIDI velocities 40, 80 and 120, each note held 0.28 s, 32 kHz mono 16-bit, all three \
          raised by one gain that brings the fortissimo scale's peak to −1 dBFS: [pianissimo](realism/scale-pp.wav), [mezzo-forte](realism/scale-mf.wav), \
