@@ -25,6 +25,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
+use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use qsa_dsp::instrument::PianoVoice;
 use qsa_dsp::instrument::{Event, Instrument, Mode, Settings, SlideBody, hammer_speed};
@@ -441,19 +443,8 @@ fn contacts(path: &Path) -> Result<Vec<Contact>, String> {
         .collect();
     let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption("Hammer–string contact duration against key", ("sans-serif", 22))
-        .margin(12)
-        .x_label_area_size(44)
-        .y_label_area_size(60)
-        .build_cartesian_2d(20f64..109f64, (0.1f64..10.0f64).log_scale())
-        .map_err(|e| e.to_string())?;
-    chart
-        .configure_mesh()
-        .x_desc("MIDI key (21 = A0, 60 = C4, 108 = C8)")
-        .y_desc("duration (ms)")
-        .draw()
-        .map_err(|e| e.to_string())?;
+    let mut chart = against_key(&root, "Hammer–string contact duration against key", (0.1, 10.0), 60)?;
+    chart.configure_mesh().x_desc(KEY_AXIS).y_desc("duration (ms)").draw().map_err(|e| e.to_string())?;
     let series = [
         (rows.iter().map(|r| (f64::from(r.0), r.1)).collect::<Vec<_>>(), BLUE, "the model, mezzo-forte (2.5 m/s)"),
         (rows.iter().map(|r| (f64::from(r.0), r.2)).collect::<Vec<_>>(), RED, "the model, forte (5 m/s)"),
@@ -491,19 +482,33 @@ fn contacts(path: &Path) -> Result<Vec<Contact>, String> {
     Ok(rows)
 }
 
+/// The x axis of the pictures against key.
+const KEY_AXIS: &str = "MIDI key (21 = A0, 60 = C4, 108 = C8)";
+
+/// A chart over the keyboard (MIDI keys 20 to 109) of a quantity on a log scale from `low` to
+/// `high`, with `y_area` pixels for its labels.
+fn against_key<'a, 'b>(
+    root: &'b DrawingArea<BitMapBackend<'a>, Shift>,
+    caption: &str,
+    (low, high): (f64, f64),
+    y_area: u32,
+) -> Result<ChartContext<'b, BitMapBackend<'a>, Cartesian2d<RangedCoordf64, LogCoord<f64>>>, String> {
+    ChartBuilder::on(root)
+        .caption(caption, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(y_area)
+        .build_cartesian_2d(20f64..109f64, (low..high).log_scale())
+        .map_err(|e| e.to_string())
+}
+
 fn inharmonicity(path: &Path) -> Result<(), String> {
     let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption("Inharmonicity coefficient B against key", ("sans-serif", 22))
-        .margin(12)
-        .x_label_area_size(44)
-        .y_label_area_size(70)
-        .build_cartesian_2d(20f64..109f64, (1e-5f64..0.1f64).log_scale())
-        .map_err(|e| e.to_string())?;
+    let mut chart = against_key(&root, "Inharmonicity coefficient B against key", (1e-5, 0.1), 70)?;
     chart
         .configure_mesh()
-        .x_desc("MIDI key (21 = A0, 60 = C4, 108 = C8)")
+        .x_desc(KEY_AXIS)
         .y_desc("B")
         .y_label_formatter(&|b| format!("{b:.0e}"))
         .draw()
@@ -544,16 +549,10 @@ fn inharmonicity(path: &Path) -> Result<(), String> {
 fn lengths(path: &Path) -> Result<(), String> {
     let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption("Speaking length against key", ("sans-serif", 22))
-        .margin(12)
-        .x_label_area_size(44)
-        .y_label_area_size(70)
-        .build_cartesian_2d(20f64..109f64, (0.04f64..2.5f64).log_scale())
-        .map_err(|e| e.to_string())?;
+    let mut chart = against_key(&root, "Speaking length against key", (0.04, 2.5), 70)?;
     chart
         .configure_mesh()
-        .x_desc("MIDI key (21 = A0, 60 = C4, 108 = C8)")
+        .x_desc(KEY_AXIS)
         .y_desc("speaking length (m)")
         .y_labels(12)
         .light_line_style(WHITE)
