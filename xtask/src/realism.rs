@@ -1112,8 +1112,9 @@ fn readme(
          bridge, and a key struck meets its strings where the other copies ring them, but a partner is its \
          key's unison moving in phase, with its lowest modes only, and of keys struck in the same instant \
          each meets only what the ones rendered before it give its strings (docs/physics.md §14.3, §14.4). \
-         Decay times above C4 have no measured grand beside them, and the string \
-         scale is the rule's, not a measured grand's (docs/physics.md §8.2). The acoustic guitar's top above \
+         Decay times above C4 have no measured grand beside them. The string scale is the rule's: its lengths \
+         follow a measured grand's from C4 up, but no grand's tensions, tenor inharmonicity or wound bass \
+         strings were found to set it from (docs/physics.md §8.4). The acoustic guitar's top above \
          its lowest mode is a mean-value plate drawn from the two-mass model's numbers, not a measured \
          guitar's modes (docs/physics.md §13.5).\n",
         hammer_speed(0.6),
