@@ -370,6 +370,60 @@ fn stealing_takes_the_least_audible_voice() {
     }
 }
 
+/// Shedding (what the plugin asks for when the host's audio thread cannot keep up) takes the least
+/// audible piano voices, fades them out as a steal does and ends their notes, without a click and
+/// without an allocation: of six keys held at velocities from 0.9 down to 0.15, `shed_voices(3)`
+/// fades the three softest, whose notes end within the steal's fade (5 ms, in whole control
+/// blocks), while the three loudest sound on; asked for more than sound, it sheds what there is.
+/// The detector stays below [`CLICK_DB`] over the fades in 1- and 64-sample host buffers, and a
+/// step of 5 % of the peak in the middle of the fades is found there above it.
+#[test]
+fn shedding_fades_out_the_least_audible_voices_and_ends_their_notes_without_a_click() {
+    let notes = [(60u8, 0.9f32), (62, 0.15), (64, 0.6), (65, 0.25), (67, 0.75), (69, 0.4)];
+    let score: Score = notes.iter().map(|&(key, velocity)| (0, on(key, velocity))).collect();
+    let fade = (STEAL_TIME * FS).ceil() as usize;
+    for size in [1usize, 64] {
+        let mut p = piano(8);
+        let block = Settings::default().block;
+        let latency = p.latency();
+        let mut out = play(&mut p, &score, 9_600, || size);
+        let _ = p.drain_ended().count();
+        let mut shed = 0;
+        assert_eq!(allocations_in(|| shed = p.shed_voices(3)), 0, "shedding allocated");
+        assert_eq!(shed, 3);
+        // The fade lasts whole control blocks from the next block boundary after the call.
+        let boundary = 9_600usize.div_ceil(block) * block;
+        let silent_by = boundary + fade.div_ceil(block) * block + block;
+        out.extend(play(&mut p, &Vec::new(), silent_by - 9_600, || size));
+        let mut ended: Vec<u8> = p.drain_ended().map(|e| e.note.key).collect();
+        ended.sort_unstable();
+        let sounding: Vec<u8> = p.piano_keys().collect();
+        println!("buffers of {size}: shed {ended:?}, sounding {sounding:?}, {} shed in all", p.shed_count());
+        assert_eq!(ended, [62, 65, 69], "buffers of {size}: the softest three end");
+        assert_eq!(p.sounding(), 3);
+        assert!(sounding.iter().all(|k| [60, 64, 67].contains(k)), "buffers of {size}: {sounding:?}");
+        out.extend(play(&mut p, &Vec::new(), 9_600, || size));
+        assert_eq!(p.sounding(), 3, "buffers of {size}: the loudest three sound on");
+        // Asked for more than sound, it sheds those there are.
+        assert_eq!(p.shed_voices(10), 3);
+        assert_eq!(p.shed_voices(1), 0, "voices fading already are not shed again");
+        let out = wide(&out);
+        let attack = latency..latency + 384;
+        let attacks = std::slice::from_ref(&attack);
+        let (db, at) = click_strength(&out, FS, attacks);
+        let fades = boundary + latency..boundary + latency + fade;
+        println!("buffers of {size}: worst click {db:.1} dB at {at}; the fades at {fades:?}");
+        assert!(db < CLICK_DB, "buffers of {size}: {db:.1} dB at sample {at}");
+        let peak = out.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let middle = (fades.start + fades.end) / 2;
+        let mut stepped = out.clone();
+        stepped[middle..].iter_mut().for_each(|v| *v += 0.05 * peak);
+        let (step_db, step_at) = click_strength(&stepped, FS, attacks);
+        println!("buffers of {size}: a 5 % step at {middle} scores {step_db:.1} dB at {step_at}");
+        assert!(step_db > CLICK_DB && step_at.abs_diff(middle) < 48, "{step_db:.1} dB at {step_at}");
+    }
+}
+
 /// A damper landing while the hammer is still on the string (note-off 0.5 ms after note-on, the
 /// felt in contact for about 1 to 4 ms) and dampers landing on ringing strings do not click,
 /// across the keyboard and from pianissimo to fortissimo.

@@ -289,6 +289,8 @@ pub struct Instrument {
     meeting: Vec<usize>,
     /// Notes that had to take a busy voice.
     steals: u64,
+    /// Piano voices shed to lighten the load ([`Instrument::shed_voices`]).
+    shed: u64,
     /// The piano's soundboard radiating the left and right channels' bridge forces.
     boards: [Body; 2],
     /// One control block of the piano's bridge forces, left and right, and of the slide
@@ -340,6 +342,7 @@ impl Instrument {
             resonance: settings.pickup_resonance,
             raw: false,
             steals: 0,
+            shed: 0,
             output: OutputStage::new(sample_rate, settings.gain),
             voicing_rate: 1.0 - (-1.0 / (VOICING_TIME * sample_rate)).exp(),
             notes: NoteBook::new(2 * count),
@@ -415,6 +418,30 @@ impl Instrument {
     /// How many notes have had to take a busy voice (a steal) since the instrument was made.
     pub fn steals(&self) -> u64 {
         self.steals
+    }
+
+    /// Fade out the `count` least audible sounding piano voices (the quietest output over their
+    /// latest block first), as a stolen voice fades, and let them fall silent, their notes ending:
+    /// what a host's audio thread that cannot keep up calls for. Voices fading already are left
+    /// to their fade; slide voices are kept. Returns how many began to fade.
+    pub fn shed_voices(&mut self, count: usize) -> usize {
+        let mut shed = 0;
+        while shed < count {
+            let quietest = (self.voices.iter().enumerate())
+                .filter(|(_, v)| v.sounding && !v.fading())
+                .min_by(|(_, a), (_, b)| a.loudness().total_cmp(&b.loudness()))
+                .map(|(i, _)| i);
+            let Some(i) = quietest else { break };
+            self.voices[i].shed(self.sample_rate);
+            shed += 1;
+        }
+        self.shed += shed as u64;
+        shed
+    }
+
+    /// How many piano voices have been shed since the instrument was made.
+    pub fn shed_count(&self) -> u64 {
+        self.shed
     }
 
     /// How many times the guard has silenced a voice since the instrument was made (see

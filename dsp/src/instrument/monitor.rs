@@ -14,6 +14,8 @@ pub struct Monitor {
     pub sounding: usize,
     /// Voices the guard has silenced since the engine started ([`Instrument::guard_trips`]).
     pub guard_trips: u32,
+    /// Piano voices shed to lighten the load since the engine started ([`Instrument::shed_count`]).
+    pub shed: u64,
     /// Mode of the loudest voice.
     pub mode: Mode,
     /// Its MIDI key.
@@ -37,6 +39,7 @@ impl Default for Monitor {
         Self {
             sounding: 0,
             guard_trips: 0,
+            shed: 0,
             mode: Mode::Piano,
             key: 60,
             energy: 0.0,
@@ -65,7 +68,7 @@ impl Instrument {
         let Some((_, string, energy, (compression, force, position), key, mode)) =
             piano.chain(slide).max_by(|a, b| a.0.total_cmp(&b.0))
         else {
-            return Monitor { guard_trips: self.guard_trips(), ..Monitor::default() };
+            return Monitor { guard_trips: self.guard_trips(), shed: self.shed_count(), ..Monitor::default() };
         };
         let length = string.params().length;
         let mut shape = [0.0f32; SHAPE_POINTS];
@@ -76,6 +79,7 @@ impl Instrument {
         Monitor {
             sounding: self.sounding(),
             guard_trips: self.guard_trips(),
+            shed: self.shed_count(),
             mode,
             key,
             energy,

@@ -49,6 +49,9 @@
 //!   mean square of its output over its latest block ([`PianoVoice::loudness`]). The stolen voice
 //!   fades at [`STEAL_RATE`] (a decay rate added to every mode, again without touching the state)
 //!   for [`STEAL_TIME`], then its new note starts on a fresh string.
+//! - **Shedding.** When the host's audio thread cannot keep up, the plugin has the least audible
+//!   voices fade the same way with no note to follow ([`PianoVoice::shed`]): they fall silent and
+//!   their notes end.
 //! - **Guard.** With no source but the hammer, the string can never hold more than the energy of
 //!   the latest strike. A string found with more than [`GUARD_FACTOR`] times that fades out over
 //!   the control block and falls silent; a non-finite sample silences it at once (the samples
@@ -315,6 +318,8 @@ pub struct PianoVoice {
     pending: Option<Strike>,
     /// Whether the pending note's key was released while it waited.
     pending_released: bool,
+    /// Fading out with no note to follow (shed to lighten the load).
+    shedding: bool,
     /// Mean square of the output over the latest rendered block (N²).
     loudness: f64,
     /// The guard's fade-out, once the voice has been caught over its bound.
@@ -362,6 +367,7 @@ impl PianoVoice {
             fade_left: 0,
             pending: None,
             pending_released: false,
+            shedding: false,
             loudness: 0.0,
             guard_fade: GuardFade::default(),
             trips: 0,
@@ -547,11 +553,28 @@ impl PianoVoice {
 
     /// Fade out over [`STEAL_TIME`], then play `strike` (a stolen voice).
     pub fn steal(&mut self, strike: Strike, sample_rate: f64, now: u64) {
-        self.fade_left = (STEAL_TIME * sample_rate).ceil() as usize;
         self.pending = Some(strike);
         self.pending_released = false;
-        self.key_down = false;
+        self.shedding = false;
         self.started = now;
+        self.fade_out(sample_rate);
+    }
+
+    /// Fade out over [`STEAL_TIME`] and fall silent, the note ending: a sounding voice given up to
+    /// lighten the load. Whether it began to fade (not if silent or fading already).
+    pub fn shed(&mut self, sample_rate: f64) -> bool {
+        if !self.sounding || self.fading() {
+            return false;
+        }
+        self.shedding = true;
+        self.fade_out(sample_rate);
+        true
+    }
+
+    /// Every mode decays at [`STEAL_RATE`] for [`STEAL_TIME`], the state untouched.
+    fn fade_out(&mut self, sample_rate: f64) {
+        self.fade_left = (STEAL_TIME * sample_rate).ceil() as usize;
+        self.key_down = false;
         self.extra.clear();
         self.extra.resize(self.core.modes(), STEAL_RATE);
         self.core.set_extra_decay(&self.extra, STEAL_RATE);
@@ -613,6 +636,7 @@ impl PianoVoice {
         self.sounding = false;
         self.key_down = false;
         self.pending = None;
+        self.shedding = false;
         self.fade_left = 0;
         self.damper = 0.0;
         self.loudness = 0.0;
@@ -623,9 +647,9 @@ impl PianoVoice {
         self.sounding && self.core.in_contact()
     }
 
-    /// Whether this voice is being faded out to make room for another note.
+    /// Whether this voice is being faded out, to make room for another note or shed.
     pub fn fading(&self) -> bool {
-        self.pending.is_some()
+        self.pending.is_some() || self.shedding
     }
 
     /// Energy of the string and hammer (J).
@@ -653,7 +677,7 @@ impl PianoVoice {
         mut partners: Option<&mut PartnerTable>,
         seeks: &mut usize,
     ) {
-        if !self.sounding && self.pending.is_none() {
+        if !self.sounding && !self.fading() {
             return;
         }
         if self.guard_fade.is_fading() {
@@ -661,16 +685,21 @@ impl PianoVoice {
             return;
         }
         let fs = self.core.string().sample_rate();
+        if self.shedding && self.fade_left == 0 {
+            self.silence();
+            return;
+        }
         if let Some(strike) = self.pending
             && self.fade_left == 0
         {
             self.pending = None;
+            self.shedding = false;
             self.sounding = false;
             let partners = partners.as_deref_mut().map(|table| (table.ready(), dampers));
             self.play_with(strike, settings, now, partners);
             self.key_down = !self.pending_released;
         }
-        if self.pending.is_some() {
+        if self.fading() {
             self.fade_left = self.fade_left.saturating_sub(len);
             return;
         }
