@@ -129,8 +129,8 @@ impl EditorApp {
     }
 }
 
-/// Title, what the loudest voice is, how many voices the energy guard silenced (if any), and
-/// the DSP load.
+/// Title, what the loudest voice is, how many voices the energy guard silenced and the overload
+/// guard shed (if any), and the DSP load.
 fn header(ui: &mut Ui, m: &Monitor, load: f32, peak: f32) {
     ui.horizontal(|ui| {
         ui.label(RichText::new("QSA Strings").size(20.0).strong());
@@ -154,6 +154,12 @@ fn header(ui: &mut Ui, m: &Monitor, load: f32, peak: f32) {
             // The energy guard silenced voices whose physics misbehaved: worth a bug report.
             let text = format!("guard silenced {}", plural(m.guard_trips as usize, "voice"));
             ui.label(RichText::new(text).color(Color32::from_rgb(230, 120, 40)));
+        }
+        if m.shed > 0 {
+            ui.label(RichText::new(format!("shed {}", m.shed)).color(Color32::from_rgb(230, 180, 40))).on_hover_text(
+                "Voices faded out because the audio thread could not keep up: play fewer voices, use a larger \
+                 buffer or a faster machine.",
+            );
         }
         ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
             ui.label(RichText::new(format!("{:5.1} % (peak {:.1} %)", load * 100.0, peak * 100.0)).monospace());

@@ -18,6 +18,8 @@
 //!   note's end goes back to the host as `VoiceTerminated` (CLAP note-end), which CLAP
 //!   polyphonic modulation needs to free its per-voice modulators.
 //!
+//! - When the audio thread cannot keep up in real-time processing, the least audible piano voices
+//!   fade out ([`overload`]) rather than the host dropping buffers.
 //! - The editor ([`editor`]) shows the parameters and the loudest voice. `process` times itself
 //!   and, every 1/30 s of audio while the editor is open, hands the engine's monitor snapshot to
 //!   it through the lock-free [`meter`] path (no allocation, lock or I/O on the audio thread).
@@ -27,6 +29,7 @@
 
 pub mod editor;
 pub mod meter;
+pub mod overload;
 pub mod params;
 
 use std::num::NonZeroU32;
@@ -39,6 +42,7 @@ use nice_plug_egui::{EguiEditor, EguiEditorState};
 use qsa_dsp::instrument::{Event, Instrument, Note, NoteTarget};
 
 use meter::{Shared, Tap};
+use overload::OverloadGuard;
 use params::QsaParams;
 
 /// The plugin. (No `Debug`: the framework's parameter types do not implement it.)
@@ -51,6 +55,10 @@ pub struct QsaStrings {
     editor_state: Arc<EguiEditorState>,
     /// The audio side of the data path to the editor (load, monitor snapshots).
     tap: Tap,
+    /// Sheds voices when the audio thread cannot keep up ([`overload`]).
+    guard: OverloadGuard,
+    /// Whether the host processes in real time (the guard acts only then).
+    realtime: bool,
 }
 
 impl Default for QsaStrings {
@@ -60,6 +68,8 @@ impl Default for QsaStrings {
             engine: None,
             editor_state: editor::default_state(),
             tap: Tap::new(Arc::new(Shared::default())),
+            guard: OverloadGuard::default(),
+            realtime: false,
         }
     }
 }
@@ -183,6 +193,8 @@ impl Plugin for QsaStrings {
             context.set_latency_samples(engine.latency() as u32);
         }
         self.tap.set_sample_rate(fs);
+        self.realtime = buffer_config.process_mode == ProcessMode::Realtime;
+        self.guard.reset();
         true
     }
 
@@ -190,6 +202,7 @@ impl Plugin for QsaStrings {
         if let Some(engine) = &mut self.engine {
             engine.handle(Event::AllSoundOff);
         }
+        self.guard.reset();
     }
 
     fn process(
@@ -237,9 +250,19 @@ impl Plugin for QsaStrings {
             }
             next = context.next_event();
         }
+        let elapsed = start.elapsed();
         // Snapshots only while someone looks at them; the load always.
         let open = self.editor_state.is_open();
-        self.tap.after_process(samples, start.elapsed(), self.engine.as_ref().filter(|_| open));
+        self.tap.after_process(samples, elapsed, self.engine.as_ref().filter(|_| open));
+        if self.realtime
+            && let Some(engine) = &mut self.engine
+        {
+            let duration = samples as f64 / engine.sample_rate();
+            let shed = self.guard.after_call(duration, elapsed.as_secs_f64(), engine.piano_keys().count());
+            if shed > 0 {
+                engine.shed_voices(shed);
+            }
+        }
         ProcessStatus::KeepAlive
     }
 }

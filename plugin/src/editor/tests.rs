@@ -146,6 +146,11 @@ fn the_editor_fits_its_window_without_missing_glyphs_or_overlaps() {
     check("slide", &[sounding(Mode::Slide, 0.3, 0); 20], "");
     check("slide, contact near the bridge", &[sounding(Mode::Slide, 0.9, 0); 20], "");
     check("piano, guard tripped", &[sounding(Mode::Piano, 0.12, 3); 20], "");
+    let overloaded = Monitor { shed: 24, ..sounding(Mode::Piano, 0.12, 3) };
+    check("piano, guard tripped and voices shed", &[overloaded; 20], "");
+    let window = vec2(SIZE.0 as f32, SIZE.1 as f32);
+    let (shown, _) = draw(&[overloaded; 20], "", window);
+    assert!(shown.iter().any(|(t, _)| t == "shed 24"), "the shed voices are not shown");
 }
 
 #[test]

@@ -2,7 +2,10 @@
 //! release bundle's path, a host that loads, activates and processes the plugin on an audio
 //! thread, parameter ids by their documented string ids, and timed note, MIDI and parameter
 //! events, CLAP note expressions and polyphonic modulation; renders collect the note-end events
-//! the plugin sends.
+//! the plugin sends. The host renders offline (CLAP's render extension), as a DAW exporting does:
+//! the tests compare samples across buffer sizes and with the offline renderer, and the plugin's
+//! overload guard, which sheds voices when real-time processing cannot keep up, must not act on
+//! how fast the test machine is.
 //!
 //! Used as `#[path = "support/host.rs"] mod host;` next to `#[path = "support/bundle.rs"] mod
 //! bundle;` (this module finds the bundle through `crate::bundle`).
@@ -18,6 +21,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, PoisonError};
 
 use clack_extensions::params::PluginParams;
+use clack_extensions::render::{PluginRender, RenderMode};
 use clack_extensions::state::PluginState;
 use clack_host::events::Match;
 use clack_host::events::event_types::{
@@ -201,6 +205,8 @@ impl Plugin {
             &host_info,
         )
         .expect("instantiate");
+        let render: PluginRender = instance.plugin_handle().get_extension().expect("render extension");
+        render.set(&instance.plugin_handle(), RenderMode::Offline).expect("offline rendering");
         if !setup.is_empty() {
             let params: PluginParams = instance.plugin_handle().get_extension().expect("params extension");
             let mut events = EventBuffer::new();

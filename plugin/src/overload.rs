@@ -1,0 +1,130 @@
+//! The overload guard: when the audio thread cannot keep up, the plugin gives up its least
+//! audible piano voices ([`Instrument::shed_voices`](qsa_dsp::instrument::Instrument::shed_voices))
+//! rather than leave the host to drop whole buffers.
+//!
+//! Each `process` call's load is its time over its buffer's duration (1 = the whole real-time
+//! budget), counted up to [`MAX_COUNTED_LOAD`] so that one call the operating system held up does
+//! not weigh like many, and smoothed over [`GUARD_TIME_CONSTANT`] of audio. Once the smoothed load
+//! exceeds [`OVERLOAD`] (the host needs some of the budget for itself and other plugins), the
+//! guard sheds the share of the sounding voices that brings it to [`TARGET_LOAD`], taking every
+//! voice to cost alike, then waits [`SETTLE_TIME`] for the load to show the effect before it
+//! sheds again. The plugin runs it in real-time processing only: an offline render takes the
+//! time it needs and sounds the same on every machine.
+
+/// Time constant of the guard's smoothed load (s of audio).
+pub const GUARD_TIME_CONSTANT: f64 = 0.05;
+
+/// The most one call's load counts for.
+pub const MAX_COUNTED_LOAD: f64 = 2.0;
+
+/// Smoothed load above which voices are shed.
+pub const OVERLOAD: f64 = 0.9;
+
+/// Load that shedding aims for.
+pub const TARGET_LOAD: f64 = 0.7;
+
+/// Audio time after shedding before the guard may shed again (s): two time constants, in which
+/// the smoothed load moves 86 % of the way to its new level.
+pub const SETTLE_TIME: f64 = 2.0 * GUARD_TIME_CONSTANT;
+
+/// The guard's state: the smoothed load and the time left to settle.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct OverloadGuard {
+    load: f64,
+    settle: f64,
+}
+
+impl OverloadGuard {
+    /// Account for a call that rendered `duration` seconds of audio in `elapsed` seconds, with
+    /// `sounding` voices that could be shed; returns how many to shed now.
+    pub fn after_call(&mut self, duration: f64, elapsed: f64, sounding: usize) -> usize {
+        if !(duration > 0.0) || !elapsed.is_finite() {
+            return 0;
+        }
+        let raw = (elapsed / duration).clamp(0.0, MAX_COUNTED_LOAD);
+        let a = 1.0 - (-duration / GUARD_TIME_CONSTANT).exp();
+        self.load += a * (raw - self.load);
+        self.settle = (self.settle - duration).max(0.0);
+        if self.settle > 0.0 || self.load <= OVERLOAD || sounding == 0 {
+            return 0;
+        }
+        self.settle = SETTLE_TIME;
+        ((sounding as f64 * (1.0 - TARGET_LOAD / self.load)).ceil() as usize).clamp(1, sounding)
+    }
+
+    /// The smoothed load.
+    pub fn load(&self) -> f64 {
+        self.load
+    }
+
+    /// Forget the load measured so far (the engine was reset or made anew).
+    pub fn reset(&mut self) {
+        *self = Self::default();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 64-sample calls at 48 kHz.
+    const CALL: f64 = 64.0 / 48_000.0;
+
+    /// Run `calls` calls at load `load` with `sounding` voices; the sheds asked for, by call.
+    fn run(guard: &mut OverloadGuard, calls: usize, load: f64, sounding: usize) -> Vec<(usize, usize)> {
+        (0..calls)
+            .filter_map(|i| Some((i, guard.after_call(CALL, load * CALL, sounding))).filter(|&(_, n)| n > 0))
+            .collect()
+    }
+
+    /// A load held at 0.85, under the threshold, for ten seconds sheds nothing.
+    #[test]
+    fn a_load_under_the_threshold_sheds_nothing() {
+        let mut guard = OverloadGuard::default();
+        assert!(run(&mut guard, 7_500, 0.85, 88).is_empty());
+        assert!((guard.load() - 0.85).abs() < 1e-9, "smoothed load {}", guard.load());
+    }
+
+    /// One call held up by the operating system for 30 ms (a load of 23 on a 64-sample call)
+    /// amid calls at 0.6 counts as a load of 2 and sheds nothing; the same delay on every call
+    /// sheds.
+    #[test]
+    fn one_late_call_does_not_shed_but_a_steady_overload_does() {
+        let mut guard = OverloadGuard::default();
+        run(&mut guard, 1_000, 0.6, 40);
+        assert_eq!(guard.after_call(CALL, CALL + 0.03, 40), 0);
+        assert!(run(&mut guard, 1_000, 0.6, 40).is_empty());
+        assert!(!run(&mut guard, 100, 23.0, 40).is_empty());
+    }
+
+    /// A steady overload of 1.2 with 88 voices: the first shed comes once the smoothed load
+    /// crosses 0.9 (after `τ·ln(1.2/0.3)` from rest at 0: 69 ms, the 52nd call), and is the share
+    /// `1 − 0.7/L` of the voices at that load; the next waits the settling time (75 calls).
+    #[test]
+    fn a_steady_overload_sheds_the_share_that_brings_the_load_to_its_target_then_settles() {
+        let mut guard = OverloadGuard::default();
+        let sheds = run(&mut guard, 200, 1.2, 88);
+        let first = sheds[0].0;
+        let crossing = (GUARD_TIME_CONSTANT * (1.2f64 / 0.3).ln() / CALL).ceil() as usize - 1;
+        assert!(first.abs_diff(crossing) <= 1, "first shed at call {first}, expected {crossing}");
+        // The smoothed load at that call.
+        let at = 1.2 * (1.0 - (-((first + 1) as f64) * CALL / GUARD_TIME_CONSTANT).exp());
+        let expected = (88.0 * (1.0 - TARGET_LOAD / at)).ceil() as usize;
+        assert_eq!(sheds[0].1, expected, "load {at:.3}");
+        assert!(sheds[0].1 >= 20 && sheds[0].1 <= 25, "{} voices", sheds[0].1);
+        let settle = SETTLE_TIME / CALL;
+        assert!(((sheds[1].0 - first) as f64 - settle).abs() <= 1.0, "{sheds:?}");
+    }
+
+    /// Nothing to shed, a zero-length call or a non-finite time asks for nothing.
+    #[test]
+    fn degenerate_calls_shed_nothing() {
+        let mut guard = OverloadGuard::default();
+        assert!(run(&mut guard, 500, 1.5, 0).is_empty());
+        assert_eq!(guard.after_call(0.0, 1.0, 10), 0);
+        assert_eq!(guard.after_call(CALL, f64::NAN, 10), 0);
+        assert_eq!(guard.after_call(CALL, f64::INFINITY, 10), 0);
+        guard.reset();
+        assert_eq!(guard.load(), 0.0);
+    }
+}
