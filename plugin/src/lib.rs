@@ -18,8 +18,8 @@
 //!   note's end goes back to the host as `VoiceTerminated` (CLAP note-end), which CLAP
 //!   polyphonic modulation needs to free its per-voice modulators.
 //!
-//! - When the audio thread cannot keep up in real-time processing, the least audible piano voices
-//!   fade out ([`overload`]) rather than the host dropping buffers.
+//! - When the audio thread cannot keep up in real-time processing, the least audible voices fade
+//!   out ([`overload`]) rather than the host dropping buffers.
 //! - The editor ([`editor`]) shows the parameters and the loudest voice. `process` times itself
 //!   and, every 1/30 s of audio while the editor is open, hands the engine's monitor snapshot to
 //!   it through the lock-free [`meter`] path (no allocation, lock or I/O on the audio thread).
@@ -258,7 +258,7 @@ impl Plugin for QsaStrings {
             && let Some(engine) = &mut self.engine
         {
             let duration = samples as f64 / engine.sample_rate();
-            let shed = self.guard.after_call(duration, elapsed.as_secs_f64(), engine.piano_keys().count());
+            let shed = self.guard.after_call(duration, elapsed.as_secs_f64(), engine.sounding());
             if shed > 0 {
                 engine.shed_voices(shed);
             }

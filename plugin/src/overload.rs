@@ -1,5 +1,5 @@
 //! The overload guard: when the audio thread cannot keep up, the plugin gives up its least
-//! audible piano voices ([`Instrument::shed_voices`](qsa_dsp::instrument::Instrument::shed_voices))
+//! audible voices ([`Instrument::shed_voices`](qsa_dsp::instrument::Instrument::shed_voices))
 //! rather than leave the host to drop whole buffers.
 //!
 //! Each `process` call's load is its time over its buffer's duration (1 = the whole real-time

@@ -424,6 +424,52 @@ fn shedding_fades_out_the_least_audible_voices_and_ends_their_notes_without_a_cl
     }
 }
 
+/// Shedding slide voices: of four notes plucked at velocities 0.9, 0.2, 0.6 and 0.35 (each its
+/// own channel, so each its own voice), `shed_voices(2)` fades out the two whose strings move
+/// least, the two softest, and ends their notes within the fade (5 ms, in whole control blocks),
+/// the string at rest; the two loudest sound on. The fades stay below [`CLICK_DB`], and a voice
+/// taken for a new note right after being shed sounds it.
+#[test]
+fn shedding_fades_out_the_stillest_slide_voices_without_a_click() {
+    let notes = [(45u8, 0.9f32), (50, 0.2), (52, 0.6), (57, 0.35)];
+    let score: Score = (notes.iter().enumerate())
+        .map(|(c, &(key, velocity))| (0, Event::NoteOn { channel: c as u8, key, velocity }))
+        .collect();
+    let settings = Settings { mode: Mode::Slide, ..Default::default() };
+    let fade = (STEAL_TIME * FS).ceil() as usize;
+    let block = settings.block;
+    let mut p = Instrument::new(FS, 4, settings);
+    let latency = p.latency();
+    let mut out = play(&mut p, &score, 9_600, || 64);
+    let _ = p.drain_ended().count();
+    let mut shed = 0;
+    assert_eq!(allocations_in(|| shed = p.shed_voices(2)), 0, "shedding allocated");
+    assert_eq!(shed, 2);
+    let boundary = 9_600usize.div_ceil(block) * block;
+    let silent_by = boundary + fade.div_ceil(block) * block + block;
+    out.extend(play(&mut p, &Vec::new(), silent_by - 9_600, || 64));
+    let mut ended: Vec<u8> = p.drain_ended().map(|e| e.note.key).collect();
+    ended.sort_unstable();
+    println!("shed {ended:?}, {} sounding", p.sounding());
+    assert_eq!(ended, [50, 57], "the two softest end");
+    assert_eq!(p.sounding(), 2);
+    out.extend(play(&mut p, &Vec::new(), 4_800, || 64));
+    assert_eq!(p.sounding(), 2, "the two loudest sound on");
+    let out = wide(&out);
+    let attack = latency..latency + 2_400;
+    let (db, at) = click_strength(&out, FS, std::slice::from_ref(&attack));
+    println!("worst click {db:.1} dB at {at}; the fades from {}", boundary + latency);
+    assert!(db < CLICK_DB, "{db:.1} dB at sample {at}");
+    // Shed again and plucked at once: the new note takes a free voice or one not being shed.
+    assert_eq!(p.shed_voices(4), 2);
+    p.handle(Event::NoteOn { channel: 5, key: 60, velocity: 0.7 });
+    let after = wide(&play(&mut p, &Vec::new(), 4_800, || 64));
+    let level = (after[2_400..].iter().map(|v| v * v).sum::<f64>() / 2_400.0).sqrt();
+    println!("a note plucked as every voice is shed: rms {level:.2e}, {} sounding", p.sounding());
+    assert_eq!(p.sounding(), 1);
+    assert!(level > 1e-4, "the new note sounds (rms {level:.2e})");
+}
+
 /// A damper landing while the hammer is still on the string (note-off 0.5 ms after note-on, the
 /// felt in contact for about 1 to 4 ms) and dampers landing on ringing strings do not click,
 /// across the keyboard and from pianissimo to fortissimo.

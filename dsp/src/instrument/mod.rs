@@ -289,7 +289,7 @@ pub struct Instrument {
     meeting: Vec<usize>,
     /// Notes that had to take a busy voice.
     steals: u64,
-    /// Piano voices shed to lighten the load ([`Instrument::shed_voices`]).
+    /// Voices shed to lighten the load ([`Instrument::shed_voices`]).
     shed: u64,
     /// The piano's soundboard radiating the left and right channels' bridge forces.
     boards: [Body; 2],
@@ -420,10 +420,11 @@ impl Instrument {
         self.steals
     }
 
-    /// Fade out the `count` least audible sounding piano voices (the quietest output over their
-    /// latest block first), as a stolen voice fades, and let them fall silent, their notes ending:
-    /// what a host's audio thread that cannot keep up calls for. Voices fading already are left
-    /// to their fade; slide voices are kept. Returns how many began to fade.
+    /// Fade out the `count` least audible sounding voices over [`STEAL_TIME`] and let them fall
+    /// silent, their notes ending: what a host's audio thread that cannot keep up calls for. Piano
+    /// voices go first, the quietest output over their latest block first, fading as a stolen
+    /// voice does; then slide voices, the least moving string first, their output faded. Voices
+    /// fading already are left to their fade. Returns how many began to fade.
     pub fn shed_voices(&mut self, count: usize) -> usize {
         let mut shed = 0;
         while shed < count {
@@ -435,11 +436,20 @@ impl Instrument {
             self.voices[i].shed(self.sample_rate);
             shed += 1;
         }
+        while shed < count {
+            let stillest = (self.slides.iter().enumerate())
+                .filter(|(_, v)| v.sounding && !v.shedding())
+                .min_by(|(_, a), (_, b)| a.motion().total_cmp(&b.motion()))
+                .map(|(i, _)| i);
+            let Some(i) = stillest else { break };
+            self.slides[i].shed(self.sample_rate);
+            shed += 1;
+        }
         self.shed += shed as u64;
         shed
     }
 
-    /// How many piano voices have been shed since the instrument was made.
+    /// How many voices have been shed since the instrument was made.
     pub fn shed_count(&self) -> u64 {
         self.shed
     }
@@ -662,12 +672,13 @@ impl Instrument {
             self.slides[i].play(strike, &settings, true, now);
             return Some(i);
         }
-        // A free voice, else the oldest: its string keeps its motion, so reuse does not click.
-        let index = self
-            .slides
-            .iter()
-            .position(|v| !v.sounding)
-            .or_else(|| self.slides.iter().enumerate().min_by_key(|(_, v)| v.started).map(|(i, _)| i));
+        // A free voice, else the oldest not being shed: its string keeps its motion, so reuse does
+        // not click.
+        let oldest = |shedding: bool| {
+            let candidates = self.slides.iter().enumerate().filter(|(_, v)| shedding || !v.shedding());
+            candidates.min_by_key(|(_, v)| v.started).map(|(i, _)| i)
+        };
+        let index = self.slides.iter().position(|v| !v.sounding).or_else(|| oldest(false)).or_else(|| oldest(true));
         if let Some(i) = index {
             let voice = &mut self.slides[i];
             // A silent voice's pickup stayed where the voice last sounded (see `begin_block`).

@@ -14,7 +14,7 @@ pub struct Monitor {
     pub sounding: usize,
     /// Voices the guard has silenced since the engine started ([`Instrument::guard_trips`]).
     pub guard_trips: u32,
-    /// Piano voices shed to lighten the load since the engine started ([`Instrument::shed_count`]).
+    /// Voices shed to lighten the load since the engine started ([`Instrument::shed_count`]).
     pub shed: u64,
     /// Mode of the loudest voice.
     pub mode: Mode,

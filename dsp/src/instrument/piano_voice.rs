@@ -101,6 +101,11 @@ impl GuardFade {
         self.fade.is_some()
     }
 
+    /// Whether a fade has reached silence.
+    pub fn is_silent(&self) -> bool {
+        self.fade.is_some_and(|(gain, _)| gain <= 0.0)
+    }
+
     /// Apply the fade to a rendered block (no change when not fading).
     pub fn apply(&mut self, out: &mut [f64]) {
         self.apply_together([out]);

@@ -56,7 +56,7 @@ use crate::control::Live;
 use crate::exciter::SlideParams;
 use crate::instrument::memo::{ENERGY_INTERVAL, Memo};
 use crate::instrument::notes::NoteParam;
-use crate::instrument::piano_voice::{GUARD_FACTOR, GuardFade, RELEASE_ENERGY, Strike};
+use crate::instrument::piano_voice::{GUARD_FACTOR, GuardFade, RELEASE_ENERGY, STEAL_TIME, Strike};
 use crate::instrument::settings::{HAND_RANGE, HandSource, Settings, SlideBody};
 use crate::instrument::solvers::Solvers;
 use crate::preset::slide_guitar;
@@ -240,6 +240,8 @@ pub struct SlideVoice {
     work_at_pluck: f64,
     /// The guard's fade-out, once the voice has been caught over its bound.
     guard_fade: GuardFade,
+    /// The output's fade-out over [`STEAL_TIME`] once the voice is shed to lighten the load.
+    shed_fade: GuardFade,
     /// How many times the guard has silenced this voice.
     trips: u32,
     /// Time into the pluck (s), while plucking.
@@ -317,6 +319,7 @@ impl SlideVoice {
             energy_at_pluck: 0.0,
             work_at_pluck: 0.0,
             guard_fade: GuardFade::default(),
+            shed_fade: GuardFade::default(),
             trips: 0,
             pluck: None,
             reference_energy: f64::MIN_POSITIVE,
@@ -346,6 +349,8 @@ impl SlideVoice {
     pub fn play(&mut self, strike: Strike, settings: &Settings, legato: bool, now: u64) {
         self.strike = strike;
         self.key_down = true;
+        // A voice taken while it was being shed sounds again.
+        self.shed_fade.clear();
         (self.poly_pressure, self.tuning, self.slide_offset, self.hand_offset) = (0.0, 0.0, 0.0, 0.0);
         if legato && self.sounding {
             return;
@@ -417,8 +422,32 @@ impl SlideVoice {
         self.key_down = false;
     }
 
+    /// Fade the output out over [`STEAL_TIME`] and fall silent, the string brought to rest and
+    /// the note ending: a sounding voice given up to lighten the load. Whether it began to fade
+    /// (not if silent or fading already).
+    pub fn shed(&mut self, sample_rate: f64) -> bool {
+        if !self.sounding || self.shedding() {
+            return false;
+        }
+        self.shed_fade.start((STEAL_TIME * sample_rate).ceil() as usize);
+        self.key_down = false;
+        true
+    }
+
+    /// Whether the voice is being shed.
+    pub fn shedding(&self) -> bool {
+        self.shed_fade.is_fading()
+    }
+
+    /// How much the string moves (J): its kinetic energy, held with a 50 ms fall; what shedding
+    /// ranks slide voices by.
+    pub fn motion(&self) -> f64 {
+        self.motion
+    }
+
     /// Stop at once.
     pub fn silence(&mut self) {
+        self.shed_fade.clear();
         self.sounding = false;
         self.key_down = false;
         self.pluck = None;
@@ -484,6 +513,12 @@ impl SlideVoice {
         }
         if self.guard_fade.is_fading() {
             self.trip();
+            return;
+        }
+        if self.shed_fade.is_silent() {
+            self.shed_fade.clear();
+            self.silence();
+            self.rest_lifted();
             return;
         }
         self.fresh = false;
@@ -610,8 +645,14 @@ impl SlideVoice {
             self.trip();
         } else {
             match sides {
-                None => self.guard_fade.apply(out),
-                Some([left, right]) => self.guard_fade.apply_together([out, left, right]),
+                None => {
+                    self.guard_fade.apply(out);
+                    self.shed_fade.apply(out);
+                }
+                Some([left, right]) => {
+                    self.guard_fade.apply_together([&mut *out, &mut *left, &mut *right]);
+                    self.shed_fade.apply_together([out, left, right]);
+                }
             }
         }
     }
