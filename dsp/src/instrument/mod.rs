@@ -426,27 +426,17 @@ impl Instrument {
     /// voice does; then slide voices, the least moving string first, their output faded. Voices
     /// fading already are left to their fade. Returns how many began to fade.
     pub fn shed_voices(&mut self, count: usize) -> usize {
-        let mut shed = 0;
-        while shed < count {
-            let quietest = (self.voices.iter().enumerate())
-                .filter(|(_, v)| v.sounding && !v.fading())
-                .min_by(|(_, a), (_, b)| a.loudness().total_cmp(&b.loudness()))
-                .map(|(i, _)| i);
-            let Some(i) = quietest else { break };
-            self.voices[i].shed(self.sample_rate);
-            shed += 1;
-        }
-        while shed < count {
-            let stillest = (self.slides.iter().enumerate())
-                .filter(|(_, v)| v.sounding && !v.shedding())
-                .min_by(|(_, a), (_, b)| a.motion().total_cmp(&b.motion()))
-                .map(|(i, _)| i);
-            let Some(i) = stillest else { break };
-            self.slides[i].shed(self.sample_rate);
-            shed += 1;
-        }
-        self.shed += shed as u64;
-        shed
+        let fs = self.sample_rate;
+        let pianos =
+            shed_lowest(&mut self.voices, count, |v| (v.sounding && !v.fading()).then(|| v.loudness()), |v| v.shed(fs));
+        let slides = shed_lowest(
+            &mut self.slides,
+            count - pianos,
+            |v| (v.sounding && !v.shedding()).then(|| v.motion()),
+            |v| v.shed(fs),
+        );
+        self.shed += (pianos + slides) as u64;
+        pianos + slides
     }
 
     /// How many voices have been shed since the instrument was made.
@@ -825,6 +815,27 @@ impl Instrument {
         }
         self.check_ended();
     }
+}
+
+/// Shed up to `count` of `voices` with `shed` (whether the voice began to fade), the lowest
+/// `rank` first among those it ranks (the voices that may be shed); how many.
+fn shed_lowest<V>(
+    voices: &mut [V],
+    count: usize,
+    rank: impl Fn(&V) -> Option<f64>,
+    mut shed: impl FnMut(&mut V) -> bool,
+) -> usize {
+    let mut done = 0;
+    while done < count {
+        let lowest =
+            (voices.iter().enumerate()).filter_map(|(i, v)| rank(v).map(|r| (i, r))).min_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((i, _)) = lowest else { break };
+        if !shed(&mut voices[i]) {
+            break;
+        }
+        done += 1;
+    }
+    done
 }
 
 /// Find the piano voices among `live` whose hammers can still touch strings that ring on other
