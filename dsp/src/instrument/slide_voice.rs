@@ -49,6 +49,12 @@
 //! and counted ([`SlideVoice::guard_trips`]): a last line of defence that the tests and sweeps
 //! check never fires. The energy is weighed every control block, or every [`ENERGY_INTERVAL`]
 //! samples when the blocks are shorter.
+//!
+//! # Shedding
+//!
+//! When the host's audio thread cannot keep up, the plugin has the voices whose strings move
+//! least fall silent ([`SlideVoice::shed`]): the output fades linearly over
+//! [`STEAL_TIME`], then the string comes to rest with the slide lifted, and the note ends.
 
 use crate::body::BodyParams;
 use crate::contact::{Method, PowerLaw};
