@@ -73,9 +73,8 @@ fn the_inharmonicity_lies_within_measured_grands() {
 /// +14 % at C8.
 #[test]
 fn the_plain_strings_inharmonicity_follows_youngs_six_pianos_as_closely_as_measured_grands_do() {
-    use xtask::realism::{MEASURED_B, young_inharmonicity};
-    let grands = MEASURED_B.iter().filter(|m| m.0 >= 60).flat_map(|m| [m.1, m.2].map(|b| b / young_inharmonicity(m.0)));
-    let (low, high) = grands.fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(r), hi.max(r)));
+    use xtask::realism::{measured_over_young, young_inharmonicity};
+    let (low, high) = measured_over_young().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(r), hi.max(r)));
     println!("measured grands: {low:.3}–{high:.3} of Young's line");
     assert!(low < 1.0 && high > 1.0, "the measured grands lie on both sides of Young's line");
     for key in 60..=108u8 {

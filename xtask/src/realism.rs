@@ -187,6 +187,12 @@ pub fn young_inharmonicity(key: u8) -> f64 {
     1.2 * std::f64::consts::LN_2 / (600.0 * 4.0) * 2f64.powf((f64::from(key) - 60.0) / 8.0)
 }
 
+/// The measured grands' `B` from C4 up ([`MEASURED_B`], both values of each row) over Young's
+/// line at their keys.
+pub fn measured_over_young() -> impl Iterator<Item = f64> {
+    MEASURED_B.iter().filter(|m| m.0 >= 60).flat_map(|m| [m.1, m.2].map(|b| b / young_inharmonicity(m.0)))
+}
+
 /// Steel's density (kg/m³) and its Young's modulus over density (m²/s²; Young 1952 took
 /// 25.5·10¹⁰ cm²/s²).
 const STEEL: (f64, f64) = (7850.0, 2.55e7);
@@ -949,12 +955,7 @@ fn readme(
         values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
     };
     let (young_low, young_high) = span(&mut (60..=108u8).map(|k| percent(b(k) / young_inharmonicity(k))));
-    let (grands_low, grands_high) = span(
-        &mut MEASURED_B
-            .iter()
-            .filter(|m| m.0 >= 60)
-            .flat_map(|m| [m.1, m.2].map(|measured| percent(measured / young_inharmonicity(m.0)))),
-    );
+    let (grands_low, grands_high) = span(&mut measured_over_young().map(percent));
     let length = |key: u8| piano_note(key).string.length;
     let against_m = |key: u8| measured_length(key).map(|m| percent(length(key) / m));
     let (treble_low, treble_high) = span(&mut (60..=108u8).filter_map(against_m));
