@@ -370,6 +370,31 @@ fn stealing_takes_the_least_audible_voice() {
     }
 }
 
+/// Play `score` for 0.2 s in buffers of `size`, shed `count` voices (asserting that it sheds that
+/// many without an allocation) and play on until they are silent: their fade ([`STEAL_TIME`])
+/// lasts whole control blocks of `block` from the next block boundary. Returns the output, the
+/// keys whose notes ended after the shed (sorted) and the boundary where the fades begin.
+fn shed_while_playing(
+    p: &mut Instrument,
+    score: &Score,
+    count: usize,
+    block: usize,
+    size: usize,
+) -> (Vec<f32>, Vec<u8>, usize) {
+    let mut out = play(p, score, 9_600, || size);
+    let _ = p.drain_ended().count();
+    let mut shed = 0;
+    assert_eq!(allocations_in(|| shed = p.shed_voices(count)), 0, "shedding allocated");
+    assert_eq!(shed, count);
+    let boundary = 9_600usize.div_ceil(block) * block;
+    let fade = (STEAL_TIME * FS).ceil() as usize;
+    let silent_by = boundary + fade.div_ceil(block) * block + block;
+    out.extend(play(p, &Vec::new(), silent_by - 9_600, || size));
+    let mut ended: Vec<u8> = p.drain_ended().map(|e| e.note.key).collect();
+    ended.sort_unstable();
+    (out, ended, boundary)
+}
+
 /// Shedding (what the plugin asks for when the host's audio thread cannot keep up) takes the least
 /// audible piano voices, fades them out as a steal does and ends their notes, without a click and
 /// without an allocation: of six keys held at velocities from 0.9 down to 0.15, `shed_voices(3)`
@@ -384,19 +409,8 @@ fn shedding_fades_out_the_least_audible_voices_and_ends_their_notes_without_a_cl
     let fade = (STEAL_TIME * FS).ceil() as usize;
     for size in [1usize, 64] {
         let mut p = piano(8);
-        let block = Settings::default().block;
         let latency = p.latency();
-        let mut out = play(&mut p, &score, 9_600, || size);
-        let _ = p.drain_ended().count();
-        let mut shed = 0;
-        assert_eq!(allocations_in(|| shed = p.shed_voices(3)), 0, "shedding allocated");
-        assert_eq!(shed, 3);
-        // The fade lasts whole control blocks from the next block boundary after the call.
-        let boundary = 9_600usize.div_ceil(block) * block;
-        let silent_by = boundary + fade.div_ceil(block) * block + block;
-        out.extend(play(&mut p, &Vec::new(), silent_by - 9_600, || size));
-        let mut ended: Vec<u8> = p.drain_ended().map(|e| e.note.key).collect();
-        ended.sort_unstable();
+        let (mut out, ended, boundary) = shed_while_playing(&mut p, &score, 3, Settings::default().block, size);
         let sounding: Vec<u8> = p.piano_keys().collect();
         println!("buffers of {size}: shed {ended:?}, sounding {sounding:?}, {} shed in all", p.shed_count());
         assert_eq!(ended, [62, 65, 69], "buffers of {size}: the softest three end");
@@ -436,20 +450,9 @@ fn shedding_fades_out_the_stillest_slide_voices_without_a_click() {
         .map(|(c, &(key, velocity))| (0, Event::NoteOn { channel: c as u8, key, velocity }))
         .collect();
     let settings = Settings { mode: Mode::Slide, ..Default::default() };
-    let fade = (STEAL_TIME * FS).ceil() as usize;
-    let block = settings.block;
     let mut p = Instrument::new(FS, 4, settings);
     let latency = p.latency();
-    let mut out = play(&mut p, &score, 9_600, || 64);
-    let _ = p.drain_ended().count();
-    let mut shed = 0;
-    assert_eq!(allocations_in(|| shed = p.shed_voices(2)), 0, "shedding allocated");
-    assert_eq!(shed, 2);
-    let boundary = 9_600usize.div_ceil(block) * block;
-    let silent_by = boundary + fade.div_ceil(block) * block + block;
-    out.extend(play(&mut p, &Vec::new(), silent_by - 9_600, || 64));
-    let mut ended: Vec<u8> = p.drain_ended().map(|e| e.note.key).collect();
-    ended.sort_unstable();
+    let (mut out, ended, boundary) = shed_while_playing(&mut p, &score, 2, settings.block, 64);
     println!("shed {ended:?}, {} sounding", p.sounding());
     assert_eq!(ended, [50, 57], "the two softest end");
     assert_eq!(p.sounding(), 2);
