@@ -206,6 +206,7 @@ fn parameters(ui: &mut Ui, p: &QsaParams, setter: &ParamSetter) {
             row(ui, &p.engine.segments, setter);
             row(ui, &p.engine.block, setter);
             row(ui, &p.engine.voices, setter);
+            row(ui, &p.engine.overload_guard, setter);
         });
         ui.label(RichText::new("Voices take effect when the plugin is next activated.").small().weak());
         ui.add_space(10.0);

@@ -254,6 +254,7 @@ impl Plugin for QsaStrings {
         // Snapshots only while someone looks at them; the load always.
         let open = self.editor_state.is_open();
         self.tap.after_process(samples, elapsed, self.engine.as_ref().filter(|_| open));
+        self.guard.switch(self.params.engine.overload_guard.value());
         if self.realtime
             && let Some(engine) = &mut self.engine
         {

@@ -8,8 +8,9 @@
 //! exceeds [`OVERLOAD`] (the host needs some of the budget for itself and other plugins), the
 //! guard sheds the share of the sounding voices that brings it to [`TARGET_LOAD`], taking every
 //! voice to cost alike, then waits [`SETTLE_TIME`] for the load to show the effect before it
-//! sheds again. The plugin runs it in real-time processing only: an offline render takes the
-//! time it needs and sounds the same on every machine.
+//! sheds again. The plugin runs it in real-time processing only, while its `Overload guard`
+//! switch is on: an offline render takes the time it needs and sounds the same on every machine,
+//! and a user measuring how much of the CPU a performance takes can switch it off.
 
 /// Time constant of the guard's smoothed load (s of audio).
 pub const GUARD_TIME_CONSTANT: f64 = 0.05;
@@ -27,18 +28,19 @@ pub const TARGET_LOAD: f64 = 0.7;
 /// the smoothed load moves 86 % of the way to its new level.
 pub const SETTLE_TIME: f64 = 2.0 * GUARD_TIME_CONSTANT;
 
-/// The guard's state: the smoothed load and the time left to settle.
+/// The guard's state: the smoothed load, the time left to settle, and whether it is switched off.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct OverloadGuard {
     load: f64,
     settle: f64,
+    off: bool,
 }
 
 impl OverloadGuard {
     /// Account for a call that rendered `duration` seconds of audio in `elapsed` seconds, with
     /// `sounding` voices that could be shed; returns how many to shed now.
     pub fn after_call(&mut self, duration: f64, elapsed: f64, sounding: usize) -> usize {
-        if !(duration > 0.0) || !elapsed.is_finite() {
+        if self.off || !(duration > 0.0) || !elapsed.is_finite() {
             return 0;
         }
         let raw = (elapsed / duration).clamp(0.0, MAX_COUNTED_LOAD);
@@ -59,7 +61,15 @@ impl OverloadGuard {
 
     /// Forget the load measured so far (the engine was reset or made anew).
     pub fn reset(&mut self) {
-        *self = Self::default();
+        *self = Self { off: self.off, ..Self::default() };
+    }
+
+    /// Switch the guard on or off. Off, it sheds nothing and measures nothing; switched on again,
+    /// it starts from rest, as after [`reset`](Self::reset), not from a load it saw before.
+    pub fn switch(&mut self, on: bool) {
+        if self.off == on {
+            *self = Self { off: !on, ..Self::default() };
+        }
     }
 }
 
@@ -114,6 +124,28 @@ mod tests {
         assert!(sheds[0].1 >= 20 && sheds[0].1 <= 25, "{} voices", sheds[0].1);
         let settle = SETTLE_TIME / CALL;
         assert!(((sheds[1].0 - first) as f64 - settle).abs() <= 1.0, "{sheds:?}");
+    }
+
+    /// Switched off, two seconds of a steady overload of 1.5 shed nothing; switched on again, the
+    /// guard starts from rest: the first shed comes at the same call as for a guard that never
+    /// saw the overload (`τ·ln(1.5/0.6)`, the 35th call), not at once.
+    #[test]
+    fn switched_off_the_guard_sheds_nothing_and_switched_on_it_starts_from_rest() {
+        let mut guard = OverloadGuard::default();
+        run(&mut guard, 100, 1.5, 88);
+        guard.switch(false);
+        assert!(run(&mut guard, 1_500, 1.5, 88).is_empty());
+        guard.switch(false);
+        assert!(run(&mut guard, 10, 1.5, 88).is_empty(), "switching off twice keeps it off");
+        guard.switch(true);
+        let sheds = run(&mut guard, 200, 1.5, 88);
+        let fresh = run(&mut OverloadGuard::default(), 200, 1.5, 88);
+        let crossing = (GUARD_TIME_CONSTANT * (1.5f64 / 0.6).ln() / CALL).ceil() as usize - 1;
+        assert!(sheds[0].0.abs_diff(crossing) <= 1, "first shed at call {}, expected {crossing}", sheds[0].0);
+        assert_eq!(sheds, fresh);
+        let load = guard.load();
+        guard.switch(true);
+        assert!(load > OVERLOAD && guard.load() == load, "switching on twice keeps the load measured");
     }
 
     /// Nothing to shed, a zero-length call or a non-finite time asks for nothing.

@@ -4,7 +4,7 @@
 //! mapped to the engine's [`Settings`] by [`ParamValues::settings`].
 //!
 //! Hosts see them in four groups, the editor's sections (VST3 units, CLAP modules): Engine
-//! (`mode` to `voices`), Piano (`hard` to `detune`), Slide (`slide` to `sbody`) and Output
+//! (`mode` to `guard`), Piano (`hard` to `stretch`), Slide (`slide` to `sbody`) and Output
 //! (`gain`, `limit`, `width`), in the order of the table. `slide` and `hand` take CLAP polyphonic
 //! modulation: a per-note offset, in the parameter's units, added to the value for that note
 //! alone (the sum clamped to the range), where the parameter acts (`slide` when the slide does not
@@ -19,6 +19,7 @@
 //! | `segs` | QSA segments | 1..=64 | 6 | [`Settings::segments`] |
 //! | `nb` | Control block | 1..=256 smp | 64 smp | [`Settings::block`] |
 //! | `voices` | Voices | 1..=128 | 32 | voice pool size (at the next activation) |
+//! | `guard` | Overload guard | on/off | on | the plugin's overload guard (real-time processing only; offline rendering never sheds) |
 //! | `hard` | Hardness | 0.1..=10× | 1× | [`Settings::hardness`] |
 //! | `hmass` | Hammer mass | 0.25..=4× | 1× | [`Settings::hammer_mass`] |
 //! | `strike` | Strike position | 0.25..=2.5× | 1× | [`Settings::strike_position`] |
@@ -302,6 +303,8 @@ param_group! {
         block: IntParam = "nb",
         /// Voice pool size (takes effect at the next activation).
         voices: IntParam = "voices",
+        /// Shed voices when real-time processing falls behind ([`crate::overload`]).
+        overload_guard: BoolParam = "guard",
     }
 }
 
@@ -504,7 +507,7 @@ mod tests {
         let groups: Vec<(String, String)> =
             QsaParams::default().param_map().into_iter().map(|(id, _, group)| (id, group)).collect();
         let expected = |id: &str| match id {
-            "mode" | "solver" | "segs" | "nb" | "voices" => "Engine",
+            "mode" | "solver" | "segs" | "nb" | "voices" | "guard" => "Engine",
             "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" | "detune" | "stretch" => "Piano",
             "gain" | "limit" | "width" => "Output",
             _ => "Slide",

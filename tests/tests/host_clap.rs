@@ -970,7 +970,7 @@ fn parameters_are_grouped_and_slide_and_hand_are_polyphonic() {
         listed.push((info.id.get(), module, info.flags.contains(ParamInfoFlags::IS_MODULATABLE_PER_NOTE_ID)));
     }
     let expected_group = |id: &str| match id {
-        "mode" | "solver" | "segs" | "nb" | "voices" => "Engine",
+        "mode" | "solver" | "segs" | "nb" | "voices" | "guard" => "Engine",
         "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" | "detune" | "stretch" => "Piano",
         "gain" | "limit" | "width" => "Output",
         _ => "Slide",
@@ -991,13 +991,14 @@ fn parameters_are_grouped_and_slide_and_hand_are_polyphonic() {
 #[test]
 fn choice_parameters_name_every_value() {
     let mut p = Plugin::at_48k(&release_bundle(), &[]);
-    let choices: [(&str, &[&str]); 6] = [
+    let choices: [(&str, &[&str]); 7] = [
         ("mode", &["Piano", "Slide"]),
         ("solver", &["QSA", "EXP", "IMP"]),
         ("handsrc", &["Parameter", "Mod wheel", "Channel pressure", "Poly pressure"]),
         ("sbody", &["Electric", "Acoustic"]),
         ("follow", &["Off", "On"]),
         ("limit", &["Off", "On"]),
+        ("guard", &["Off", "On"]),
     ];
     let params = p.params();
     for (id, names) in choices {
@@ -1023,7 +1024,7 @@ fn choice_parameters_name_every_value() {
 /// switches by index, everything else through the plugin's own text-to-value conversion of the
 /// number in the unit it shows (`gain` in dB), as a host's text entry does.
 fn preset_clap_value(p: &mut Plugin, id: &str, plain: f32) -> f64 {
-    if ["mode", "solver", "handsrc", "sbody", "follow", "limit"].contains(&id) {
+    if ["mode", "solver", "handsrc", "sbody", "follow", "limit", "guard"].contains(&id) {
         return f64::from(plain);
     }
     let text = if id == "gain" { format!("{}", 20.0 * plain.log10()) } else { format!("{plain}") };

@@ -180,7 +180,7 @@ const fn float(min: f32, max: f32, default: f32, unit: &'static str, scale: Scal
 }
 
 /// Every parameter, in display order (the groups in the order Engine, Piano, Slide, Output).
-pub const PARAMETERS: [ParamSpec; 32] = [
+pub const PARAMETERS: [ParamSpec; 33] = [
     ParamSpec {
         id: "mode",
         name: "Mode",
@@ -228,6 +228,15 @@ pub const PARAMETERS: [ParamSpec; 32] = [
         maps_to: "voice pool size (at the next activation)",
         get: |v| v.voices as f32,
         put: |v, x| v.voices = x as i32,
+    },
+    ParamSpec {
+        id: "guard",
+        name: "Overload guard",
+        group: Group::Engine,
+        kind: ParamKind::Bool { default: true },
+        maps_to: "the plugin's overload guard (real-time processing only; offline rendering never sheds)",
+        get: |v| switch(v.overload_guard),
+        put: |v, x| v.overload_guard = x != 0.0,
     },
     ParamSpec {
         id: "hard",
@@ -670,6 +679,8 @@ pub struct ParamValues {
     pub block: i32,
     /// `voices` (pool size at the next activation).
     pub voices: i32,
+    /// `guard`.
+    pub overload_guard: bool,
     /// `hard` (×).
     pub hardness: f32,
     /// `hmass` (×).
@@ -735,6 +746,7 @@ impl Default for ParamValues {
             segments: 0,
             block: 0,
             voices: 0,
+            overload_guard: false,
             hardness: 0.0,
             hammer_mass: 0.0,
             strike_position: 0.0,
@@ -884,9 +896,9 @@ mod tests {
     #[test]
     fn ids_are_the_released_ones() {
         let released = [
-            "mode", "solver", "segs", "nb", "voices", "hard", "hmass", "strike", "damp", "bright", "damper", "detune",
-            "stretch", "slide", "follow", "glide", "bend", "hand", "handsrc", "smass", "hstiff", "hdamp", "fdamp",
-            "kappa", "alpha", "pluck", "pickup", "ptone", "sbody", "gain", "limit", "width",
+            "mode", "solver", "segs", "nb", "voices", "guard", "hard", "hmass", "strike", "damp", "bright", "damper",
+            "detune", "stretch", "slide", "follow", "glide", "bend", "hand", "handsrc", "smass", "hstiff", "hdamp",
+            "fdamp", "kappa", "alpha", "pluck", "pickup", "ptone", "sbody", "gain", "limit", "width",
         ];
         assert_eq!(PARAM_IDS, released);
     }
@@ -986,7 +998,7 @@ mod tests {
                 "solver" => "imp",
                 "handsrc" => "modwheel",
                 "sbody" => "acoustic",
-                "follow" | "limit" => "off",
+                "follow" | "limit" | "guard" => "off",
                 _ => "2",
             };
             p.set(id, value).unwrap_or_else(|e| panic!("{id}: {e}"));
