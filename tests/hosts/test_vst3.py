@@ -50,6 +50,7 @@ DOCUMENTED = {
     "qsa_segments": "QSA segments",
     "control_block_smp": "Control block",
     "voices": "Voices",
+    "overload_guard": "Overload guard",
     "hardness": "Hardness",
     "hammer_mass": "Hammer mass",
     "strike_position": "Strike position",
