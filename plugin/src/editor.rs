@@ -158,7 +158,8 @@ fn header(ui: &mut Ui, m: &Monitor, load: f32, peak: f32) {
         if m.shed > 0 {
             ui.label(RichText::new(format!("shed {}", m.shed)).color(Color32::from_rgb(230, 180, 40))).on_hover_text(
                 "Voices faded out because the audio thread could not keep up: play fewer voices, use a larger \
-                 buffer or a faster machine.",
+                 buffer or a faster machine. Switching Overload guard (Engine) off keeps every voice and leaves \
+                 the host to drop buffers instead.",
             );
         }
         ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
