@@ -68,7 +68,8 @@ impl OverloadGuard {
     /// it starts from rest, as after [`reset`](Self::reset), not from a load it saw before.
     pub fn switch(&mut self, on: bool) {
         if self.off == on {
-            *self = Self { off: !on, ..Self::default() };
+            self.off = !on;
+            self.reset();
         }
     }
 }
