@@ -179,6 +179,12 @@ const fn float(min: f32, max: f32, default: f32, unit: &'static str, scale: Scal
     ParamKind::Float { min, max, default, unit, scale, display, step: None, poly: None }
 }
 
+/// The parameters that say how this machine plays the instrument rather than how it sounds: how
+/// many voices it may hold, and whether it sheds voices when processing falls behind. A preset
+/// leaves them where the player set them unless its file names them (Pianoteq and Kontakt keep
+/// their polyphony outside the sound's presets too).
+pub const PLAYER_SETTINGS: [&str; 2] = ["voices", "guard"];
+
 /// Every parameter, in display order (the groups in the order Engine, Piano, Slide, Output).
 pub const PARAMETERS: [ParamSpec; 33] = [
     ParamSpec {
@@ -867,8 +873,15 @@ impl ParamValues {
     /// more than a host's `f32` normalisation can account for (relative 1e-4, or 1e-5 absolute
     /// near zero), or `None` when they match. Used to mark a preset as modified.
     pub fn first_difference(&self, other: &Self) -> Option<&'static str> {
+        self.first_difference_among(other, |_| true)
+    }
+
+    /// [`first_difference`](Self::first_difference) among the parameters whose id `compared`
+    /// accepts.
+    pub fn first_difference_among(&self, other: &Self, compared: impl Fn(&str) -> bool) -> Option<&'static str> {
         PARAMETERS
             .iter()
+            .filter(|spec| compared(spec.id))
             .map(|spec| (spec.id, (spec.get)(self), (spec.get)(other)))
             .find_map(|(id, a, b)| ((a - b).abs() > 1e-5f32.max(1e-4 * a.abs().max(b.abs()))).then_some(id))
     }

@@ -16,12 +16,13 @@
 //! ```
 //!
 //! A parameter the preset leaves out takes its default ([`ParamValues::default`]), so a preset
-//! always sets every parameter. Unknown keys, unknown parameter ids, values of the wrong kind or
+//! sets every parameter but the player's settings ([`PLAYER_SETTINGS`]: voices and the overload
+//! guard), which it sets only when it names them ([`Preset::sets`]). Unknown keys, unknown parameter ids, values of the wrong kind or
 //! outside the parameter's range are errors naming the preset and the key; nothing here panics.
 
 use std::sync::OnceLock;
 
-use crate::instrument::params::{ParamError, ParamValues, param_spec};
+use crate::instrument::params::{PLAYER_SETTINGS, ParamError, ParamValues, param_spec};
 
 /// Preset categories, in the order the editor lists them.
 pub const CATEGORIES: [&str; 4] = ["Paper", "Piano", "Slide", "Contact"];
@@ -65,6 +66,23 @@ pub struct Preset {
     pub description: String,
     /// Every parameter's value: the preset's, or the default where it says nothing.
     pub values: ParamValues,
+    /// The player's settings ([`PLAYER_SETTINGS`]) the file names, and so sets.
+    player_settings: Vec<&'static str>,
+}
+
+impl Preset {
+    /// Whether choosing this preset sets parameter `id`: every parameter but a player's setting
+    /// ([`PLAYER_SETTINGS`]) that the file leaves out, which stays as the player set it.
+    pub fn sets(&self, id: &str) -> bool {
+        !PLAYER_SETTINGS.contains(&id) || self.player_settings.contains(&id)
+    }
+
+    /// The first parameter it sets whose value in `values` differs from the preset's (within
+    /// [`ParamValues::first_difference`]'s tolerance), or `None` when `values` still sound as
+    /// the preset.
+    pub fn first_difference(&self, values: &ParamValues) -> Option<&'static str> {
+        values.first_difference_among(&self.values, |id| self.sets(id))
+    }
 }
 
 /// Why a preset file was refused. Every message names the preset.
@@ -167,6 +185,7 @@ pub fn parse_preset(id: &str, text: &str) -> Result<Preset, PresetError> {
         }
     };
     let mut values = ParamValues::default();
+    let player_settings = PLAYER_SETTINGS.into_iter().filter(|id| params.contains_key(*id)).collect();
     for (key, value) in params {
         let text = match value {
             toml::Value::String(s) => s.clone(),
@@ -189,7 +208,7 @@ pub fn parse_preset(id: &str, text: &str) -> Result<Preset, PresetError> {
             range,
         })?;
     }
-    Ok(Preset { id: id.to_owned(), name, category, description, values })
+    Ok(Preset { id: id.to_owned(), name, category, description, values, player_settings })
 }
 
 /// Whether `text`, just accepted for parameter `key`, is in the parameter's range, in the unit the
@@ -253,6 +272,24 @@ solver = "imp"
         assert_eq!(p.values.mode, Mode::Piano);
         let untouched = ParamValues { hardness: d.hardness, segments: d.segments, gain: d.gain, ..p.values };
         assert_eq!(untouched, ParamValues { follow_key: false, method: p.values.method, ..d });
+    }
+
+    /// A preset sets every parameter (`hard`, named, and `nb`, defaulted) but a player's setting
+    /// it leaves out; one naming the voice count sets it and still leaves the guard. Compared with
+    /// the preset, only what it sets counts.
+    #[test]
+    fn a_preset_sets_the_players_settings_only_when_it_names_them() {
+        let plain = parse_preset("test", GOOD).unwrap();
+        assert!(plain.sets("hard") && plain.sets("nb"));
+        assert!(!plain.sets("voices") && !plain.sets("guard"));
+        let naming = parse_preset("test", &format!("{GOOD}voices = 96\n")).unwrap();
+        assert!(naming.sets("voices") && !naming.sets("guard"));
+        assert_eq!(naming.values.voices, 96);
+
+        let player = ParamValues { voices: 7, overload_guard: false, ..plain.values };
+        assert_eq!(plain.first_difference(&player), None, "the player's settings are not the preset's");
+        assert_eq!(naming.first_difference(&player), Some("voices"));
+        assert_eq!(plain.first_difference(&ParamValues { block: 8, ..player }), Some("nb"));
     }
 
     #[test]

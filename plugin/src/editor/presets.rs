@@ -1,11 +1,12 @@
 //! The preset section of the editor (first column, under Output): the factory presets in a menu
 //! grouped by category, previous and next buttons, and the current preset's description.
 //!
-//! Choosing a preset sets every parameter to its value as the host's own gestures (begin, set,
-//! end for each parameter, found by id in the parameter map), so hosts record it as automation
-//! and undo. The chosen preset's id is kept in [`QsaParams::preset`], a persistent field, so it
-//! comes back with the saved state; the name is marked " *" once a parameter differs from the
-//! preset.
+//! Choosing a preset sets every parameter it sets ([`Preset::sets`]: all but the player's settings,
+//! voices and the overload guard, that its file leaves out) as the host's own gestures (begin,
+//! set, end for each parameter, found by id in the parameter map), so hosts record it as
+//! automation and undo. The chosen preset's id is kept in [`QsaParams::preset`], a persistent
+//! field, so it comes back with the saved state; the name is marked " *" once a parameter the
+//! preset sets differs from it.
 
 use egui::{Id, Label, RichText, Ui};
 use nice_plug::prelude::{GuiContextInner, ParamSetter, Params};
@@ -94,16 +95,17 @@ pub fn section(ui: &mut Ui, params: &QsaParams, setter: &ParamSetter) {
     }
 }
 
-/// Whether a parameter differs from `preset` by more than the host's normalisation can explain.
+/// Whether a parameter `preset` sets differs from it by more than the host's normalisation can
+/// explain.
 pub fn modified(params: &QsaParams, preset: &Preset) -> bool {
-    params.values().first_difference(&preset.values).is_some()
+    preset.first_difference(&params.values()).is_some()
 }
 
-/// Set every parameter to `preset`'s value, each as one host gesture (begin, set, end), and
-/// remember the preset's id.
+/// Set every parameter `preset` sets to its value, each as one host gesture (begin, set, end),
+/// and remember the preset's id.
 pub fn apply(params: &QsaParams, setter: &ParamSetter, preset: &Preset) {
     for (id, param, _) in params.param_map() {
-        if let Some(plain) = preset.values.plain(&id) {
+        if let Some(plain) = preset.values.plain(&id).filter(|_| preset.sets(&id)) {
             set_plain(setter.raw_context, param, plain);
         }
     }
@@ -134,7 +136,7 @@ mod tests {
 
     use egui::{MissingGlyphPolicy, RawInput};
     use nice_plug::prelude::{ParamPtr, PluginApi, PluginState};
-    use qsa_dsp::instrument::{PARAM_IDS, find_preset};
+    use qsa_dsp::instrument::{PARAM_IDS, PLAYER_SETTINGS, find_preset};
 
     use super::*;
 
@@ -174,18 +176,21 @@ mod tests {
         fn request_restart(&self) {}
     }
 
-    /// Choosing a preset sets every parameter, each in its own begin–set–end gesture, to the
-    /// preset's value (after the host's normalisation, within `first_difference`'s tolerance), and
-    /// the chosen id is kept; changing a parameter afterwards marks the preset modified.
+    /// Choosing a preset sets every parameter but the player's settings, each in its own
+    /// begin–set–end gesture, to the preset's value (after the host's normalisation, within
+    /// `first_difference`'s tolerance), and the chosen id is kept; changing a parameter afterwards
+    /// marks the preset modified.
     #[test]
-    fn choosing_a_preset_sets_every_parameter_in_one_gesture_each() {
+    fn choosing_a_preset_sets_every_parameter_but_the_players_in_one_gesture_each() {
         for preset in factory_presets() {
             let params = Arc::new(QsaParams::default());
             let host = RecordingHost::default();
             apply(&params, &ParamSetter::new(&host), preset);
             let calls = host.calls.lock().unwrap();
-            assert_eq!(calls.len(), 3 * PARAM_IDS.len(), "{}: three calls per parameter", preset.id);
-            let map = params.param_map();
+            let set = PARAM_IDS.len() - PLAYER_SETTINGS.len();
+            assert_eq!(calls.len(), 3 * set, "{}: three calls per parameter it sets", preset.id);
+            let map: Vec<_> =
+                params.param_map().into_iter().filter(|(id, ..)| !PLAYER_SETTINGS.contains(&id.as_str())).collect();
             for (k, chunk) in calls.chunks(3).enumerate() {
                 let kinds: Vec<&str> = chunk.iter().map(|c| c.0).collect();
                 assert_eq!(kinds, ["begin", "set", "end"], "{}: gesture {k}", preset.id);
@@ -204,6 +209,35 @@ mod tests {
         setter.set_parameter(&params.slide.alpha, 2.5);
         assert!(modified(&params, preset), "a changed exponent marks the preset modified");
         assert_eq!(params.values().first_difference(&preset.values), Some("alpha"));
+    }
+
+    /// The player's voice count and overload guard stay as they were set through every factory
+    /// preset (none names them), without marking it modified, and changing them afterwards does
+    /// not mark it either; a preset whose file names them sets them like any other parameter.
+    #[test]
+    fn presets_leave_the_players_settings_unless_they_name_them() {
+        let params = Arc::new(QsaParams::default());
+        let host = RecordingHost::default();
+        let setter = ParamSetter::new(&host);
+        setter.set_parameter(&params.engine.voices, 48);
+        setter.set_parameter(&params.engine.overload_guard, false);
+        for preset in factory_presets() {
+            apply(&params, &setter, preset);
+            assert_eq!(params.engine.voices.value(), 48, "{}: voices kept", preset.id);
+            assert!(!params.engine.overload_guard.value(), "{}: guard kept off", preset.id);
+            assert!(!modified(&params, preset), "{}: the player's settings do not mark it modified", preset.id);
+        }
+        setter.set_parameter(&params.engine.voices, 96);
+        assert!(!modified(&params, factory_presets().last().unwrap()), "changing the voices afterwards");
+
+        let text =
+            "name = \"Big\"\ncategory = \"Piano\"\ndescription = \"Names its voices.\"\n[params]\nvoices = 128\n";
+        let naming = qsa_dsp::instrument::parse_preset("big", text).unwrap();
+        apply(&params, &setter, &naming);
+        assert_eq!(params.engine.voices.value(), 128, "a preset naming the voices sets them");
+        assert!(!params.engine.overload_guard.value(), "and still leaves the guard it does not name");
+        setter.set_parameter(&params.engine.voices, 64);
+        assert_eq!(naming.first_difference(&params.values()), Some("voices"), "and marks them modified");
     }
 
     #[test]
