@@ -283,6 +283,8 @@ impl ClapPlugin for QsaStrings {
 }
 
 impl Vst3Plugin for QsaStrings {
+    /// Also written into the factory presets' VST3 preset files (`xtask::presets`), which hosts
+    /// refuse for any other id (the VST3 host test loads them).
     const VST3_CLASS_ID: [u8; 16] = *b"QsaStringsPlugin";
     const VST3_SUBCATEGORIES: &'static [Vst3SubCategory] = &[Vst3SubCategory::Instrument, Vst3SubCategory::Synth];
 }

@@ -11,7 +11,10 @@ environment) and ``target/bundled/QSA Strings.vst3`` (``cargo xtask bundle qsa-p
 - a parameter change (felt hardness) measurably changes the spectrum;
 - the choice parameters are discrete and name every value;
 - MIDI controllers, which VST3 carries as the plugin's MIDI proxy parameters, reach the
-  instrument: the sustain pedal holds a released key, pitch bend bends a slide note.
+  instrument: the sustain pedal holds a released key, pitch bend bends a slide note;
+- the factory presets written as VST3 preset files (``cargo xtask presets --vst3 DIR``; the Rust
+  wrapper writes them and passes the folder) load through JUCE's preset reader, set what they
+  hold and keep the player's voices and overload guard; a file for another class id is refused.
 
 Loading time. Besides its 32 parameters, the VST3 exposes 16 x 130 = 2,080 MIDI proxy parameters
 (``MIDI Ch. N CC M``, pitch bend and channel pressure per channel: VST3 has no controller events,
@@ -25,7 +28,9 @@ function. These are pedalboard 0.9 internals: ``cargo xtask test`` pins the vers
 """
 
 import contextlib
+import json
 import math
+import struct
 import os
 import pathlib
 
@@ -41,6 +46,8 @@ BUNDLE = pathlib.Path(
     os.environ.get("QSA_VST3_BUNDLE", ROOT / "target" / "bundled" / "QSA Strings.vst3")
 )
 FS = 48_000
+# The factory presets as VST3 preset files, written by the Rust wrapper.
+PRESETS = os.environ.get("QSA_VST3_PRESETS")
 
 # Documented parameters (plugin/src/params.rs) under pedalboard's python names; the names are the
 # documentation table's (checked below), which a Rust test checks against the parameter table.
@@ -376,3 +383,50 @@ def test_pitch_bend_bends_a_slide_note_by_the_bend_range(defaults):
         expected = key_hz(52 + semitones)
         segment = audio[0, int(0.3 * FS) : int(0.9 * FS)]
         assert_pitch(fundamental(segment, 0.8 * expected, 1.2 * expected), expected, f"E3 bent {bend}")
+
+
+def component_state(vstpreset):
+    """The component chunk of a VST3 preset file (the plugin's saved state), as JSON."""
+    assert vstpreset[:4] == b"VST3", vstpreset[:4]
+    (list_at,) = struct.unpack_from("<q", vstpreset, 40)
+    assert vstpreset[list_at : list_at + 4] == b"List"
+    (count,) = struct.unpack_from("<i", vstpreset, list_at + 4)
+    for k in range(count):
+        entry = list_at + 8 + 20 * k
+        offset, size = struct.unpack_from("<qq", vstpreset, entry + 4)
+        if vstpreset[entry : entry + 4] == b"Comp":
+            return json.loads(vstpreset[offset : offset + size])
+    raise AssertionError("no component chunk")
+
+
+def test_factory_vst3_presets_set_what_they_hold_and_keep_the_players_settings():
+    assert PRESETS, "QSA_VST3_PRESETS names the folder of the preset files (tests/tests/host_vst3.rs)"
+    files = sorted(pathlib.Path(PRESETS).glob("*.vstpreset"))
+    assert len(files) == len(list((ROOT / "presets").glob("*.toml"))), files
+    with _without_eager_parameter_probe():
+        plugin = pedalboard.load_plugin(str(BUNDLE))
+    names = {_pedalboard.to_python_parameter_name(p): p.name for p in plugin._parameters}
+    for name, value in [("voices", 48), ("overload_guard", False)]:
+        p = pedalboard.AudioProcessorParameter(plugin, names[name])
+        p.raw_value = p.get_raw_value_for(value)
+    for path in files:
+        plugin.load_preset(str(path))
+        written = component_state(path.read_bytes())
+        saved = component_state(plugin.preset_data)
+        for key, value in written["params"].items():
+            (kind, want), (got_kind, got) = next(iter(value.items())), next(iter(saved["params"][key].items()))
+            assert got_kind == kind, (path.name, key, saved["params"][key])
+            if kind == "f32":
+                assert math.isclose(got, want, rel_tol=1e-6, abs_tol=1e-9), (path.name, key, got, want)
+            else:
+                assert got == want, (path.name, key, got, want)
+        assert "voices" not in written["params"] and "guard" not in written["params"]
+        assert saved["params"]["voices"] == {"i32": 48}, (path.name, saved["params"]["voices"])
+        assert saved["params"]["guard"] == {"bool": False}, (path.name, saved["params"]["guard"])
+        assert saved["fields"]["preset"] == written["fields"]["preset"], path.name
+    other = bytearray(files[0].read_bytes())
+    other[8:10] = b"00"
+    elsewhere = pathlib.Path(PRESETS) / "another plugin's.bin"
+    elsewhere.write_bytes(bytes(other))
+    with pytest.raises(Exception, match="failed to load"):
+        plugin.load_preset(str(elsewhere))

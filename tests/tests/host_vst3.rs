@@ -1,6 +1,7 @@
 //! The bundled VST3 plugin in a real host: runs the pedalboard tests
 //! (`PYTHON -m pytest -q tests/hosts/test_vst3.py`, see that file for what they check) from the
-//! workspace root, and fails with pytest's output if they fail.
+//! workspace root, and fails with pytest's output if they fail. It first writes the factory
+//! presets as VST3 preset files (`xtask::presets`) into `target/vst3-presets-test/` for them.
 //!
 //! `PYTHON` is the interpreter named by `QSA_PYTHON` (`cargo xtask test` passes the one of its
 //! virtual environment `target/python-venv/`), else that environment's interpreter if it exists,
@@ -67,11 +68,16 @@ fn pedalboard_plays_the_vst3() {
          mido numpy pytest",
         python.display()
     );
+    let presets = target_dir().join("vst3-presets-test");
+    let _ = std::fs::remove_dir_all(&presets);
+    let factory = qsa_dsp::instrument::load_factory_presets().expect("the factory presets parse");
+    xtask::presets::write_vst3_presets(&factory, &presets, false).expect("the preset files are written");
     let start = Instant::now();
     let output = Command::new(&python)
         .args(["-m", "pytest", "-q", "-s", "-p", "no:cacheprovider", SCRIPT])
         .current_dir(workspace_root())
         .env("QSA_VST3_BUNDLE", &vst3)
+        .env("QSA_VST3_PRESETS", &presets)
         .env("PYTHONDONTWRITEBYTECODE", "1")
         .output()
         .unwrap_or_else(|e| panic!("cannot run {} ({e}): install Python 3 ({install})", python.display()));

@@ -377,6 +377,28 @@ fn the_presets_command_lists_id_category_and_description() {
     }
 }
 
+/// `cargo xtask presets --vst3 DIR` lists the presets, then writes one VST3 preset file per preset
+/// into DIR (made if missing) under its name and says how many; `--force` without `--vst3` is a
+/// usage error.
+#[test]
+fn the_presets_command_writes_vst3_preset_files_when_asked() {
+    let dir = std::env::temp_dir().join(format!("qsa-presets-command-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (code, out, err) = xtask(&["presets", "--vst3", dir.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let count = factory_presets().len();
+    assert_eq!(out.lines().count(), count + 2, "{out}");
+    assert!(out.ends_with(&format!("wrote {count} VST3 presets to {}\n", dir.display())), "{out}");
+    for p in factory_presets() {
+        let file = std::fs::read(dir.join(format!("{}.vstpreset", p.name))).unwrap();
+        assert_eq!(file, xtask::presets::vst3_preset(p), "{}", p.id);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+    let (code, _, err) = xtask(&["presets", "--force"]);
+    assert_eq!(code, 2, "a usage error");
+    assert!(err.contains("--vst3"), "{err}");
+}
+
 /// `cargo xtask examples` writes, per showcase (every category's, the slide's electric and
 /// acoustic guitar), a stereo 16-bit WAV at 32 kHz under 500 kB peaking at −1 dBFS and its
 /// spectrogram PNG, and a README linking them all; a second run gives the same bytes

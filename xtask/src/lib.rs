@@ -5,7 +5,8 @@
 //! - `bench`: real-time factors of whole voices, one JSON line per case. See [`bench`].
 //! - `report`: the error-against-run-time and stability report in `docs/report/`, or with
 //!   `--quick` the CI check of its error figures. See [`report`].
-//! - `presets`: list the factory presets (id, category, name, description). See [`presets`].
+//! - `presets`: list the factory presets (id, category, name, description), and write them as
+//!   VST3 preset files. See [`presets`].
 //! - `examples`: render one example per preset category into `docs/examples/` (WAV, spectrogram
 //!   PNG and a README table). See [`examples`].
 //! - `loudness`: loudness per key across the keyboard (EBU R128) and the voicing table. See
@@ -49,8 +50,9 @@ pub enum Cli {
     /// Compare the piano with measured grands: two-stage decay, contact duration, inharmonicity
     /// and decay rates against key, and a scale at three dynamics, into docs/report/realism.md.
     Realism(realism::RealismArgs),
-    /// List the factory presets: id, category, name and description.
-    Presets,
+    /// List the factory presets: id, category, name and description; with --vst3 DIR also write
+    /// them as VST3 preset files for a host's preset browser.
+    Presets(presets::PresetsArgs),
     /// Render an audio example and spectrogram per preset category into docs/examples/.
     Examples(examples::ExamplesArgs),
     /// Build plugin bundles (CLAP, VST3) into target/bundled/ with nice-plug's bundler.
@@ -105,7 +107,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>, stdout: &mut dyn Write, std
         Cli::Render(args) => render::run(&args, stdout).map(|_| ()).map_err(|e| e.to_string()),
         Cli::Bench(args) => bench::run(&args, stdout).map(|_| ()).map_err(|e| e.to_string()),
         Cli::Report(args) => report::run(&args, stdout).map_err(|e| e.to_string()),
-        Cli::Presets => presets::run(stdout).map_err(|e| e.to_string()),
+        Cli::Presets(args) => presets::run(&args, stdout),
         Cli::Examples(args) => examples::run(&args, stdout).map(|_| ()).map_err(|e| e.to_string()),
         Cli::Loudness(args) => loudness::run(&args, stdout),
         Cli::Realism(args) => realism::run(&args, stdout),
