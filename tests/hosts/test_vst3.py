@@ -30,9 +30,9 @@ function. These are pedalboard 0.9 internals: ``cargo xtask test`` pins the vers
 import contextlib
 import json
 import math
-import struct
 import os
 import pathlib
+import struct
 
 import mido
 import numpy as np
