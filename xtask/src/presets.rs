@@ -96,7 +96,7 @@ fn file_name(name: &str) -> String {
 pub fn plugin_state(preset: &Preset) -> Value {
     let mut params = Map::new();
     for spec in PARAMETERS.iter().filter(|spec| preset.sets(spec.id)) {
-        let plain = preset.values.plain(spec.id).unwrap_or_else(|| spec.default_plain());
+        let plain = (spec.get)(&preset.values);
         let value = match spec.kind {
             ParamKind::Float { .. } => json!({ "f32": shortest(plain) }),
             ParamKind::Int { .. } => json!({ "i32": plain.round() as i32 }),
