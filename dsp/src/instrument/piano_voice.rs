@@ -184,7 +184,8 @@ fn bit(key: u8) -> u128 {
 /// and at N_b = 1 it keeps a landing damper from costing a pass of exponentials every sample.
 pub const DAMPER_UPDATE: f64 = 0.000_7;
 
-/// A note to play: MIDI channel (0..16), key (0..128), velocity (0, 1].
+/// A note to play: MIDI channel (0..16), key (0..128), velocity (0, 1], and whether the soft
+/// pedal shifts the hammer.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Strike {
     /// MIDI channel, 0..=15.
@@ -193,6 +194,17 @@ pub struct Strike {
     pub key: u8,
     /// Note velocity in (0, 1].
     pub velocity: f64,
+    /// The soft pedal (una corda) is down: the hammer misses one string of a bichord or
+    /// trichord ([`struck_strings`]). The slide guitar ignores it.
+    pub shifted: bool,
+}
+
+/// How many strings of a unison of `strings` the hammer meets: one fewer when the una corda
+/// shifts it (a grand's action moves sideways by about a string's spacing: a trichord is struck
+/// on two strings, a bichord on one), all of them otherwise. A single string is still struck,
+/// by a part of the felt beside its usual grooves (docs/physics.md §12.9).
+pub fn struck_strings(strings: usize, shifted: bool) -> usize {
+    if shifted { strings.saturating_sub(1).max(1) } else { strings }
 }
 
 /// The damper's share of each mode relative to the fundamental, `g_i` (module docs), for a pad
@@ -349,7 +361,7 @@ impl PianoVoice {
             extra: per_mode(),
             core,
             solvers: Solvers::new(law),
-            strike: Strike { channel: 0, key: 60, velocity: 0.0 },
+            strike: Strike { channel: 0, key: 60, velocity: 0.0, shifted: false },
             sounding: false,
             key_down: false,
             started: 0,
@@ -431,7 +443,10 @@ impl PianoVoice {
         }
         let fs = self.core.string().sample_rate();
         let velocity = hammer_speed(strike.velocity);
-        // The rule's hammer is one string's share (see `PianoNote`).
+        // The rule's hammer is one string's share (see `PianoNote`): the whole hammer weighs
+        // `S` shares, and its felt is as stiff as the strings it meets.
+        let met = struck_strings(note.strings, strike.shifted);
+        self.core.set_struck(met);
         let mass = note.hammer_mass * settings.hammer_mass * strings;
         // The felt starts two samples of travel beyond the string, so the hammer lands almost at once.
         let hammer = HammerParams { mass, velocity, position, gap: 2.0 * velocity / fs };
@@ -440,7 +455,7 @@ impl PianoVoice {
         self.core.set_background(elsewhere.motion, elsewhere.reach);
         self.core.strike(&hammer);
         self.position = position;
-        let Ok(law) = PowerLaw::new(note.kappa * settings.hardness * strings, note.alpha) else { return };
+        let Ok(law) = PowerLaw::new(note.kappa * settings.hardness * met as f64, note.alpha) else { return };
         // All the energy there is: the hammer's and the string's (a re-strike meets a moving
         // string), and what the strings' motion elsewhere can bring: with `E` that motion's
         // energy, the key's copy holds at most `(√(E_hammer + E_string + E) + √E)²`, the copies'
@@ -615,6 +630,11 @@ impl PianoVoice {
     pub fn release(&mut self) {
         self.key_down = false;
         self.pending_released = true;
+    }
+
+    /// How many of its strings the latest strike's hammer met ([`struck_strings`]).
+    pub fn strings_struck(&self) -> usize {
+        self.core.struck()
     }
 
     /// The strings' and bridge's energy over the latest strike's reference, all the energy the
@@ -870,7 +890,7 @@ mod tests {
     fn struck(blocks: usize) -> (PianoVoice, Settings) {
         let settings = Settings::default();
         let mut voice = PianoVoice::new(200, FS);
-        voice.play(Strike { channel: 0, key: 60, velocity: 0.7 }, &settings, 0);
+        voice.play(Strike { channel: 0, key: 60, velocity: 0.7, shifted: false }, &settings, 0);
         let mut out = [0.0; 64];
         for _ in 0..blocks {
             voice.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
@@ -915,7 +935,7 @@ mod tests {
     /// `voice`'s output for `key` struck at velocity 0.7, held for 20 blocks of 64 samples and let
     /// go for 20 more (the damper landing on the strings).
     fn played(voice: &mut PianoVoice, key: u8, settings: &Settings) -> Vec<f64> {
-        voice.play(Strike { channel: 0, key, velocity: 0.7 }, settings, 0);
+        voice.play(Strike { channel: 0, key, velocity: 0.7, shifted: false }, settings, 0);
         let (mut all, mut out) = (Vec::new(), [0.0; 64]);
         for block in 0..40 {
             if block == 20 {
@@ -957,7 +977,12 @@ mod tests {
         let mut table = PartnerTable::new(FS, &settings);
         let pedal = Dampers { pedal: true, held: 0 };
         let play = |voice: &mut PianoVoice, table: &mut PartnerTable| {
-            voice.play_with(Strike { channel: 0, key: 60, velocity: 0.7 }, &settings, 0, Some((table.ready(), pedal)));
+            voice.play_with(
+                Strike { channel: 0, key: 60, velocity: 0.7, shifted: false },
+                &settings,
+                0,
+                Some((table.ready(), pedal)),
+            );
             let (mut all, mut out) = (Vec::new(), [0.0; 64]);
             for _ in 0..40 {
                 voice.begin_block(&settings, pedal, 64, 0, Some(&mut *table), &mut 0);

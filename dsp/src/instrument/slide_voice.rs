@@ -307,7 +307,7 @@ impl SlideVoice {
             solvers: Solvers::new(law),
             live: Live(rest),
             length,
-            strike: Strike { channel: 0, key: OPEN_KEY, velocity: 0.0 },
+            strike: Strike { channel: 0, key: OPEN_KEY, velocity: 0.0, shifted: false },
             sounding: false,
             key_down: false,
             started: 0,
@@ -765,7 +765,7 @@ mod tests {
     fn plucked_on(body: SlideBody, blocks: usize) -> (SlideVoice, Settings) {
         let settings = Settings { mode: crate::instrument::Mode::Slide, slide_body: body, ..Settings::default() };
         let mut voice = SlideVoice::new(FS, &settings);
-        voice.play(Strike { channel: 0, key: 52, velocity: 0.8 }, &settings, false, 0);
+        voice.play(Strike { channel: 0, key: 52, velocity: 0.8, shifted: false }, &settings, false, 0);
         let mut out = [0.0; 64];
         for _ in 0..blocks {
             voice.begin_block(&settings, &ChannelState::default(), 64);
