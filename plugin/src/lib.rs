@@ -9,7 +9,7 @@
 //!   renders up to the next one. Parameter changes arrive split sample-accurately by the
 //!   framework; the engine samples them at its control-block boundaries, so host buffer sizes never
 //!   change the output.
-//! - MIDI: notes; CC64 sustain, CC67 soft pedal (una corda), CC1 mod wheel, CC120 all sound off, CC123 all notes off; pitch bend
+//! - MIDI: notes; CC64 sustain, CC66 sostenuto, CC67 soft pedal (una corda), CC1 mod wheel, CC120 all sound off, CC123 all notes off; pitch bend
 //!   moves the slide; channel and poly pressure can press it (per channel, so MPE works).
 //! - Per note (slide mode): CLAP and VST3 tuning expressions move the note's slide, CLAP pressure
 //!   expressions (nice-plug delivers them, like MIDI poly aftertouch and VST3 poly pressure, as
@@ -120,6 +120,7 @@ fn engine_event<S>(event: &NoteEvent<S>) -> Option<Event> {
         NoteEvent::MidiCC { channel, cc, value, .. } => match cc {
             1 => Event::ModWheel { channel, value },
             64 => Event::Sustain { channel, down: value >= 0.5 },
+            66 => Event::Sostenuto { channel, down: value >= 0.5 },
             67 => Event::SoftPedal { channel, down: value >= 0.5 },
             120 => Event::AllSoundOff,
             123 => Event::AllNotesOff,
@@ -310,6 +311,8 @@ mod tests {
                 (1, 100),
                 (64, 63),
                 (64, 64),
+                (66, 63),
+                (66, 64),
                 (67, 63),
                 (67, 64),
                 (120, 0),

@@ -13,7 +13,7 @@
 //!   parameter events timed inside a buffer). `Voices` takes effect when the host re-activates
 //!   the plugin, which it does every 500 permutations.
 //! - Meanwhile notes (CLAP note events and MIDI note messages: single keys, repeated keys,
-//!   chords, releases), the sustain and soft pedals (CC64, CC67), pitch bend, channel and poly pressure, the mod
+//!   chords, releases), the sustain, sostenuto and soft pedals (CC64, CC66, CC67), pitch bend, channel and poly pressure, the mod
 //!   wheel (CC1) and all-notes-off (CC123) play on every channel.
 //!
 //! The default run is 2,000 permutations with a fixed seed; `QSA_FUZZ_PERMUTATIONS=20000` runs
@@ -301,10 +301,10 @@ impl Generator {
                 }
                 0
             }
-            // Sustain pedal, or the soft pedal.
+            // Sustain pedal, or the sostenuto or soft pedal.
             72..=78 => {
                 let value = [0, 127, self.value7()][self.rng.random_range(0..3)];
-                let pedal = if self.rng.random_range(0..3) == 0 { 67 } else { 64 };
+                let pedal = [64, 64, 66, 67][self.rng.random_range(0..4)];
                 score.push((t, Ev::Midi([0xB0 | channel, pedal, value])));
                 0
             }

@@ -14,6 +14,8 @@
 //!   the fundamental, faster for higher modes) with time constant `damper_time`, changing how fast
 //!   the string decays, never its state. The sustain pedal (CC64 ≥ 64 on the note's channel, or
 //!   on an MPE zone's master channel, 1 or 16, which speaks for every channel) holds dampers off.
+//! - The sostenuto pedal (CC66 ≥ 64, read on the channels as the sustain pedal is) holds up the
+//!   dampers of the keys held down as it goes down, until it comes up.
 //! - The soft pedal (CC67 ≥ 64, read on the channels as the sustain pedal is) shifts the hammers:
 //!   a key struck while it is down meets one string fewer of a bichord or trichord
 //!   ([`struck_strings`]); a key already sounding keeps the strike it had.
@@ -187,6 +189,14 @@ pub enum Event {
         /// Pedal down.
         down: bool,
     },
+    /// Sostenuto pedal (CC66) on a channel: going down, it holds up the dampers of the keys held
+    /// down at that moment until it comes up; keys struck later are damped as usual.
+    Sostenuto {
+        /// MIDI channel, 0..=15.
+        channel: u8,
+        /// Pedal down.
+        down: bool,
+    },
     /// Release every key and pedal (CC123), letting the notes ring out under their dampers.
     AllNotesOff,
     /// Silence everything at once (CC120).
@@ -283,6 +293,9 @@ pub struct Instrument {
     sustain: [bool; 16],
     /// Soft pedal per channel.
     soft: [bool; 16],
+    /// Sostenuto pedal per channel, and the keys whose dampers it holds up.
+    sostenuto: [bool; 16],
+    caught: [u128; 16],
     /// The keys held down on each channel, one bit per MIDI key: their dampers are off their
     /// strings, so they ring as partners of the keys struck meanwhile (docs/physics.md §14).
     keys_down: [u128; 16],
@@ -342,6 +355,8 @@ impl Instrument {
             pickup: settings.pickup_position,
             sustain: [false; 16],
             soft: [false; 16],
+            sostenuto: [false; 16],
+            caught: [0; 16],
             keys_down: [0; 16],
             now: 0,
             in_block: 0,
@@ -538,9 +553,12 @@ impl Instrument {
             }
             Event::Sustain { channel, down } => self.sustain[usize::from(channel & 15)] = down,
             Event::SoftPedal { channel, down } => self.soft[usize::from(channel & 15)] = down,
+            Event::Sostenuto { channel, down } => self.sostenuto(channel & 15, down),
             Event::AllNotesOff => {
                 self.sustain = [false; 16];
                 self.soft = [false; 16];
+                self.sostenuto = [false; 16];
+                self.caught = [0; 16];
                 self.keys_down = [0; 16];
                 self.voices.iter_mut().for_each(PianoVoice::release);
                 self.slides.iter_mut().for_each(SlideVoice::key_up);
@@ -548,6 +566,8 @@ impl Instrument {
             Event::AllSoundOff => {
                 self.sustain = [false; 16];
                 self.soft = [false; 16];
+                self.sostenuto = [false; 16];
+                self.caught = [0; 16];
                 self.keys_down = [0; 16];
                 self.voices.iter_mut().for_each(PianoVoice::silence);
                 self.slides.iter_mut().for_each(SlideVoice::silence);
@@ -610,6 +630,26 @@ impl Instrument {
         self.sustain[usize::from(channel & 15)] || self.sustain[0] || self.sustain[15]
     }
 
+    /// The sostenuto pedal on `channel` goes down or up. Going down it catches the dampers of
+    /// the keys held down on its channel, on every channel for an MPE zone's master channel (1
+    /// or 16, as the sustain pedal speaks for every channel there); a pedal already down
+    /// catches nothing more. Coming up it lets them go.
+    fn sostenuto(&mut self, channel: u8, down: bool) {
+        let c = usize::from(channel);
+        if down && !self.sostenuto[c] {
+            self.caught[c] = if c == 0 || c == 15 { self.held_keys() } else { self.keys_down[c] };
+        } else if !down {
+            self.caught[c] = 0;
+        }
+        self.sostenuto[c] = down;
+    }
+
+    /// The keys whose dampers the sostenuto pedal holds up for notes on `channel`, read as
+    /// [`pedal`](Self::pedal) reads the sustain pedal.
+    fn caught(&self, channel: u8) -> u128 {
+        self.caught[usize::from(channel & 15)] | self.caught[0] | self.caught[15]
+    }
+
     /// Whether the soft pedal shifts the hammers of notes on `channel`, as [`pedal`](Self::pedal)
     /// reads the sustain pedal.
     fn soft_pedal(&self, channel: u8) -> bool {
@@ -624,7 +664,8 @@ impl Instrument {
     /// Strike `strike` on a piano voice; the index of the voice that took it.
     fn note_on(&mut self, strike: Strike) -> Option<usize> {
         let now = self.now;
-        let dampers = Dampers { pedal: self.pedal(strike.channel), held: self.held_keys() };
+        let dampers =
+            Dampers { pedal: self.pedal(strike.channel), held: self.held_keys(), caught: self.caught(strike.channel) };
         // The same key again: strike the same string.
         if let Some(i) = self.voices.iter().position(|v| v.upcoming_key() == Some(strike.key)) {
             if self.voices[i].fading() {
@@ -807,6 +848,7 @@ impl Instrument {
         let mut seeks = PARTNER_SEEKS;
         let held = self.held_keys();
         let pedals: [bool; 16] = std::array::from_fn(|channel| self.pedal(channel as u8));
+        let caught: [u128; 16] = std::array::from_fn(|channel| self.caught(channel as u8));
         // A voice neither sounding nor fading for a new note has nothing to do at a block's start;
         // only those with live notes can be either.
         let (pianos, slides) = self.pools();
@@ -818,7 +860,8 @@ impl Instrument {
             if !(v.sounding || v.fading()) {
                 continue;
             }
-            let dampers = Dampers { pedal: pedals[usize::from(v.strike.channel & 15)], held };
+            let channel = usize::from(v.strike.channel & 15);
+            let dampers = Dampers { pedal: pedals[channel], held, caught: caught[channel] };
             v.begin_block(&self.settings, dampers, len, self.now, Some(&mut self.partners), &mut seeks);
         }
         // The pickup slides to a new position instead of jumping: its weights move a little in
@@ -1278,7 +1321,7 @@ mod tests {
 
     /// Played hard: keys struck, struck again and let go at random (half of them among C2, G2,
     /// C3, G3, C4, G4, C5 and E5, which ring one another's strings), at velocities from 1/127 to
-    /// full, the sustain and soft pedals pressed and lifted, voices stolen (4 to 32 voices for about 600 note-ons
+    /// full, the sustain, sostenuto and soft pedals pressed and lifted, voices stolen (4 to 32 voices for about 600 note-ons
     /// each), host buffers of 1 to 4,096 samples, and over half of each run every piano
     /// parameter, the solver and the control block sent to either end of its range or anywhere
     /// between before one event in twenty. No voice's strings and bridge ever hold more than its
@@ -1316,7 +1359,14 @@ mod tests {
                     }
                     8..12 => instrument.handle(Event::NoteOff { channel: 0, key }),
                     12 => instrument.handle(Event::Sustain { channel: 0, down: rng.random_range(0..4) != 0 }),
-                    13 => instrument.handle(Event::SoftPedal { channel: 0, down: rng.random_range(0..2) != 0 }),
+                    13 => {
+                        let down = rng.random_range(0..2) != 0;
+                        instrument.handle(if rng.random_range(0..2) == 0 {
+                            Event::SoftPedal { channel: 0, down }
+                        } else {
+                            Event::Sostenuto { channel: 0, down }
+                        })
+                    }
                     14 if jumping => {
                         let settings = Settings {
                             method: [Method::Qsa, Method::Exp, Method::Imp][rng.random_range(0..3)],
@@ -1448,5 +1498,74 @@ mod tests {
                 assert!(more > 0.3, "key {key} at {velocity}: {more} dB");
             }
         }
+    }
+
+    /// The sostenuto pedal (CC66 at 64 and above) holds up the dampers of the keys held down as
+    /// it goes down, and only theirs, until it comes up. Every render below is compared to the
+    /// bit with one that holds the same dampers up by holding keys down instead, over 2 s:
+    /// - C4 held, the pedal down, C4 let go, E4 struck staccato: as C4 held throughout with E4
+    ///   struck staccato (C4 rings on, E4's damper falls);
+    /// - the pedal then coming up at 1 s: as C4 let go at 1 s;
+    /// - the pedal down before any key, C4 struck and let go: as no pedal at all;
+    /// - the pedal sent again (a controller's values 70, then 90) while E4 is held: E4 is not
+    ///   caught by the second;
+    /// - on channel 4, it catches the keys held on channel 4 alone; on channel 1 (an MPE zone's
+    ///   master channel, 0 here) those held on every channel.
+    #[test]
+    fn the_sostenuto_holds_up_the_dampers_of_the_keys_down_as_it_goes_down_and_only_those() {
+        let sostenuto = |channel: u8, value: u8| event_from_midi(0xb0 | channel, 66, value).unwrap();
+        assert_eq!(sostenuto(3, 64), Event::Sostenuto { channel: 3, down: true });
+        assert_eq!(sostenuto(3, 63), Event::Sostenuto { channel: 3, down: false });
+        let on = |channel: u8, key: u8| Event::NoteOn { channel, key, velocity: 0.6 };
+        let off = |channel: u8, key: u8| Event::NoteOff { channel, key };
+        let render = |events: &[(usize, Event)]| {
+            let mut instrument = Instrument::new(48_000.0, 4, Settings::default());
+            let (mut left, mut right) = ([0.0; 64], [0.0; 64]);
+            let mut out = Vec::new();
+            for block in 0..1500 {
+                events.iter().filter(|(at, _)| *at == block).for_each(|&(_, e)| instrument.handle(e));
+                instrument.process(&mut left, &mut right);
+                out.extend(left.iter().chain(&right).map(|x| x.to_bits()));
+            }
+            out
+        };
+        let same = |name: &str, a: &[(usize, Event)], b: &[(usize, Event)]| {
+            let (a, b) = (render(a), render(b));
+            assert!(a.iter().any(|&x| x != 0), "{name}: sounds");
+            assert!(a == b, "{name}");
+        };
+        let c4_rings = [(0, on(0, 60)), (30, on(0, 64)), (60, off(0, 64))];
+        let caught = [(0, on(0, 60)), (10, sostenuto(0, 127)), (20, off(0, 60)), (30, on(0, 64)), (60, off(0, 64))];
+        same("C4 caught, E4 not", &caught, &c4_rings);
+        let lifted = [caught.as_slice(), &[(750, sostenuto(0, 0))]].concat();
+        let let_go = [c4_rings.as_slice(), &[(750, off(0, 60))]].concat();
+        same("the pedal coming up", &lifted, &let_go);
+        same(
+            "nothing caught",
+            &[(0, sostenuto(0, 127)), (10, on(0, 60)), (40, off(0, 60))],
+            &[(10, on(0, 60)), (40, off(0, 60))],
+        );
+        same(
+            "sent again",
+            &[
+                (0, on(0, 60)),
+                (10, sostenuto(0, 70)),
+                (20, on(0, 64)),
+                (30, sostenuto(0, 90)),
+                (40, off(0, 60)),
+                (60, off(0, 64)),
+            ],
+            &[(0, on(0, 60)), (20, on(0, 64)), (60, off(0, 64))],
+        );
+        same(
+            "its own channel",
+            &[(0, on(4, 60)), (0, on(5, 64)), (10, sostenuto(4, 127)), (20, off(4, 60)), (20, off(5, 64))],
+            &[(0, on(4, 60)), (0, on(5, 64)), (20, off(5, 64))],
+        );
+        same(
+            "the master channel",
+            &[(0, on(4, 60)), (0, on(5, 64)), (10, sostenuto(0, 127)), (20, off(4, 60)), (20, off(5, 64))],
+            &[(0, on(4, 60)), (0, on(5, 64))],
+        );
     }
 }

@@ -146,13 +146,16 @@ pub fn has_damper(key: u8) -> bool {
 }
 
 /// Which keys' strings are free of their dampers: every key's with the sustain pedal down, else
-/// those of the keys held down and of the keys without a damper.
+/// those of the keys held down, of the keys the sostenuto pedal holds and of the keys without a
+/// damper.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Dampers {
     /// Whether the sustain pedal is down.
     pub pedal: bool,
     /// The keys held down, one bit per MIDI key (bit `k` for key `k`).
     pub held: u128,
+    /// The keys whose dampers the sostenuto pedal holds up (those held down as it went down).
+    pub caught: u128,
 }
 
 impl Dampers {
@@ -161,7 +164,7 @@ impl Dampers {
 
     /// The keys whose strings are free, one bit per MIDI key.
     pub fn lifted(&self) -> u128 {
-        if self.pedal { u128::MAX } else { self.held | Self::UNDAMPED }
+        if self.pedal { u128::MAX } else { self.held | self.caught | Self::UNDAMPED }
     }
 }
 
@@ -529,7 +532,7 @@ impl PianoVoice {
             return (0, 0, 0);
         }
         let position = Self::striking_point(key, settings);
-        let everything = Dampers { pedal: true, held: 0 };
+        let everything = Dampers { pedal: true, held: 0, caught: 0 };
         if !self.tune(key, settings, position, Some((table, everything))) {
             return (0, 0, 0);
         }
@@ -741,7 +744,8 @@ impl PianoVoice {
         let span = len as f64 / fs;
         // The fraction of the way a damper's rate moves to its target over this block.
         let step = self.damper_step.get(-span / settings.damper_time, |x| 1.0 - x.exp());
-        let damped = !(self.key_down || dampers.pedal) && has_damper(self.strike.key);
+        let caught = dampers.caught & bit(self.strike.key) != 0;
+        let damped = !(self.key_down || dampers.pedal || caught) && has_damper(self.strike.key);
         let target = if damped { settings.damper_rate } else { 0.0 };
         settle(&mut self.damper, target, step);
         self.since_update += span;
@@ -975,7 +979,7 @@ mod tests {
     fn a_prepared_voice_plays_as_a_fresh_voice_does() {
         let settings = Settings::default();
         let mut table = PartnerTable::new(FS, &settings);
-        let pedal = Dampers { pedal: true, held: 0 };
+        let pedal = Dampers { pedal: true, held: 0, caught: 0 };
         let play = |voice: &mut PianoVoice, table: &mut PartnerTable| {
             voice.play_with(
                 Strike { channel: 0, key: 60, velocity: 0.7, shifted: false },
