@@ -622,7 +622,7 @@ fn output_does_not_depend_on_host_buffers() {
 }
 
 /// Garbage in one block: 10,000 random events (any channel, keys 0 and 127, velocity 0, NaN,
-/// note-offs without note-ons, pedals), NaN and infinite settings: no panic, finite output, and
+/// note-offs without note-ons, the three pedals), NaN and infinite settings: no panic, finite output, and
 /// no allocation in `handle`, `set_settings` or `process`.
 #[test]
 fn garbage_input_is_safe_and_allocation_free() {
@@ -636,7 +636,14 @@ fn garbage_input_is_safe_and_allocation_free() {
                 0 => Event::NoteOn { channel, key, velocity: rng.random_range(0.0..1.5) },
                 1 => Event::NoteOn { channel, key, velocity: f32::NAN },
                 2 => Event::NoteOff { channel, key },
-                3 => Event::Sustain { channel, down: rng.random_bool(0.5) },
+                3 => {
+                    let down = rng.random_bool(0.5);
+                    match key % 3 {
+                        0 => Event::Sustain { channel, down },
+                        1 => Event::Sostenuto { channel, down },
+                        _ => Event::SoftPedal { channel, down },
+                    }
+                }
                 4 => Event::NoteOn { channel, key: [0, 127][usize::from(key % 2)], velocity: 0.0 },
                 _ => Event::AllNotesOff,
             }
@@ -664,8 +671,9 @@ fn garbage_input_is_safe_and_allocation_free() {
     assert!(left.iter().all(|v| v.is_finite()));
 }
 
-/// A steady stream of notes (with steals, releases, and the pedal going down on sounding keys,
-/// which brings their partners onto their bridges) allocates nothing after `new`.
+/// A steady stream of notes (with steals, releases, the pedal going down on sounding keys,
+/// which brings their partners onto their bridges, the sostenuto catching keys and the soft
+/// pedal shifting the hammers) allocates nothing after `new`.
 #[test]
 fn playing_allocates_nothing() {
     let mut p = piano(8);
@@ -674,6 +682,12 @@ fn playing_allocates_nothing() {
         for i in 0..400u32 {
             if i % 7 == 0 {
                 p.handle(Event::Sustain { channel: 0, down: i % 14 == 7 });
+            }
+            if i % 11 == 0 {
+                p.handle(Event::SoftPedal { channel: 0, down: i % 22 == 11 });
+            }
+            if i % 13 == 0 {
+                p.handle(Event::Sostenuto { channel: 0, down: i % 26 == 13 });
             }
             if i % 3 == 0 {
                 p.handle(on(21 + (i * 7 % 88) as u8, 0.5 + (i % 5) as f32 * 0.1));
