@@ -91,11 +91,17 @@ pub fn contact_duration(key: u8, speed: f64) -> Option<f64> {
 /// partners), `seconds` long, with a unison spread of `detune` cents: the dry bridge force (full
 /// scale as the output).
 pub fn held_note(key: u8, velocity: f32, detune: f64, seconds: f64) -> Vec<f64> {
+    held_note_shifted(key, velocity, detune, false, seconds)
+}
+
+/// [`held_note`], struck with the soft pedal down (`soft`: the una corda, one string fewer).
+pub fn held_note_shifted(key: u8, velocity: f32, detune: f64, soft: bool, seconds: f64) -> Vec<f64> {
     let settings = Settings { unison_detune: detune, ..Settings::default() };
     let mut piano = Instrument::new(FS, 4, settings);
     // The strings' own decay: the dry bridge force, without the soundboard's radiation (whose
     // modes add their own ringing to a partial's envelope).
     piano.set_raw_output(true);
+    piano.handle(Event::SoftPedal { channel: 0, down: soft });
     piano.handle(Event::NoteOn { channel: 0, key, velocity });
     let n = (seconds * FS) as usize;
     let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
@@ -377,6 +383,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let dir = args.root.join("docs/report/realism");
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let envelopes = envelopes(&dir.join("envelopes.png"))?;
+    let shifted = una_corda(&dir.join("una-corda.png"))?;
     let contacts = contacts(&dir.join("contact.png"))?;
     inharmonicity(&dir.join("inharmonicity.png"))?;
     lengths(&dir.join("lengths.png"))?;
@@ -394,7 +401,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let phrases = [("electric", SlideBody::Pickup), ("acoustic", SlideBody::Acoustic)]
         .map(|(name, body)| (name, guitar_phrase(body)));
     write_at_one_gain(&dir, "guitar", &phrases)?;
-    let text = readme(&envelopes, &contacts, &decays, &t60, (&sympathy, undamped, held), (&guitars, &stereo));
+    let text = readme(&envelopes, &shifted, &contacts, &decays, &t60, (&sympathy, undamped, held), (&guitars, &stereo));
     let path = args.root.join("docs/report/realism.md");
     std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     writeln!(out, "{}", serde_json::json!({ "written": path.display().to_string() })).map_err(|e| e.to_string())
@@ -429,6 +436,46 @@ fn envelopes(path: &Path) -> Result<Vec<Envelope>, String> {
             format!("partial {partial}, unison tuned exactly alike")
         };
         let width = if *detune > 0.0 { 2 } else { 1 };
+        chart
+            .draw_series(LineSeries::new(points, colour.stroke_width(width)))
+            .map_err(|e| e.to_string())?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(width)));
+    }
+    crate::report::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+    root.present().map_err(|e| e.to_string())?;
+    Ok(rows)
+}
+
+/// C4's partial levels with the pedal up and with the soft pedal down: `(partial, soft, levels)`
+/// for partials 1 and 2.
+type Shifted = (usize, bool, Vec<f64>);
+
+fn una_corda(path: &Path) -> Result<Vec<Shifted>, String> {
+    let spread = Settings::default().unison_detune;
+    let notes = [false, true].map(|soft| (soft, held_note_shifted(60, 0.6, spread, soft, 5.0)));
+    let c4 = tuned(60);
+    let rows: Vec<Shifted> = [1, 2]
+        .into_iter()
+        .flat_map(|p| notes.iter().map(move |(soft, out)| (p, *soft, partial_levels(out, c4.partial(p)))))
+        .collect();
+    let top = rows.iter().flat_map(|r| r.2.iter().copied()).fold(f64::NEG_INFINITY, f64::max);
+    let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("C4 struck mezzo-forte and held, with and without the una corda (50 ms windows)", ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0f64..5f64, (top - 80.0)..(top + 3.0))
+        .map_err(|e| e.to_string())?;
+    chart.configure_mesh().x_desc("time (s)").y_desc("level (dB)").draw().map_err(|e| e.to_string())?;
+    for ((partial, soft, levels), colour) in rows.iter().zip([BLUE, BLUE, RED, RED]) {
+        let points = levels.iter().enumerate().map(|(k, &l)| ((k as f64 + 0.5) * LEVEL_WINDOW, l));
+        let (label, width) = match soft {
+            true => (format!("partial {partial}, una corda: two strings struck"), 1),
+            false => (format!("partial {partial}, all three strings struck"), 2),
+        };
         chart
             .draw_series(LineSeries::new(points, colour.stroke_width(width)))
             .map_err(|e| e.to_string())?
@@ -916,6 +963,7 @@ type T60Row = ((u8, f64, f64), f64, f64);
 
 fn readme(
     envelopes: &[Envelope],
+    shifted: &[Shifted],
     contacts: &[Contact],
     decays: &[Decay],
     t60: &[T60Row],
@@ -932,6 +980,23 @@ fn readme(
             at(levels, PROMPT),
             at(levels, AFTERSOUND),
             at(levels, PROMPT) / at(levels, AFTERSOUND)
+        );
+    }
+    // Each partial's level over the first 0.1 s, and how far it stands below the whole
+    // unison's.
+    let first = |levels: &[f64]| {
+        let w = (0.1 / LEVEL_WINDOW).round() as usize;
+        10.0 * (levels[..w].iter().map(|l| 10f64.powf(l / 10.0)).sum::<f64>() / w as f64).log10()
+    };
+    let mut una_rows = String::new();
+    for (partial, soft, levels) in shifted {
+        let whole = shifted.iter().find(|r| r.0 == *partial && !r.1).map_or(f64::NAN, |r| first(&r.2));
+        una_rows += &format!(
+            "| {partial} | {} | {:+.1} | {:.1} | {:.1} |\n",
+            if *soft { "down (two strings)" } else { "up (three strings)" },
+            first(levels) - whole,
+            at(levels, PROMPT),
+            at(levels, AFTERSOUND)
         );
     }
     let t60_rows: String = t60
@@ -1035,6 +1100,17 @@ fn readme(
          aftersound, with beats. Tuned exactly alike they stay together and decay in one stage (Weinreich, JASA \
          62(6), 1977).\n\n\
          | partial | unison | prompt sound (dB/s) | aftersound (dB/s) | ratio |\n|---|---|---|---|---|\n{rows}\n\
+         ## The soft pedal\n\n\
+         ![C4 with the una corda](realism/una-corda.png)\n\n\
+         C4 struck as above, with the soft pedal down: the hammer shifted off one of the three strings \
+         (docs/physics.md §12.9). The first 0.1 s is against the whole unison's level; the rates are measured \
+         as above. The string the hammer misses rings from the bridge alone, and the strings start out of \
+         step, so more of the motion lies in patterns that barely move the bridge: both partials start \
+         lower and their prompt sounds decay more slowly; the aftersound's rates differ partial by \
+         partial, as its beats fall elsewhere. Over all partials the note's first 0.1 s is about 2 dB \
+         softer and its sound 2–3 s later stands higher against it (docs/physics.md §12.9 measures both at E2, C4 and \
+         C5).\n\n\
+         | partial | soft pedal | first 0.1 s (dB) | prompt sound (dB/s) | aftersound (dB/s) |\n|---|---|---|---|---|\n{una_rows}\n\
          ## Decay rates against key\n\n\
          ![decay rates](realism/decay.png)\n\n\
          Every third key from C1 to C7, struck at velocity 0.6 and held: the second partial's prompt sound decays \
