@@ -417,33 +417,12 @@ fn envelopes(path: &Path) -> Result<Vec<Envelope>, String> {
     let c4 = tuned(60);
     let mut rows: Vec<Envelope> = (1..=3).map(|p| (p, spread, partial_levels(&detuned, c4.partial(p)))).collect();
     rows.push((2, 0.0, partial_levels(&exact, c4.partial(2))));
-    let top = rows.iter().flat_map(|r| r.2.iter().copied()).fold(f64::NEG_INFINITY, f64::max);
-    let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption("C4 struck mezzo-forte and held: partial levels (50 ms windows)", ("sans-serif", 22))
-        .margin(12)
-        .x_label_area_size(44)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0f64..5f64, (top - 80.0)..(top + 3.0))
-        .map_err(|e| e.to_string())?;
-    chart.configure_mesh().x_desc("time (s)").y_desc("level (dB)").draw().map_err(|e| e.to_string())?;
-    for ((partial, detune, levels), colour) in rows.iter().zip([BLUE, GREEN, RED, PURPLE]) {
-        let points = levels.iter().enumerate().map(|(k, &l)| ((k as f64 + 0.5) * LEVEL_WINDOW, l));
-        let label = if *detune > 0.0 {
-            format!("partial {partial}, unison spread {detune} cents")
-        } else {
-            format!("partial {partial}, unison tuned exactly alike")
-        };
-        let width = if *detune > 0.0 { 2 } else { 1 };
-        chart
-            .draw_series(LineSeries::new(points, colour.stroke_width(width)))
-            .map_err(|e| e.to_string())?
-            .label(label)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(width)));
-    }
-    crate::report::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
-    root.present().map_err(|e| e.to_string())?;
+    let lines =
+        rows.iter().zip([BLUE, GREEN, RED, PURPLE]).map(|((partial, detune, levels), colour)| match *detune > 0.0 {
+            true => (levels.as_slice(), colour, format!("partial {partial}, unison spread {detune} cents"), 2),
+            false => (levels.as_slice(), colour, format!("partial {partial}, unison tuned exactly alike"), 1),
+        });
+    draw_levels(path, "C4 struck mezzo-forte and held: partial levels (50 ms windows)", lines.collect())?;
     Ok(rows)
 }
 
@@ -459,23 +438,31 @@ fn una_corda(path: &Path) -> Result<Vec<Shifted>, String> {
         .into_iter()
         .flat_map(|p| notes.iter().map(move |(soft, out)| (p, *soft, partial_levels(out, c4.partial(p)))))
         .collect();
-    let top = rows.iter().flat_map(|r| r.2.iter().copied()).fold(f64::NEG_INFINITY, f64::max);
+    let lines = rows.iter().zip([BLUE, BLUE, RED, RED]).map(|((partial, soft, levels), colour)| match soft {
+        true => (levels.as_slice(), colour, format!("partial {partial}, una corda: two strings struck"), 1),
+        false => (levels.as_slice(), colour, format!("partial {partial}, all three strings struck"), 2),
+    });
+    let caption = "C4 struck mezzo-forte and held, with and without the una corda (50 ms windows)";
+    draw_levels(path, caption, lines.collect())?;
+    Ok(rows)
+}
+
+/// Draw partial levels over 5 s into `path`, each line `(levels per LEVEL_WINDOW, colour, label,
+/// width)`, the scale spanning 80 dB below the highest.
+fn draw_levels(path: &Path, caption: &str, lines: Vec<(&[f64], RGBColor, String, u32)>) -> Result<(), String> {
+    let top = lines.iter().flat_map(|l| l.0.iter().copied()).fold(f64::NEG_INFINITY, f64::max);
     let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let mut chart = ChartBuilder::on(&root)
-        .caption("C4 struck mezzo-forte and held, with and without the una corda (50 ms windows)", ("sans-serif", 22))
+        .caption(caption, ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(44)
         .y_label_area_size(60)
         .build_cartesian_2d(0f64..5f64, (top - 80.0)..(top + 3.0))
         .map_err(|e| e.to_string())?;
     chart.configure_mesh().x_desc("time (s)").y_desc("level (dB)").draw().map_err(|e| e.to_string())?;
-    for ((partial, soft, levels), colour) in rows.iter().zip([BLUE, BLUE, RED, RED]) {
+    for (levels, colour, label, width) in lines {
         let points = levels.iter().enumerate().map(|(k, &l)| ((k as f64 + 0.5) * LEVEL_WINDOW, l));
-        let (label, width) = match soft {
-            true => (format!("partial {partial}, una corda: two strings struck"), 1),
-            false => (format!("partial {partial}, all three strings struck"), 2),
-        };
         chart
             .draw_series(LineSeries::new(points, colour.stroke_width(width)))
             .map_err(|e| e.to_string())?
@@ -483,8 +470,7 @@ fn una_corda(path: &Path) -> Result<Vec<Shifted>, String> {
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(width)));
     }
     crate::report::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
-    root.present().map_err(|e| e.to_string())?;
-    Ok(rows)
+    root.present().map_err(|e| e.to_string())
 }
 
 /// Contact durations (ms) per key: `(key, mezzo-forte, forte)`.

@@ -1400,6 +1400,19 @@ mod tests {
         }
     }
 
+    /// `blocks` blocks of 64 samples of `instrument` playing `events`, each `(block, event)`
+    /// handled before its block: both channels' samples, a block at a time, as bits.
+    fn blocks_played(instrument: &mut Instrument, events: &[(usize, Event)], blocks: usize) -> Vec<u32> {
+        let (mut left, mut right) = ([0.0; 64], [0.0; 64]);
+        let mut out = Vec::with_capacity(blocks * 128);
+        for block in 0..blocks {
+            events.iter().filter(|(at, _)| *at == block).for_each(|&(_, e)| instrument.handle(e));
+            instrument.process(&mut left, &mut right);
+            out.extend(left.iter().chain(&right).map(|x| x.to_bits()));
+        }
+        out
+    }
+
     /// Render `key` struck at `velocity` on channel 0 with the soft pedal down or up, the raw
     /// (centred) output for `seconds`, and how many strings its hammer met.
     fn una_corda(key: u8, velocity: f32, soft: bool, seconds: f64) -> (Vec<f64>, usize) {
@@ -1447,13 +1460,7 @@ mod tests {
 
         let render = |events: &[(usize, Event)]| {
             let mut instrument = Instrument::new(48_000.0, 2, Settings::default());
-            let (mut left, mut right) = ([0.0; 64], [0.0; 64]);
-            let mut out = Vec::new();
-            for block in 0..400 {
-                events.iter().filter(|(at, _)| *at == block).for_each(|&(_, e)| instrument.handle(e));
-                instrument.process(&mut left, &mut right);
-                out.extend(left.iter().chain(&right).map(|x| x.to_bits()));
-            }
+            let out = blocks_played(&mut instrument, events, 400);
             (out, voice_of(&instrument, 60).map(|i| instrument.voices[i].strings_struck()))
         };
         let c4 = Event::NoteOn { channel: 0, key: 60, velocity: 0.6 };
@@ -1519,15 +1526,7 @@ mod tests {
         let on = |channel: u8, key: u8| Event::NoteOn { channel, key, velocity: 0.6 };
         let off = |channel: u8, key: u8| Event::NoteOff { channel, key };
         let render = |events: &[(usize, Event)]| {
-            let mut instrument = Instrument::new(48_000.0, 4, Settings::default());
-            let (mut left, mut right) = ([0.0; 64], [0.0; 64]);
-            let mut out = Vec::new();
-            for block in 0..1500 {
-                events.iter().filter(|(at, _)| *at == block).for_each(|&(_, e)| instrument.handle(e));
-                instrument.process(&mut left, &mut right);
-                out.extend(left.iter().chain(&right).map(|x| x.to_bits()));
-            }
-            out
+            blocks_played(&mut Instrument::new(48_000.0, 4, Settings::default()), events, 1500)
         };
         let same = |name: &str, a: &[(usize, Event)], b: &[(usize, Event)]| {
             let (a, b) = (render(a), render(b));

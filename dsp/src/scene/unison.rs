@@ -1281,6 +1281,24 @@ mod tests {
         s
     }
 
+    /// 50 ms of the bridge force (N) of one C4 string on a still bridge, struck at 3.5 m/s by
+    /// `shares` of the rule's hammer (one string's share) with one share's felt, solved by QSA
+    /// fitted up to `y_ref`.
+    fn single_c4(shares: f64, y_ref: f64) -> Vec<f64> {
+        let c4 = chaigne_askenfelt_c4();
+        let mass = shares * c4.hammer_mass;
+        let params = HammerStringParams {
+            string: c4.string,
+            hammer: HammerParams { mass, velocity: 3.5, position: c4.strike_position, gap: 2e-4 },
+            pickup: Pickup::point(OutputKind::BridgeForce, 0.5),
+        };
+        let string = ModalString::new(c4.string, FS).unwrap();
+        let mut single = HammerString::new(string, &params, QsaSolver::new(QuadSpline::new(law(1), y_ref, 6).unwrap()));
+        let mut out = vec![0.0; 2400];
+        single.process_output(&mut out);
+        out
+    }
+
     fn law(strings: usize) -> PowerLaw {
         let c4 = chaigne_askenfelt_c4();
         PowerLaw::new(c4.kappa * strings as f64, c4.alpha).unwrap()
@@ -1609,22 +1627,14 @@ mod tests {
     #[test]
     fn a_unison_of_identical_strings_on_a_still_bridge_is_one_string() {
         let rigid = BridgeParams { modes: vec![BridgeMode { frequency: 50.0, mass: 1e12, loss_factor: 0.0 }] };
-        let c4 = chaigne_askenfelt_c4();
         let y_ref = law(1).compression_at_energy(0.5 * 2.97e-3 * 3.5 * 3.5);
         let mut unison = HammerUnison::new(
             c4_unison(3, [0.0; 3], &rigid),
             QsaSolver::new(QuadSpline::new(law(3), y_ref, 6).unwrap()),
         );
-        let params = HammerStringParams {
-            string: c4.string,
-            hammer: HammerParams { mass: c4.hammer_mass, velocity: 3.5, position: c4.strike_position, gap: 2e-4 },
-            pickup: Pickup::point(OutputKind::BridgeForce, 0.5),
-        };
-        let string = ModalString::new(c4.string, FS).unwrap();
-        let mut single = HammerString::new(string, &params, QsaSolver::new(QuadSpline::new(law(1), y_ref, 6).unwrap()));
-        let (mut a, mut b) = (vec![0.0; 2400], vec![0.0; 2400]);
+        let b = single_c4(1.0, y_ref);
+        let mut a = vec![0.0; b.len()];
         unison.process_output(&mut a);
-        single.process_output(&mut b);
         let peak = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let worst = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
         println!("peak {peak:.3} N, worst difference {worst:.2e} N");
@@ -1650,16 +1660,9 @@ mod tests {
             HammerParams { mass: 3.0 * c4.hammer_mass, velocity: 3.5, position: c4.strike_position, gap: 2e-4 };
         core.strike(&hammer);
         let mut unison = HammerUnison::new(core, QsaSolver::new(QuadSpline::new(law(2), y_ref, 6).unwrap()));
-        let params = HammerStringParams {
-            string: c4.string,
-            hammer: HammerParams { mass: 1.5 * c4.hammer_mass, ..hammer },
-            pickup: Pickup::point(OutputKind::BridgeForce, 0.5),
-        };
-        let string = ModalString::new(c4.string, FS).unwrap();
-        let mut single = HammerString::new(string, &params, QsaSolver::new(QuadSpline::new(law(1), y_ref, 6).unwrap()));
-        let (mut a, mut b) = (vec![0.0; 2400], vec![0.0; 2400]);
+        let b = single_c4(1.5, y_ref);
+        let mut a = vec![0.0; b.len()];
         unison.process_output(&mut a);
-        single.process_output(&mut b);
         let peak = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let worst = a.iter().zip(&b).map(|(x, y)| (x - 2.0 / 3.0 * y).abs()).fold(0.0, f64::max);
         println!("peak {peak:.3} N, worst difference {worst:.2e} N");
