@@ -13,8 +13,9 @@
 //!   parameter events timed inside a buffer). `Voices` takes effect when the host re-activates
 //!   the plugin, which it does every 500 permutations.
 //! - Meanwhile notes (CLAP note events and MIDI note messages: single keys, repeated keys,
-//!   chords, releases), the sustain, sostenuto and soft pedals (CC64, CC66, CC67), pitch bend, channel and poly pressure, the mod
-//!   wheel (CC1) and all-notes-off (CC123) play on every channel.
+//!   chords, releases), the sustain, sostenuto and soft pedals (CC64, CC66, CC67), pitch bend,
+//!   channel and poly pressure, the mod wheel (CC1) and all-notes-off (CC123) play on every
+//!   channel.
 //!
 //! The default run is 2,000 permutations with a fixed seed; `QSA_FUZZ_PERMUTATIONS=20000` runs
 //! longer and `QSA_FUZZ_SEED=n` picks another seed. A failure names the seed, the permutation,

@@ -203,9 +203,9 @@ pub struct Strike {
 }
 
 /// How many strings of a unison of `strings` the hammer meets: one fewer when the una corda
-/// shifts it (a grand's action moves sideways by about a string's spacing: a trichord is struck
-/// on two strings, a bichord on one), all of them otherwise. A single string is still struck,
-/// by a part of the felt beside its usual grooves (docs/physics.md §12.9).
+/// shifts it (a grand's action moves sideways: a trichord is struck on two strings, a bichord on
+/// one), all of them otherwise. A single string is still struck, on a softer part of the felt
+/// that the model leaves out (docs/physics.md §12.9).
 pub fn struck_strings(strings: usize, shifted: bool) -> usize {
     if shifted { strings.saturating_sub(1).max(1) } else { strings }
 }
