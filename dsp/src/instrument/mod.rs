@@ -116,7 +116,7 @@ use crate::pickup::PickupCircuit;
 use crate::scene::{MAX_PARTNERS, Shared, Watch};
 use crate::string::ModalString;
 use notes::NoteBook;
-use std::ops::Range;
+use std::ops::{BitOr, Range};
 
 /// Time constant with which a voice struck again moves to its new voicing gain (s).
 pub const VOICING_TIME: f64 = 0.005;
@@ -581,7 +581,7 @@ impl Instrument {
     /// Play a note (velocity above 0) in the current mode, and note which voice took it.
     fn play(&mut self, channel: u8, key: u8, velocity: f32, voice: Option<i32>) {
         let channel = channel & 15;
-        let shifted = self.soft_pedal(channel);
+        let shifted = for_channel(&self.soft, channel);
         let strike = Strike { channel, key: key & 127, velocity: f64::from(velocity.min(1.0)), shifted };
         self.keys_down[usize::from(strike.channel)] |= 1 << strike.key;
         let note = Note { voice, channel: strike.channel, key: strike.key };
@@ -623,11 +623,14 @@ impl Instrument {
         });
     }
 
-    /// Whether the sustain pedal holds the dampers off for notes on `channel`: its own pedal, or
-    /// that of an MPE zone's master channel (MIDI channel 1 for the lower zone, 16 for the upper),
-    /// whose controllers apply to every note of the zone.
-    fn pedal(&self, channel: u8) -> bool {
-        self.sustain[usize::from(channel & 15)] || self.sustain[0] || self.sustain[15]
+    /// The dampers as the pedals leave them for notes on `channel`: the sustain pedal's and the
+    /// keys the sostenuto pedal holds, read through [`for_channel`], and the keys held down.
+    fn dampers(&self, channel: u8) -> Dampers {
+        Dampers {
+            pedal: for_channel(&self.sustain, channel),
+            held: self.held_keys(),
+            caught: for_channel(&self.caught, channel),
+        }
     }
 
     /// The sostenuto pedal on `channel` goes down or up. Going down it catches the dampers of
@@ -644,18 +647,6 @@ impl Instrument {
         self.sostenuto[c] = down;
     }
 
-    /// The keys whose dampers the sostenuto pedal holds up for notes on `channel`, read as
-    /// [`pedal`](Self::pedal) reads the sustain pedal.
-    fn caught(&self, channel: u8) -> u128 {
-        self.caught[usize::from(channel & 15)] | self.caught[0] | self.caught[15]
-    }
-
-    /// Whether the soft pedal shifts the hammers of notes on `channel`, as [`pedal`](Self::pedal)
-    /// reads the sustain pedal.
-    fn soft_pedal(&self, channel: u8) -> bool {
-        self.soft[usize::from(channel & 15)] || self.soft[0] || self.soft[15]
-    }
-
     /// The keys held down, whatever their channel, one bit per MIDI key.
     fn held_keys(&self) -> u128 {
         self.keys_down.iter().fold(0, |held, keys| held | keys)
@@ -664,8 +655,7 @@ impl Instrument {
     /// Strike `strike` on a piano voice; the index of the voice that took it.
     fn note_on(&mut self, strike: Strike) -> Option<usize> {
         let now = self.now;
-        let dampers =
-            Dampers { pedal: self.pedal(strike.channel), held: self.held_keys(), caught: self.caught(strike.channel) };
+        let dampers = self.dampers(strike.channel);
         // The same key again: strike the same string.
         if let Some(i) = self.voices.iter().position(|v| v.upcoming_key() == Some(strike.key)) {
             if self.voices[i].fading() {
@@ -846,9 +836,7 @@ impl Instrument {
         }
         self.partners.request(&self.settings);
         let mut seeks = PARTNER_SEEKS;
-        let held = self.held_keys();
-        let pedals: [bool; 16] = std::array::from_fn(|channel| self.pedal(channel as u8));
-        let caught: [u128; 16] = std::array::from_fn(|channel| self.caught(channel as u8));
+        let dampers: [Dampers; 16] = std::array::from_fn(|channel| self.dampers(channel as u8));
         // A voice neither sounding nor fading for a new note has nothing to do at a block's start;
         // only those with live notes can be either.
         let (pianos, slides) = self.pools();
@@ -860,8 +848,7 @@ impl Instrument {
             if !(v.sounding || v.fading()) {
                 continue;
             }
-            let channel = usize::from(v.strike.channel & 15);
-            let dampers = Dampers { pedal: pedals[channel], held, caught: caught[channel] };
+            let dampers = dampers[usize::from(v.strike.channel & 15)];
             v.begin_block(&self.settings, dampers, len, self.now, Some(&mut self.partners), &mut seeks);
         }
         // The pickup slides to a new position instead of jumping: its weights move a little in
@@ -883,6 +870,13 @@ impl Instrument {
         }
         self.check_ended();
     }
+}
+
+/// What a per-channel controller says for notes on `channel`: its own channel's value joined
+/// with that of an MPE zone's master channels (MIDI channel 1 for the lower zone, 16 for the
+/// upper), whose controllers apply to every note of the zone.
+fn for_channel<T: Copy + BitOr<Output = T>>(per_channel: &[T; 16], channel: u8) -> T {
+    per_channel[usize::from(channel & 15)] | per_channel[0] | per_channel[15]
 }
 
 /// Shed up to `count` of `voices` with `shed` (whether the voice began to fade), the lowest
