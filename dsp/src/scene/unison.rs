@@ -678,6 +678,27 @@ impl UnisonCore {
         bank.own_energy(self.partner_ranges[j].clone()) + bank.own_energy(self.bridge_range.clone())
     }
 
+    /// The amplitude (m) of the unison's widest swing at the fraction `x` of the strings' length:
+    /// the largest of its strings' ([`ModalBank::swing_at`]).
+    pub fn swing_at(&self, x: f64) -> f64 {
+        (0..self.count)
+            .map(|s| {
+                let coupled = self.coupled_bank.swing_at(self.coupled_ranges[s].clone(), 1, x);
+                let free = self.free_bank.swing_at(self.free_ranges[s].clone(), self.split[s] + 1, x);
+                (coupled + free).sqrt()
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// The amplitude (m) of partner `j`'s swing at the fraction `x` of its length, 0 for a
+    /// partner the bridge does not hold ([`ModalBank::swing_at`]).
+    pub fn partner_swing_at(&self, j: usize, x: f64) -> f64 {
+        if j >= self.partners {
+            return 0.0;
+        }
+        self.coupled_bank.swing_at(self.partner_ranges[j].clone(), 1, x).sqrt()
+    }
+
     /// The partner strings' energy weighed with their own stiffnesses (J).
     pub fn partners_energy(&self) -> f64 {
         self.partner_ranges[..self.partners].iter().map(|r| self.coupled_bank.own_energy(r.clone())).sum()

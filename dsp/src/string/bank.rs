@@ -396,6 +396,28 @@ impl ModalBank {
             .sum()
     }
 
+    /// The squared amplitude (m²) of the motion at the fraction `x` of a string's length of the
+    /// string modes in `range`, the string's modes `first, first + 1, …` (shapes `sin(kπx)`):
+    /// `Σ sin²(kπx)·a_k²`, with `a_k² = ū_k² + (m_k/K̂_k)·v_k²` the squared amplitude of mode
+    /// `k`'s swing (its own stiffness; `ū`, `v` the state's mean and velocity between `n − 1` and
+    /// `n`). The square root is the amplitude of the sinusoid with the motion's mean square.
+    pub fn swing_at(&self, range: Range<usize>, first: usize, x: f64) -> f64 {
+        let fs = self.sample_rate;
+        let theta = std::f64::consts::PI * x;
+        // sin(kθ) by the recurrence sin((k+1)θ) = 2cos θ·sin(kθ) − sin((k−1)θ).
+        let (two_cos, mut before, mut shape) =
+            (2.0 * theta.cos(), ((first as f64 - 1.0) * theta).sin(), (first as f64 * theta).sin());
+        let mut sum = 0.0;
+        for i in range {
+            let (v, mean) = ((self.u_now[i] - self.u_prev[i]) * fs, 0.5 * (self.u_now[i] + self.u_prev[i]));
+            let stiffness = self.own_stiffness[i];
+            let swing = if stiffness > 0.0 { mean * mean + self.mass[i] / stiffness * v * v } else { mean * mean };
+            sum += shape * shape * swing;
+            (before, shape) = (shape, two_cos * shape - before);
+        }
+        sum
+    }
+
     /// The energy `H^{n−1/2}` weighed with the modes' own stiffnesses (J), as
     /// [`own_energy`](Self::own_energy), of the modes before `at` and of those from `at` on: one
     /// vector pass over the whole chunks of each, the modes of the chunk they share one by one.
