@@ -9,9 +9,9 @@
 //!   renders up to the next one. Parameter changes arrive split sample-accurately by the
 //!   framework; the engine samples them at its control-block boundaries, so host buffer sizes never
 //!   change the output.
-//! - MIDI: notes; CC64 sustain, CC66 sostenuto, CC67 soft pedal (una corda), CC1 mod wheel, CC120
-//!   all sound off, CC123 all notes off; pitch bend moves the slide; channel and poly pressure can
-//!   press it (per channel, so MPE works).
+//! - MIDI: notes; CC64 sustain (continuous: half-pedalling), CC66 sostenuto, CC67 soft pedal
+//!   (una corda), CC1 mod wheel, CC120 all sound off, CC123 all notes off; pitch bend moves the
+//!   slide; channel and poly pressure can press it (per channel, so MPE works).
 //! - Per note (slide mode): CLAP and VST3 tuning expressions move the note's slide, CLAP pressure
 //!   expressions (nice-plug delivers them, like MIDI poly aftertouch and VST3 poly pressure, as
 //!   `PolyPressure`) are its poly pressure, and CLAP polyphonic modulation offsets its `slide` and
@@ -120,7 +120,7 @@ fn engine_event<S>(event: &NoteEvent<S>) -> Option<Event> {
         NoteEvent::MidiPitchBend { channel, value, .. } => Event::PitchBend { channel, value: 2.0 * value - 1.0 },
         NoteEvent::MidiCC { channel, cc, value, .. } => match cc {
             1 => Event::ModWheel { channel, value },
-            64 => Event::Sustain { channel, down: value >= 0.5 },
+            64 => Event::Sustain { channel, depth: value },
             66 => Event::Sostenuto { channel, down: value >= 0.5 },
             67 => Event::SoftPedal { channel, down: value >= 0.5 },
             120 => Event::AllSoundOff,

@@ -153,7 +153,7 @@ fn velocity_sets_loudness() {
 /// that its upper partials set ringing sound on after release (§14), at their own pitches.
 #[test]
 fn damper_and_sustain_pedal() {
-    let pedal = Event::Sustain { channel: 0, down: true };
+    let pedal = Event::Sustain { channel: 0, depth: 1.0 };
     let score_damped: Score = vec![(0, on(60, 0.7)), (9_600, off(60))];
     let score_held: Score = vec![(0, pedal), (0, on(60, 0.7)), (9_600, off(60))];
     let score_key_down: Score = vec![(0, pedal), (0, on(60, 0.7))];
@@ -188,7 +188,7 @@ fn the_pedal_on_an_mpe_master_channel_holds_every_channels_dampers() {
         false => Event::NoteOff { channel: 2, key: 60 },
     };
     for (pedal, holds) in [(0u8, true), (15, true), (5, false)] {
-        let pedal = Event::Sustain { channel: pedal, down: true };
+        let pedal = Event::Sustain { channel: pedal, depth: 1.0 };
         let released = play(&mut dry(), &vec![(0, pedal), (0, note(true)), (9_600, note(false))], 24_000, || 64);
         let key_down = play(&mut dry(), &vec![(0, pedal), (0, note(true))], 24_000, || 64);
         let (r, k) = (at_fundamental(&released[19_200..24_000], 60), at_fundamental(&key_down[19_200..24_000], 60));
@@ -239,7 +239,7 @@ fn the_pedal_after_a_retune_adds_partners_beside_the_undamped_ones() {
     let mut score: Score = [48u8, 60, 72, 79].iter().map(|&k| (0, on(k, 0.8))).collect();
     let out = play(&mut p, &score, 4_800, || 64);
     p.set_settings(&Settings { brightness: 3.0, damping: 4.0, ..Settings::default() });
-    score = vec![(0, Event::Sustain { channel: 0, down: true }), (4_800, off(48)), (4_800, off(60))];
+    score = vec![(0, Event::Sustain { channel: 0, depth: 1.0 }), (4_800, off(48)), (4_800, off(60))];
     let after = play(&mut p, &score, 24_000, || 64);
     assert!(out.iter().chain(&after).all(|v| v.is_finite()));
     assert_eq!(p.guard_trips(), 0);
@@ -498,7 +498,7 @@ fn dampers_land_without_clicks() {
 fn the_pedal_pressed_after_the_strike_adds_no_click() {
     for pedal_at in [24, 4_800] {
         let mut score: Score = [(21u8, 1.0f32), (48, 0.7), (60, 0.6), (96, 0.9)].map(|(k, v)| (0, on(k, v))).to_vec();
-        score.push((pedal_at, Event::Sustain { channel: 0, down: true }));
+        score.push((pedal_at, Event::Sustain { channel: 0, depth: 1.0 }));
         score.extend([21u8, 48, 60, 96].map(|k| (9_600, off(k))));
         for size in [1, 64] {
             let out = wide(&play(&mut piano(4), &score, 19_200, || size));
@@ -506,6 +506,32 @@ fn the_pedal_pressed_after_the_strike_adds_no_click() {
             println!("pedal at {pedal_at}, buffers of {size}: worst click {db:.1} dB at {at}");
             assert!(db < CLICK_DB, "pedal at {pedal_at}: {db:.1} dB at sample {at}");
         }
+    }
+}
+
+/// The sustain pedal moved through its half-way zone, where the dampers hover above the strings
+/// and take what swings beyond their lift, adds no click: a chord from the bass to the treble
+/// struck with the pedal down and let go at 0.1 s, the pedal then raised from 127 to 0 one MIDI
+/// step every 4 ms (as a continuous pedal sends it), pressed again and moved by jumps between
+/// its ends and points in the zone; the detector stays below [`CLICK_DB`] outside the attacks, in
+/// 1- and 64-sample host buffers.
+#[test]
+fn moving_the_sustain_pedal_through_its_half_way_zone_adds_no_click() {
+    let keys = [21u8, 48, 60, 84];
+    let mut score: Score = vec![(0, Event::Sustain { channel: 0, depth: 1.0 })];
+    score.extend([(21u8, 1.0f32), (48, 0.7), (60, 0.6), (84, 0.9)].map(|(k, v)| (0, on(k, v))));
+    score.extend(keys.map(|k| (4_800, off(k))));
+    score.extend((0..=127u16).map(|step| {
+        (9_600 + 192 * usize::from(step), Event::Sustain { channel: 0, depth: f32::from(127 - step) / 127.0 })
+    }));
+    let jumps = [0.5f32, 0.3, 0.2, 1.0, 0.45, 0.0, 0.65];
+    score
+        .extend(jumps.iter().enumerate().map(|(i, &depth)| (38_400 + 4_800 * i, Event::Sustain { channel: 0, depth })));
+    for size in [1, 64] {
+        let out = wide(&play(&mut piano(4), &score, 67_200, || size));
+        let (db, at) = click_strength(&out, FS, &attacks(&score));
+        println!("buffers of {size}: worst click {db:.1} dB at {at}");
+        assert!(db < CLICK_DB, "buffers of {size}: {db:.1} dB at sample {at}");
     }
 }
 
@@ -599,10 +625,10 @@ fn output_does_not_depend_on_host_buffers() {
     let score: Score = vec![
         (0, on(60, 0.7)),
         (1_000, on(64, 0.5)),
-        (2_345, Event::Sustain { channel: 0, down: true }),
+        (2_345, Event::Sustain { channel: 0, depth: 1.0 }),
         (5_000, off(60)),
         (7_777, on(67, 0.9)),
-        (9_000, Event::Sustain { channel: 0, down: false }),
+        (9_000, Event::Sustain { channel: 0, depth: 0.0 }),
         (11_111, off(64)),
     ];
     for method in [Method::Qsa, Method::Imp, Method::Exp] {
@@ -639,7 +665,9 @@ fn garbage_input_is_safe_and_allocation_free() {
                 3 => {
                     let down = rng.random_bool(0.5);
                     match key % 3 {
-                        0 => Event::Sustain { channel, down },
+                        0 => {
+                            Event::Sustain { channel, depth: if down { rng.random_range(-1.0..2.0) } else { f32::NAN } }
+                        }
                         1 => Event::Sostenuto { channel, down },
                         _ => Event::SoftPedal { channel, down },
                     }
@@ -681,7 +709,8 @@ fn playing_allocates_nothing() {
     let count = allocations_in(|| {
         for i in 0..400u32 {
             if i % 7 == 0 {
-                p.handle(Event::Sustain { channel: 0, down: i % 14 == 7 });
+                // Down, half-way (the dampers hovering), up.
+                p.handle(Event::Sustain { channel: 0, depth: [1.0, 0.5, 0.0][(i / 7 % 3) as usize] });
             }
             if i % 11 == 0 {
                 p.handle(Event::SoftPedal { channel: 0, down: i % 22 == 11 });

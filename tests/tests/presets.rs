@@ -55,12 +55,12 @@ fn phrase() -> Vec<(f64, Event)> {
         bend(0.55, -0.5),
         bend(0.65, 0.0),
         (0.7, off(55)),
-        (0.8, Event::Sustain { channel: 0, down: true }),
+        (0.8, Event::Sustain { channel: 0, depth: 1.0 }),
     ];
     events.extend([48, 60, 67, 76].map(|k| (0.8, on(k, 1.0))));
     events.extend([48, 60, 67, 76].map(|k| (1.2, off(k))));
     events.extend([
-        (1.4, Event::Sustain { channel: 0, down: false }),
+        (1.4, Event::Sustain { channel: 0, depth: 0.0 }),
         (1.5, Event::ModWheel { channel: 0, value: 1.0 }),
         (1.55, on(57, 1.0)),
     ]);

@@ -139,7 +139,7 @@ fn letting_a_held_key_go_damps_its_strings_as_a_partner() {
 /// into its pitch; C4 7.5 dB).
 #[test]
 fn lifting_the_pedal_leaves_the_held_keys_strings_ringing() {
-    let pedal = [(0.0, Event::Sustain { channel: 0, down: true }), (1.0, Event::Sustain { channel: 0, down: false })];
+    let pedal = [(0.0, Event::Sustain { channel: 0, depth: 1.0 }), (1.0, Event::Sustain { channel: 0, depth: 0.0 })];
     let c4 = [(0.0, Event::NoteOn { channel: 0, key: 60, velocity: 1.0 / 127.0 })];
     let c3 =
         [(0.0, Event::NoteOn { channel: 0, key: 48, velocity: 0.7 }), (0.1, Event::NoteOff { channel: 0, key: 48 })];

@@ -425,7 +425,7 @@ pub fn measure_piano(
         for (i, &key) in keys.iter().enumerate() {
             let channel = if mode == Mode::Slide { (i % 16) as u8 } else { 0 };
             if play.late_pedal.is_none() && play.arpeggio.is_none() {
-                piano.handle(Event::Sustain { channel, down: true });
+                piano.handle(Event::Sustain { channel, depth: 1.0 });
             }
             piano.handle(Event::NoteOn { channel, key, velocity });
         }
@@ -447,7 +447,7 @@ pub fn measure_piano(
                 strike(&mut piano, velocities.random_range(RESTRIKE_VELOCITIES));
             }
             if play.late_pedal == Some(n) {
-                piano.handle(Event::Sustain { channel: 0, down: true });
+                piano.handle(Event::Sustain { channel: 0, depth: 1.0 });
             }
             if let Some(every) = play.arpeggio
                 && n % every == 0
@@ -767,7 +767,7 @@ fn automated(runs: usize) -> serde_json::Value {
     };
     let timed = |automate: bool| {
         let mut piano = Instrument::new(PIANO_RATE, 32, Settings::default());
-        piano.handle(Event::Sustain { channel: 0, down: true });
+        piano.handle(Event::Sustain { channel: 0, depth: 1.0 });
         for key in keys {
             piano.handle(Event::NoteOn { channel: 0, key, velocity: 0.7 });
         }

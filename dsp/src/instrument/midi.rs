@@ -23,7 +23,7 @@ pub fn event_from_midi(status: u8, data1: u8, data2: u8) -> Option<Event> {
         }
         0xb0 => match key {
             1 => Event::ModWheel { channel, value: unit(value) },
-            64 => Event::Sustain { channel, down: unit(value) >= 0.5 },
+            64 => Event::Sustain { channel, depth: unit(value) },
             66 => Event::Sostenuto { channel, down: unit(value) >= 0.5 },
             67 => Event::SoftPedal { channel, down: unit(value) >= 0.5 },
             120 => Event::AllSoundOff,

@@ -12,8 +12,10 @@
 //!   velocity.
 //! - Note-off lets the damper down: a felt pad whose extra decay rises towards `damper_rate` (at
 //!   the fundamental, faster for higher modes) with time constant `damper_time`, changing how fast
-//!   the string decays, never its state. The sustain pedal (CC64 ≥ 64 on the note's channel, or
-//!   on an MPE zone's master channel, 1 or 16, which speaks for every channel) holds dampers off.
+//!   the string decays, never its state. The sustain pedal (CC64 on the note's channel, or on an
+//!   MPE zone's master channel, 1 or 16, which speaks for every channel) holds dampers off: its
+//!   value is how far it is down, and part of the way down the dampers hover above the strings,
+//!   taking only what swings beyond their lift ([`damper_lift`], [`contact_share`]).
 //! - The sostenuto pedal (CC66 ≥ 64, read on the channels as the sustain pedal is) holds up the
 //!   dampers of the keys held down as it goes down, until it comes up.
 //! - The soft pedal (CC67 ≥ 64, read on the channels as the sustain pedal is) shifts the hammers:
@@ -97,8 +99,9 @@ pub use partners::{
     MAX_PARTNER_MODES, PARTNER_BAND, PARTNER_KEYS, PARTNER_TOLERANCE_CENTS, PartnerTable, STRIKING_PARTIALS,
 };
 pub use piano_voice::{
-    DAMPER_UPDATE, DAMPER_WIDTH, Dampers, Elsewhere, FIRST_UNDAMPED_KEY, GUARD_FACTOR, PianoVoice, RELEASE_ENERGY,
-    STEAL_RATE, STEAL_TIME, Strike, damper_shares, has_damper, struck_strings,
+    DAMPER_UPDATE, DAMPER_WIDTH, Dampers, Elsewhere, FIRST_UNDAMPED_KEY, GUARD_FACTOR, HOVER_LIFTS, PEDAL_CLEAR,
+    PEDAL_REST, PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike, contact_share, damper_lift, damper_shares,
+    has_damper, struck_strings,
 };
 pub use presets::{
     CATEGORIES, FACTORY_PRESETS, Preset, PresetError, factory_presets, find_preset, load_factory_presets, parse_preset,
@@ -116,7 +119,7 @@ use crate::pickup::PickupCircuit;
 use crate::scene::{MAX_PARTNERS, Shared, Watch};
 use crate::string::ModalString;
 use notes::NoteBook;
-use std::ops::{BitOr, Range};
+use std::ops::Range;
 
 /// Time constant with which a voice struck again moves to its new voicing gain (s).
 pub const VOICING_TIME: f64 = 0.005;
@@ -174,12 +177,13 @@ pub enum Event {
         /// MIDI key, 0..=127.
         key: u8,
     },
-    /// Sustain pedal (CC64) on a channel.
+    /// Sustain pedal (CC64) on a channel, pressed `depth` of its travel: the dampers rest on the
+    /// strings, hover partly up or are clear of them ([`damper_lift`]).
     Sustain {
         /// MIDI channel, 0..=15.
         channel: u8,
-        /// Pedal down.
-        down: bool,
+        /// How far the pedal is down, 0..=1 (0 up, 1 down).
+        depth: f32,
     },
     /// Soft pedal (una corda, CC67) on a channel: the piano's keys struck while it is down are
     /// struck on one string fewer (docs/physics.md §12.9).
@@ -289,8 +293,8 @@ pub struct Instrument {
     channels: [ChannelState; 16],
     /// Pickup position the slide voices were last set to.
     pickup: f64,
-    /// Sustain pedal per channel.
-    sustain: [bool; 16],
+    /// Sustain pedal per channel: how far it is down, 0..=1.
+    sustain: [f64; 16],
     /// Soft pedal per channel.
     soft: [bool; 16],
     /// Sostenuto pedal per channel, and the keys whose dampers it holds up.
@@ -353,7 +357,7 @@ impl Instrument {
             slides: (0..count).map(|_| SlideVoice::new(sample_rate, &settings)).collect(),
             channels: [ChannelState::default(); 16],
             pickup: settings.pickup_position,
-            sustain: [false; 16],
+            sustain: [0.0; 16],
             soft: [false; 16],
             sostenuto: [false; 16],
             caught: [0; 16],
@@ -551,11 +555,11 @@ impl Instrument {
                 let offset = param.sanitize(offset);
                 self.each_slide(note, |v, settings| v.set_offset(param, offset, settings));
             }
-            Event::Sustain { channel, down } => self.sustain[usize::from(channel & 15)] = down,
+            Event::Sustain { channel, depth } => self.sustain[usize::from(channel & 15)] = unit(depth, 0.0),
             Event::SoftPedal { channel, down } => self.soft[usize::from(channel & 15)] = down,
             Event::Sostenuto { channel, down } => self.sostenuto(channel & 15, down),
             Event::AllNotesOff => {
-                self.sustain = [false; 16];
+                self.sustain = [0.0; 16];
                 self.soft = [false; 16];
                 self.sostenuto = [false; 16];
                 self.caught = [0; 16];
@@ -564,7 +568,7 @@ impl Instrument {
                 self.slides.iter_mut().for_each(SlideVoice::key_up);
             }
             Event::AllSoundOff => {
-                self.sustain = [false; 16];
+                self.sustain = [0.0; 16];
                 self.soft = [false; 16];
                 self.sostenuto = [false; 16];
                 self.caught = [0; 16];
@@ -581,7 +585,7 @@ impl Instrument {
     /// Play a note (velocity above 0) in the current mode, and note which voice took it.
     fn play(&mut self, channel: u8, key: u8, velocity: f32, voice: Option<i32>) {
         let channel = channel & 15;
-        let shifted = for_channel(&self.soft, channel);
+        let shifted = for_channel(&self.soft, channel, |a, b| a | b);
         let strike = Strike { channel, key: key & 127, velocity: f64::from(velocity.min(1.0)), shifted };
         self.keys_down[usize::from(strike.channel)] |= 1 << strike.key;
         let note = Note { voice, channel: strike.channel, key: strike.key };
@@ -627,9 +631,9 @@ impl Instrument {
     /// keys the sostenuto pedal holds, read through [`for_channel`], and the keys held down.
     fn dampers(&self, channel: u8) -> Dampers {
         Dampers {
-            pedal: for_channel(&self.sustain, channel),
+            lift: damper_lift(for_channel(&self.sustain, channel, f64::max)),
             held: self.held_keys(),
-            caught: for_channel(&self.caught, channel),
+            caught: for_channel(&self.caught, channel, |a, b| a | b),
         }
     }
 
@@ -875,8 +879,9 @@ impl Instrument {
 /// What a per-channel controller says for notes on `channel`: its own channel's value joined
 /// with that of an MPE zone's master channels (MIDI channel 1 for the lower zone, 16 for the
 /// upper), whose controllers apply to every note of the zone.
-fn for_channel<T: Copy + BitOr<Output = T>>(per_channel: &[T; 16], channel: u8) -> T {
-    per_channel[usize::from(channel & 15)] | per_channel[0] | per_channel[15]
+/// `join` combines two values.
+fn for_channel<T: Copy>(per_channel: &[T; 16], channel: u8, join: impl Fn(T, T) -> T) -> T {
+    join(join(per_channel[usize::from(channel & 15)], per_channel[0]), per_channel[15])
 }
 
 /// Shed up to `count` of `voices` with `shed` (whether the voice began to fade), the lowest
@@ -1114,7 +1119,7 @@ mod tests {
     fn a_swept_setting_retunes_the_partners_only_when_a_key_is_struck() {
         let mut instrument = Instrument::new(48_000.0, 8, Settings::default());
         let (mut left, mut right) = ([0.0; 64], [0.0; 64]);
-        instrument.handle(Event::Sustain { channel: 0, down: true });
+        instrument.handle(Event::Sustain { channel: 0, depth: 1.0 });
         for key in [36, 48, 55, 60] {
             instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.6 });
         }
@@ -1193,7 +1198,7 @@ mod tests {
     /// C4's voice.
     fn c4_after(lower: &[u8], delay: f64, buffer: usize) -> (Instrument, usize) {
         let mut instrument = Instrument::new(48_000.0, 8, Settings::default());
-        instrument.handle(Event::Sustain { channel: 0, down: true });
+        instrument.handle(Event::Sustain { channel: 0, depth: 1.0 });
         for &key in lower {
             instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.7 });
         }
@@ -1294,7 +1299,7 @@ mod tests {
     fn a_key_struck_among_strings_ringing_elsewhere_stays_within_its_energy_bound() {
         for (c3, c4, delay) in [(1.0, 1.0 / 127.0, 0.1), (1.0, 1.0 / 127.0, 1.0), (0.7, 0.7, 1.0), (1.0, 0.05, 0.3)] {
             let mut instrument = Instrument::new(48_000.0, 8, Settings::default());
-            instrument.handle(Event::Sustain { channel: 0, down: true });
+            instrument.handle(Event::Sustain { channel: 0, depth: 1.0 });
             instrument.handle(Event::NoteOn { channel: 0, key: 48, velocity: c3 });
             let (mut left, mut right) = ([0.0f32; 64], [0.0f32; 64]);
             for _ in 0..(delay * 750.0) as usize {
@@ -1315,7 +1320,8 @@ mod tests {
 
     /// Played hard: keys struck, struck again and let go at random (half of them among C2, G2,
     /// C3, G3, C4, G4, C5 and E5, which ring one another's strings), at velocities from 1/127 to
-    /// full, the sustain, sostenuto and soft pedals pressed and lifted, voices stolen (4 to 32
+    /// full, the sustain pedal pressed part or all of the way and lifted, the sostenuto and soft
+    /// pedals pressed and lifted, voices stolen (4 to 32
     /// voices for about 600 note-ons each), host buffers of 1 to 4,096 samples, and over half of
     /// each run every piano parameter, the solver and the control block sent to either end of
     /// its range or anywhere between before one event in twenty. No voice's strings and bridge
@@ -1352,7 +1358,15 @@ mod tests {
                         instrument.handle(Event::NoteOn { channel: 0, key, velocity });
                     }
                     8..12 => instrument.handle(Event::NoteOff { channel: 0, key }),
-                    12 => instrument.handle(Event::Sustain { channel: 0, down: rng.random_range(0..4) != 0 }),
+                    12 => {
+                        // Up, partly down (the dampers hovering) or down.
+                        let depth = match rng.random_range(0..4) {
+                            0 => 0.0,
+                            1 => rng.random_range(0.0..1.0),
+                            _ => 1.0,
+                        };
+                        instrument.handle(Event::Sustain { channel: 0, depth });
+                    }
                     13 => {
                         let down = rng.random_range(0..2) != 0;
                         instrument.handle(if rng.random_range(0..2) == 0 {
@@ -1560,5 +1574,79 @@ mod tests {
             &[(0, on(4, 60)), (0, on(5, 64)), (10, sostenuto(0, 127)), (20, off(4, 60)), (20, off(5, 64))],
             &[(0, on(4, 60)), (0, on(5, 64))],
         );
+    }
+    /// The swing of key `key`'s strings at its damper's pad (m) at 0.1, 0.2, … 4 s, struck at
+    /// velocity 0.8 and let go at 0.2 s with the sustain pedal pressed `depth` of its way.
+    fn swings_under_the_pedal(key: u8, depth: f32) -> Vec<f64> {
+        let mut instrument = Instrument::new(48_000.0, 2, Settings::default());
+        instrument.handle(Event::Sustain { channel: 0, depth });
+        instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.8 });
+        let (mut left, mut right) = (vec![0.0f32; 4_800], vec![0.0f32; 4_800]);
+        (0..40)
+            .map(|tenth| {
+                if tenth == 2 {
+                    instrument.handle(Event::NoteOff { channel: 0, key });
+                }
+                instrument.process(&mut left, &mut right);
+                instrument.voices.iter().find(|v| v.strike.key == key).map_or(0.0, PianoVoice::pad_swing)
+            })
+            .collect()
+    }
+
+    /// A sustain pedal pressed part of the way holds the dampers above the strings (Lehtonen,
+    /// Askenfelt and Välimäki, JASA 126, EL49, 2009): after the key is let go the damper takes the
+    /// swing beyond its lift quickly, then the strings ring on freely at a lower rate. C2 and C4
+    /// at 0.4, 0.5 and 0.6 of the pedal's way (lifts 20, 63 and 200 µm), let go at 0.2 s:
+    /// - over the first 0.1 s after the release the swing decays more than 5 times as fast as
+    ///   with the pedal down;
+    /// - 0.2 s after the release it is within 0.8 to 1.25 times the lift, where with the pedal
+    ///   down it is still over twice the lift: the damper has taken it down to the lift (from
+    ///   above: 1.25 allows for the slowing approach, as the felt touches less of each period),
+    ///   and not much further (0.8: the strings' own decay over 0.2 s, under 1 1/s);
+    /// - from 1 s to 3 s after the release its decay rate is within 20 % of the pedal-down one:
+    ///   the strings ring freely (the damper has changed what their modes hold).
+    #[test]
+    fn a_half_pressed_sustain_pedal_damps_the_swing_down_to_the_dampers_lift_and_lets_it_ring() {
+        let rate = |x: &[f64], from: usize, to: usize| (x[from] / x[to]).ln() / ((to - from) as f64 / 10.0);
+        for key in [36u8, 60] {
+            let down = swings_under_the_pedal(key, 1.0);
+            for depth in [0.4f32, 0.5, 0.6] {
+                let lift = damper_lift(f64::from(depth));
+                let half = swings_under_the_pedal(key, depth);
+                // `half[k]` is the swing at (k + 1)/10 s; the key is let go at 0.2 s, after `half[1]`.
+                let (early, down_early) = (rate(&half, 1, 2), rate(&down, 1, 2));
+                let (late, free) = (rate(&half, 11, 31), rate(&down, 11, 31));
+                println!(
+                    "key {key}, depth {depth}: decay over 0.2–0.3 s {early:.2} 1/s (pedal down {down_early:.2}); \
+                     at 0.4 s {:.3} of the lift (pedal down {:.1}); over 1.2–3.2 s {late:.3} 1/s (pedal down \
+                     {free:.3})",
+                    half[3] / lift,
+                    down[3] / lift
+                );
+                assert!(early > 5.0 * down_early, "key {key}, depth {depth}: the damper takes the swing fast");
+                assert!(down[3] > 2.0 * lift, "the swing stays well above the lift with the pedal down");
+                assert!((0.8..1.25).contains(&(half[3] / lift)), "key {key}, depth {depth}: damped to the lift");
+                assert!((late / free - 1.0).abs() < 0.2, "key {key}, depth {depth}: then free");
+            }
+        }
+    }
+
+    /// The sustain pedal's ends: up to [`PEDAL_REST`] of its way the dampers rest on the strings
+    /// as with the pedal up, and from [`PEDAL_CLEAR`] they are clear of them as with it down,
+    /// bit for bit: C2 and C4 let go at 0.2 s, over 4 s.
+    #[test]
+    fn the_sustain_pedal_is_up_to_its_rest_point_and_down_from_its_clear_point_to_the_bit() {
+        for key in [36u8, 60] {
+            let up = swings_under_the_pedal(key, 0.0);
+            let down = swings_under_the_pedal(key, 1.0);
+            assert!(down[39] > 1e3 * up[39], "up and down differ");
+            // (0.2 in `f32` is a little above `PEDAL_REST`; a MIDI pedal sends 25/127 or 26/127.)
+            for depth in [0.1f32, 25.0 / 127.0] {
+                assert_eq!(swings_under_the_pedal(key, depth), up, "key {key}, depth {depth}");
+            }
+            for depth in [102.0 / 127.0, 0.9] {
+                assert_eq!(swings_under_the_pedal(key, depth), down, "key {key}, depth {depth}");
+            }
+        }
     }
 }

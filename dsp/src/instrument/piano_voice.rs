@@ -23,6 +23,11 @@
 //!   with time constant `damper_time` as the felt settles (towards 0 as it lifts). The rates
 //!   change the string's coefficients, never its state ([`ModalString::set_extra_decay`]), so the
 //!   sound dies away continuously however fast the damper lands.
+//! - **Half-pedalling.** With the sustain pedal part of the way down the dampers hover above the
+//!   strings ([`damper_lift`]). A hovering damper's target is the share of `D` that the strings'
+//!   swing beyond its lift gives ([`contact_share`]), measured under the pad's middle every
+//!   [`HOVER_UPDATE`]; each partner's is judged by its own swing at the same fraction of its
+//!   length. Every partner joins the bridge, as with the pedal down.
 //! - **Partners.** The strings of the other keys whose modes meet the key's partials ring with
 //!   it on its bridge while their dampers are off (docs/physics.md §14, [`Dampers`]): all of them
 //!   with the sustain pedal down; with it up, those of the keys held down and those without a
@@ -145,13 +150,15 @@ pub fn has_damper(key: u8) -> bool {
     key < FIRST_UNDAMPED_KEY
 }
 
-/// Which keys' strings are free of their dampers: every key's with the sustain pedal down, else
-/// those of the keys held down, of the keys the sostenuto pedal holds and of the keys without a
-/// damper.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+/// Where the dampers are: how far the sustain pedal holds them above the strings, and the keys
+/// whose dampers their keys or the sostenuto pedal hold clear of them, with those of the keys
+/// without a damper (docs/physics.md §6.5).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Dampers {
-    /// Whether the sustain pedal is down.
-    pub pedal: bool,
+    /// How far the sustain pedal holds the dampers above the strings at their pads (m): 0 with
+    /// the pedal up (they rest on the strings), infinite with it down (clear of any motion), in
+    /// between while it is partly down ([`damper_lift`]).
+    pub lift: f64,
     /// The keys held down, one bit per MIDI key (bit `k` for key `k`).
     pub held: u128,
     /// The keys whose dampers the sostenuto pedal holds up (those held down as it went down).
@@ -162,9 +169,85 @@ impl Dampers {
     /// The keys from [`FIRST_UNDAMPED_KEY`] up, one bit per MIDI key.
     const UNDAMPED: u128 = u128::MAX << FIRST_UNDAMPED_KEY;
 
-    /// The keys whose strings are free, one bit per MIDI key.
+    /// The dampers with the sustain pedal down, the keys held and caught none.
+    pub const PEDAL_DOWN: Self = Self { lift: f64::INFINITY, held: 0, caught: 0 };
+
+    /// The keys whose strings no damper rests on, one bit per MIDI key: every key's while the
+    /// sustain pedal holds the dampers up at all.
     pub fn lifted(&self) -> u128 {
-        if self.pedal { u128::MAX } else { self.held | self.caught | Self::UNDAMPED }
+        if self.lift > 0.0 { u128::MAX } else { self.clear() }
+    }
+
+    /// The keys whose dampers are clear of their strings whatever the sustain pedal does.
+    fn clear(&self) -> u128 {
+        self.held | self.caught | Self::UNDAMPED
+    }
+
+    /// Whether the sustain pedal holds the dampers partly up, where they touch a string only as
+    /// far as it swings beyond their lift.
+    pub fn hovering(&self) -> bool {
+        self.lift > 0.0 && self.lift.is_finite()
+    }
+
+    /// The share of a damper's full rate that the sustain pedal leaves a damper to take from
+    /// strings swinging `swing` (m) at its pad (read only while [`hovering`](Self::hovering)): 1
+    /// resting on them, 0 with the pedal down, else [`contact_share`].
+    pub fn share(&self, swing: impl FnOnce() -> f64) -> f64 {
+        if self.lift == 0.0 {
+            1.0
+        } else if self.hovering() {
+            contact_share(swing() / self.lift)
+        } else {
+            0.0
+        }
+    }
+
+    /// [`share`](Self::share) for the damper of key `key`'s strings, 0 while its key or the
+    /// sostenuto pedal hold it clear or it has none.
+    pub fn share_of(&self, key: u8, swing: impl FnOnce() -> f64) -> f64 {
+        if self.clear() & bit(key) != 0 { 0.0 } else { self.share(swing) }
+    }
+}
+
+/// The share of a resting damper's rate that a damper held `g` above a string swinging with
+/// amplitude `A` at its pad takes, from `reach = A/g` (docs/physics.md §6.5): the felt touches
+/// the string only beyond `g`, on the arc `|θ − π/2| < φ` of each period of `u = A sin θ`, with
+/// `cos φ = g/A`, and as a dashpot it takes there the share of the period's `∫ v² dt` that falls
+/// on that arc, `(φ − sin φ cos φ)/π`: 0 while `A ≤ g`, rising to ½ as `g/A → 0`, the felt then
+/// touching every upswing (resting on the string, it also follows it down: 1).
+pub fn contact_share(reach: f64) -> f64 {
+    if !(reach > 1.0) {
+        return 0.0;
+    }
+    let cos = (1.0 / reach).min(1.0);
+    let phi = cos.acos();
+    (phi - phi.sin() * cos) / std::f64::consts::PI
+}
+
+/// How far down the sustain pedal can go (fraction of its travel) with the dampers still resting
+/// on the strings: the pedal's lost motion.
+pub const PEDAL_REST: f64 = 0.2;
+
+/// How far down the sustain pedal lifts the dampers clear of any motion.
+pub const PEDAL_CLEAR: f64 = 0.8;
+
+/// The dampers' lift (m) at the two ends of the pedal's half-way zone, [`PEDAL_REST`] and
+/// [`PEDAL_CLEAR`].
+pub const HOVER_LIFTS: (f64, f64) = (2e-6, 2e-3);
+
+/// How far (m) the sustain pedal pressed `depth` of its travel (0..=1) holds the dampers above
+/// the strings (docs/physics.md §6.5): 0 (resting on them) up to [`PEDAL_REST`], infinite (clear
+/// of any motion) from [`PEDAL_CLEAR`], and in between from [`HOVER_LIFTS`]`.0` to `.1` in
+/// equal ratios, so that equal steps of the pedal move the level at which it holds a string by
+/// equal steps in dB.
+pub fn damper_lift(depth: f64) -> f64 {
+    if !(depth > PEDAL_REST) {
+        0.0
+    } else if depth >= PEDAL_CLEAR {
+        f64::INFINITY
+    } else {
+        let (low, high) = HOVER_LIFTS;
+        low * (high / low).powf((depth - PEDAL_REST) / (PEDAL_CLEAR - PEDAL_REST))
     }
 }
 
@@ -186,6 +269,12 @@ fn bit(key: u8) -> u128 {
 /// rates change smoothly, so recomputing them every ~0.7 ms (32 samples at 44.1 kHz) is enough,
 /// and at N_b = 1 it keeps a landing damper from costing a pass of exponentials every sample.
 pub const DAMPER_UPDATE: f64 = 0.000_7;
+
+/// Interval between measurements of the strings' swing at the damper's pad, and shortest
+/// interval between updates of their coefficients, while the sustain pedal holds the dampers
+/// partly up (s): a hovering damper's rate follows the swing as it decays, over tenths of a
+/// second, and each update is a pass of exponentials over the modes.
+pub const HOVER_UPDATE: f64 = 0.004;
 
 /// A note to play: MIDI channel (0..16), key (0..128), velocity (0, 1], and whether the soft
 /// pedal shifts the hammer.
@@ -311,6 +400,11 @@ pub struct PianoVoice {
     partner_applied: [f64; MAX_PARTNERS],
     /// Seconds since the partners' coefficients were last updated.
     partner_since: f64,
+    /// The amplitudes (m) of the strings' and each partner's swing at the damper's pad, as last
+    /// measured for a damper the sustain pedal holds partly up, and the seconds since then.
+    swing: f64,
+    partner_swing: [f64; MAX_PARTNERS],
+    swing_age: f64,
     /// The damper's share of each mode relative to the fundamental, `g_i` (module docs).
     damper_shape: Vec<f64>,
     /// What `damper_shape` was made for: the first string, its modes, the striking point and
@@ -378,6 +472,9 @@ impl PianoVoice {
             partner_dampers: [0.0; MAX_PARTNERS],
             partner_applied: [0.0; MAX_PARTNERS],
             partner_since: 0.0,
+            swing: 0.0,
+            partner_swing: [0.0; MAX_PARTNERS],
+            swing_age: f64::INFINITY,
             since_update: 0.0,
             damper_step: Memo::EMPTY,
             unweighed: 0,
@@ -518,6 +615,7 @@ impl PianoVoice {
         self.shape_damper(position);
         self.damper = 0.0;
         self.applied = 0.0;
+        self.swing_age = f64::INFINITY;
         true
     }
 
@@ -532,8 +630,7 @@ impl PianoVoice {
             return (0, 0, 0);
         }
         let position = Self::striking_point(key, settings);
-        let everything = Dampers { pedal: true, held: 0, caught: 0 };
-        if !self.tune(key, settings, position, Some((table, everything))) {
+        if !self.tune(key, settings, position, Some((table, Dampers::PEDAL_DOWN))) {
             return (0, 0, 0);
         }
         let (coupled, free) = self.core.parts();
@@ -551,6 +648,7 @@ impl PianoVoice {
         // A retuned table may no longer pair them: they stop waiting too.
         self.partners_waiting &= !lifted & list.all;
         if added > 0 {
+            self.swing_age = f64::INFINITY;
             self.partner_dampers[had..had + added].fill(settings.damper_rate);
             self.partner_applied[had..had + added].fill(settings.damper_rate);
             let mut rates = [None; MAX_PARTNERS];
@@ -658,6 +756,28 @@ impl PianoVoice {
         self.silence();
     }
 
+    /// Measure the strings' and the partners' swing at the damper's pad: its middle, half of
+    /// [`DAMPER_WIDTH`] from the striking point towards the bridge.
+    fn measure_swings(&mut self) {
+        let pad = self.pad();
+        self.swing = self.core.swing_at(pad);
+        for j in 0..self.core.partners() {
+            self.partner_swing[j] = self.core.partner_swing_at(j, pad);
+        }
+        self.swing_age = 0.0;
+    }
+
+    /// The middle of the damper's pad (fraction of the strings' length).
+    fn pad(&self) -> f64 {
+        (self.position + 0.5 * DAMPER_WIDTH / self.core.string().params().length).min(1.0)
+    }
+
+    /// The amplitude (m) of the strings' widest swing under the damper's pad now
+    /// ([`UnisonCore::swing_at`]): what a damper the sustain pedal holds partly up meets.
+    pub fn pad_swing(&self) -> f64 {
+        self.core.swing_at(self.pad())
+    }
+
     /// Stop at once: the string at rest, no pending note.
     pub fn silence(&mut self) {
         self.core.reset();
@@ -744,12 +864,18 @@ impl PianoVoice {
         let span = len as f64 / fs;
         // The fraction of the way a damper's rate moves to its target over this block.
         let step = self.damper_step.get(-span / settings.damper_time, |x| 1.0 - x.exp());
+        // A damper the pedal holds partly up takes what the strings' swing beyond it gives.
+        if dampers.hovering() && self.swing_age >= HOVER_UPDATE {
+            self.measure_swings();
+        }
+        self.swing_age += span;
+        let update = if dampers.hovering() { HOVER_UPDATE } else { DAMPER_UPDATE };
         let caught = dampers.caught & bit(self.strike.key) != 0;
-        let damped = !(self.key_down || dampers.pedal || caught) && has_damper(self.strike.key);
-        let target = if damped { settings.damper_rate } else { 0.0 };
+        let damped = !(self.key_down || caught) && has_damper(self.strike.key);
+        let target = if damped { settings.damper_rate * dampers.share(|| self.swing) } else { 0.0 };
         settle(&mut self.damper, target, step);
         self.since_update += span;
-        if self.damper != self.applied && (self.since_update >= DAMPER_UPDATE || self.damper == target) {
+        if self.damper != self.applied && (self.since_update >= update || self.damper == target) {
             self.since_update = 0.0;
             self.applied = self.damper;
             self.extra.clear();
@@ -761,7 +887,8 @@ impl PianoVoice {
         let mut rates = [None; MAX_PARTNERS];
         let mut settled = true;
         for j in 0..self.core.partners() {
-            let target = if lifted & bit(self.partner_keys[j]) != 0 { 0.0 } else { settings.damper_rate };
+            let swing = self.partner_swing[j];
+            let target = settings.damper_rate * dampers.share_of(self.partner_keys[j], || swing);
             let rate = &mut self.partner_dampers[j];
             settle(rate, target, step);
             if *rate != self.partner_applied[j] {
@@ -770,7 +897,7 @@ impl PianoVoice {
             }
         }
         self.partner_since += span;
-        if rates.iter().any(Option::is_some) && (self.partner_since >= DAMPER_UPDATE || settled) {
+        if rates.iter().any(Option::is_some) && (self.partner_since >= update || settled) {
             self.partner_since = 0.0;
             self.partner_applied = self.partner_dampers;
             self.core.set_partner_decays(&rates);
@@ -979,7 +1106,7 @@ mod tests {
     fn a_prepared_voice_plays_as_a_fresh_voice_does() {
         let settings = Settings::default();
         let mut table = PartnerTable::new(FS, &settings);
-        let pedal = Dampers { pedal: true, held: 0, caught: 0 };
+        let pedal = Dampers::PEDAL_DOWN;
         let play = |voice: &mut PianoVoice, table: &mut PartnerTable| {
             voice.play_with(
                 Strike { channel: 0, key: 60, velocity: 0.7, shifted: false },
@@ -1053,5 +1180,30 @@ mod tests {
         assert!(out.iter().all(|&x| x == 0.0));
         assert!(!voice.sounding);
         assert_eq!(voice.guard_trips(), 1);
+    }
+
+    /// [`contact_share`] against its definition: the share of `∫ v² dt` over a period of
+    /// `u = A sin θ` that falls where `u > g`, summed over a million points of the period, to
+    /// 1e-5 (the sum's error); 0 up to `A = g`, and ½ as `g/A → 0`.
+    #[test]
+    fn a_hovering_damper_takes_the_share_of_the_swings_motion_beyond_its_lift() {
+        let n = 1_000_000;
+        for reach in [1.0, 1.01, 1.2, 2.0, 5.0, 100.0] {
+            let (mut beyond, mut all) = (0.0, 0.0);
+            for k in 0..n {
+                let theta = std::f64::consts::TAU * (k as f64 + 0.5) / n as f64;
+                let v2 = theta.cos().powi(2);
+                all += v2;
+                if reach * theta.sin() > 1.0 {
+                    beyond += v2;
+                }
+            }
+            let share = contact_share(reach);
+            println!("A/g = {reach}: {share:.6} against {:.6}", beyond / all);
+            assert!((share - beyond / all).abs() < 1e-5, "A/g = {reach}: {share} against {}", beyond / all);
+        }
+        assert_eq!(contact_share(0.5), 0.0);
+        assert_eq!(contact_share(f64::NAN), 0.0);
+        assert!((contact_share(1e9) - 0.5).abs() < 1e-9);
     }
 }
