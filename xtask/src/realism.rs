@@ -263,8 +263,8 @@ const PURPLE: RGBColor = RGBColor(148, 103, 189);
 pub fn held_with_pedal(key: u8, pedal: Option<f64>, seconds: f64) -> Vec<f64> {
     let strike = (0.0, Event::NoteOn { channel: 0, key, velocity: 0.7 });
     let events = match pedal.map(|t| t.max(0.0)) {
-        Some(t) if (t * FS) as usize == 0 => vec![(0.0, Event::Sustain { channel: 0, down: true }), strike],
-        Some(t) => vec![strike, (t, Event::Sustain { channel: 0, down: true })],
+        Some(t) if (t * FS) as usize == 0 => vec![(0.0, Event::Sustain { channel: 0, depth: 1.0 }), strike],
+        Some(t) => vec![strike, (t, Event::Sustain { channel: 0, depth: 1.0 })],
         None => vec![strike],
     };
     performed_in(128, &events, seconds)
@@ -277,8 +277,8 @@ pub fn played(key: u8, pedal: bool, release: f64, lift: f64, seconds: f64) -> Ve
     let mut events =
         vec![(0.0, Event::NoteOn { channel: 0, key, velocity: 0.7 }), (release, Event::NoteOff { channel: 0, key })];
     if pedal {
-        events.insert(0, (0.0, Event::Sustain { channel: 0, down: true }));
-        events.push((lift, Event::Sustain { channel: 0, down: false }));
+        events.insert(0, (0.0, Event::Sustain { channel: 0, depth: 1.0 }));
+        events.push((lift, Event::Sustain { channel: 0, depth: 0.0 }));
     }
     performed(&events, seconds)
 }
@@ -384,6 +384,7 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let envelopes = envelopes(&dir.join("envelopes.png"))?;
     let shifted = una_corda(&dir.join("una-corda.png"))?;
+    let half = half_pedal(&dir.join("half-pedal.png"))?;
     let contacts = contacts(&dir.join("contact.png"))?;
     inharmonicity(&dir.join("inharmonicity.png"))?;
     lengths(&dir.join("lengths.png"))?;
@@ -401,7 +402,15 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
     let phrases = [("electric", SlideBody::Pickup), ("acoustic", SlideBody::Acoustic)]
         .map(|(name, body)| (name, guitar_phrase(body)));
     write_at_one_gain(&dir, "guitar", &phrases)?;
-    let text = readme(&envelopes, &shifted, &contacts, &decays, &t60, (&sympathy, undamped, held), (&guitars, &stereo));
+    let text = readme(
+        &envelopes,
+        (&shifted, &half),
+        &contacts,
+        &decays,
+        &t60,
+        (&sympathy, undamped, held),
+        (&guitars, &stereo),
+    );
     let path = args.root.join("docs/report/realism.md");
     std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     writeln!(out, "{}", serde_json::json!({ "written": path.display().to_string() })).map_err(|e| e.to_string())
@@ -443,6 +452,43 @@ fn una_corda(path: &Path) -> Result<Vec<Shifted>, String> {
         false => (levels.as_slice(), colour, format!("partial {partial}, all three strings struck"), 2),
     });
     let caption = "C4 struck mezzo-forte and held, with and without the una corda (50 ms windows)";
+    draw_levels(path, caption, lines.collect())?;
+    Ok(rows)
+}
+
+/// How far down the sustain pedal is in [`half_pedal`]'s renders: up, three points of its
+/// half-way zone (the dampers hovering) and down.
+pub const HALF_PEDALS: [f32; 5] = [0.0, 0.4, 0.5, 0.6, 1.0];
+
+/// When [`half_pedal`]'s key is let go (s).
+const HALF_PEDAL_RELEASE: f64 = 0.5;
+
+/// C2's fundamental level, struck at velocity 0.7 and let go after [`HALF_PEDAL_RELEASE`], with
+/// the sustain pedal at each of [`HALF_PEDALS`]: `(depth, levels)`.
+type HalfPedal = (f32, Vec<f64>);
+
+fn half_pedal(path: &Path) -> Result<Vec<HalfPedal>, String> {
+    let c2 = tuned(36);
+    let rows: Vec<HalfPedal> = HALF_PEDALS
+        .into_iter()
+        .map(|depth| {
+            let events = [
+                (0.0, Event::Sustain { channel: 0, depth }),
+                (0.0, Event::NoteOn { channel: 0, key: 36, velocity: 0.7 }),
+                (HALF_PEDAL_RELEASE, Event::NoteOff { channel: 0, key: 36 }),
+            ];
+            (depth, partial_levels(&performed(&events, 5.0), c2.partial(1)))
+        })
+        .collect();
+    let lines = rows.iter().zip([BLACK, RED, GREEN, BLUE, PURPLE]).map(|((depth, levels), colour)| {
+        let label = match *depth {
+            0.0 => "pedal up".to_string(),
+            1.0 => "pedal down".to_string(),
+            d => format!("pedal at {d}: dampers {:.0} µm above", 1e6 * qsa_dsp::instrument::damper_lift(f64::from(d))),
+        };
+        (levels.as_slice(), colour, label, 2)
+    });
+    let caption = "C2 struck at velocity 0.7, let go at 0.5 s: its fundamental's level (50 ms windows)";
     draw_levels(path, caption, lines.collect())?;
     Ok(rows)
 }
@@ -949,7 +995,7 @@ type T60Row = ((u8, f64, f64), f64, f64);
 
 fn readme(
     envelopes: &[Envelope],
-    shifted: &[Shifted],
+    (shifted, half): (&[Shifted], &[HalfPedal]),
     contacts: &[Contact],
     decays: &[Decay],
     t60: &[T60Row],
@@ -985,6 +1031,24 @@ fn readme(
             at(levels, AFTERSOUND)
         );
     }
+    let half_rows: String = half
+        .iter()
+        .map(|(depth, levels)| {
+            let lift = qsa_dsp::instrument::damper_lift(f64::from(*depth));
+            let release = HALF_PEDAL_RELEASE;
+            // The pedal-up tone has fallen silent by 2 s: no rate to read.
+            let rate = |span| match at(levels, span) {
+                r if r.is_finite() => format!("{r:.1}"),
+                _ => "silent".into(),
+            };
+            format!(
+                "| {depth} | {} | {} | {} |\n",
+                if lift.is_finite() { format!("{:.0}", 1e6 * lift) } else { "clear".into() },
+                rate((release, release + 0.2)),
+                rate((2.0, 4.5))
+            )
+        })
+        .collect();
     let t60_rows: String = t60
         .iter()
         .map(|&((key, up, down), model_up, model_down)| {
@@ -1097,6 +1161,16 @@ fn readme(
          softer and its sound 2–3 s later stands higher against it (docs/physics.md §12.9 measures both at E2, C4 and \
          C5).\n\n\
          | partial | soft pedal | first 0.1 s (dB) | prompt sound (dB/s) | aftersound (dB/s) |\n|---|---|---|---|---|\n{una_rows}\n\
+         ## Half-pedalling\n\n\
+         ![C2 under the half pedal](realism/half-pedal.png)\n\n\
+         C2 struck at velocity 0.7 and let go after 0.5 s, with the sustain pedal up, down and at three points \
+         between, where the dampers hover above the strings and take only what swings beyond their lift \
+         (docs/physics.md §6.5). As on the grand that Lehtonen, Askenfelt and Välimäki measured (JASA 126(2), \
+         EL49, 2009), the released tone has three intervals: it rings freely while the key is held, decays \
+         fast while the strings reach the felt, and rings on at about its free rate once they no longer do. \
+         The deeper the pedal, the higher the level it rings on from. Decay rates of the fundamental over the \
+         first 0.2 s after the release and over 2–4.5 s:\n\n\
+         | pedal (of its way) | dampers' lift (µm) | after the release (dB/s) | from 2 s (dB/s) |\n|---|---|---|---|\n{half_rows}\n\
          ## Decay rates against key\n\n\
          ![decay rates](realism/decay.png)\n\n\
          Every third key from C1 to C7, struck at velocity 0.6 and held: the second partial's prompt sound decays \
