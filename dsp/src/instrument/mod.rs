@@ -876,10 +876,9 @@ impl Instrument {
     }
 }
 
-/// What a per-channel controller says for notes on `channel`: its own channel's value joined
-/// with that of an MPE zone's master channels (MIDI channel 1 for the lower zone, 16 for the
-/// upper), whose controllers apply to every note of the zone.
-/// `join` combines two values.
+/// What a per-channel controller says for notes on `channel`: its own channel's value joined (by
+/// `join`) with those of an MPE zone's master channels (MIDI channel 1 for the lower zone, 16 for
+/// the upper), whose controllers apply to every note of the zone.
 fn for_channel<T: Copy>(per_channel: &[T; 16], channel: u8, join: impl Fn(T, T) -> T) -> T {
     join(join(per_channel[usize::from(channel & 15)], per_channel[0]), per_channel[15])
 }
@@ -1321,14 +1320,13 @@ mod tests {
     /// Played hard: keys struck, struck again and let go at random (half of them among C2, G2,
     /// C3, G3, C4, G4, C5 and E5, which ring one another's strings), at velocities from 1/127 to
     /// full, the sustain pedal pressed part or all of the way and lifted, the sostenuto and soft
-    /// pedals pressed and lifted, voices stolen (4 to 32
-    /// voices for about 600 note-ons each), host buffers of 1 to 4,096 samples, and over half of
-    /// each run every piano parameter, the solver and the control block sent to either end of
-    /// its range or anywhere between before one event in twenty. No voice's strings and bridge
-    /// ever hold more than its latest strike's reference energy, all the energy it had to give
-    /// (measured at most 0.996 of it), the guard never fires and every sample is finite. A voice
-    /// fading out for a stolen note is left out: its fade's damping weighs its energy anew, and
-    /// the guard does not read it.
+    /// pedals pressed and lifted, voices stolen (4 to 32 voices for about 600 note-ons each), host
+    /// buffers of 1 to 4,096 samples, and over half of each run every piano parameter, the solver
+    /// and the control block sent to either end of its range or anywhere between before one event
+    /// in twenty. No voice's strings and bridge ever hold more than its latest strike's reference
+    /// energy, all the energy it had to give (measured at most 0.998 of it), the guard never fires
+    /// and every sample is finite. A voice fading out for a stolen note is left out: its fade's
+    /// damping weighs its energy anew, and the guard does not read it.
     #[test]
     fn every_voice_stays_within_its_strikes_energy_through_steals_pedalling_and_parameter_jumps() {
         use crate::contact::Method;
@@ -1575,6 +1573,7 @@ mod tests {
             &[(0, on(4, 60)), (0, on(5, 64))],
         );
     }
+
     /// The swing of key `key`'s strings at its damper's pad (m) at 0.1, 0.2, … 4 s, struck at
     /// velocity 0.8 and let go at 0.2 s with the sustain pedal pressed `depth` of its way.
     fn swings_under_the_pedal(key: u8, depth: f32) -> Vec<f64> {
