@@ -150,6 +150,12 @@ pub fn has_damper(key: u8) -> bool {
     key < FIRST_UNDAMPED_KEY
 }
 
+/// The middle of the damper's pad on a string `length` (m) long struck at `position` (fraction
+/// of the length): half of [`DAMPER_WIDTH`] from the striking point towards the bridge.
+fn pad_at(position: f64, length: f64) -> f64 {
+    (position + 0.5 * DAMPER_WIDTH / length).min(1.0)
+}
+
 /// Where the dampers are: how far the sustain pedal holds them above the strings, and the keys
 /// whose dampers their keys or the sostenuto pedal hold clear of them, with those of the keys
 /// without a damper (docs/physics.md §6.5).
@@ -200,12 +206,6 @@ impl Dampers {
         } else {
             0.0
         }
-    }
-
-    /// [`share`](Self::share) for the damper of key `key`'s strings, 0 while its key or the
-    /// sostenuto pedal hold it clear or it has none.
-    pub fn share_of(&self, key: u8, swing: impl FnOnce() -> f64) -> f64 {
-        if self.clear() & bit(key) != 0 { 0.0 } else { self.share(swing) }
     }
 }
 
@@ -400,11 +400,13 @@ pub struct PianoVoice {
     partner_applied: [f64; MAX_PARTNERS],
     /// Seconds since the partners' coefficients were last updated.
     partner_since: f64,
-    /// The amplitudes (m) of the strings' and each partner's swing at the damper's pad, as last
-    /// measured for a damper the sustain pedal holds partly up, and the seconds since then.
+    /// The amplitudes (m) of the strings' and each partner's swing at their dampers' pads, as
+    /// last measured for dampers the sustain pedal holds partly up, and the seconds since then.
     swing: f64,
     partner_swing: [f64; MAX_PARTNERS],
     swing_age: f64,
+    /// The middle of each partner's damper pad (fraction of its string's length).
+    partner_pads: [f64; MAX_PARTNERS],
     /// The damper's share of each mode relative to the fundamental, `g_i` (module docs).
     damper_shape: Vec<f64>,
     /// What `damper_shape` was made for: the first string, its modes, the striking point and
@@ -475,6 +477,7 @@ impl PianoVoice {
             swing: 0.0,
             partner_swing: [0.0; MAX_PARTNERS],
             swing_age: f64::INFINITY,
+            partner_pads: [0.0; MAX_PARTNERS],
             since_update: 0.0,
             damper_step: Memo::EMPTY,
             unweighed: 0,
@@ -607,6 +610,9 @@ impl PianoVoice {
             return false;
         }
         self.partner_keys = list.as_ref().map_or([0; MAX_PARTNERS], |l| l.keys);
+        if let Some(list) = &list {
+            self.place_partner_pads(settings, list, 0);
+        }
         let present = self.partner_keys[..self.core.partners()].iter().fold(0, |m, &k| m | bit(k));
         self.partners_waiting = list.map_or(0, |l| l.all & !present);
         // The partners there start free.
@@ -645,6 +651,7 @@ impl PianoVoice {
         let had = self.core.partners();
         let added = self.core.add_partners(&list.strings[..list.count]);
         self.partner_keys[had..had + added].copy_from_slice(&list.keys[..added]);
+        self.place_partner_pads(settings, &list, had);
         // A retuned table may no longer pair them: they stop waiting too.
         self.partners_waiting &= !lifted & list.all;
         if added > 0 {
@@ -654,6 +661,17 @@ impl PianoVoice {
             let mut rates = [None; MAX_PARTNERS];
             rates[had..had + added].fill(Some(settings.damper_rate));
             self.core.set_partner_decays(&rates);
+        }
+    }
+
+    /// Where the dampers of the partners from the `first`-th on, `list`'s in turn, touch their
+    /// strings: each at its own key's pad.
+    fn place_partner_pads(&mut self, settings: &Settings, list: &PartnerList, first: usize) {
+        let end = (first + list.count).min(MAX_PARTNERS);
+        for (pad, (&key, (string, _))) in
+            self.partner_pads[first..end].iter_mut().zip(list.keys.iter().zip(&list.strings))
+        {
+            *pad = pad_at(Self::striking_point(key, settings), string.params().length);
         }
     }
 
@@ -756,26 +774,19 @@ impl PianoVoice {
         self.silence();
     }
 
-    /// Measure the strings' and the partners' swing at the damper's pad: its middle, half of
-    /// [`DAMPER_WIDTH`] from the striking point towards the bridge.
+    /// Measure the strings' swing at their damper's pad and each partner's at its own.
     fn measure_swings(&mut self) {
-        let pad = self.pad();
-        self.swing = self.core.swing_at(pad);
+        self.swing = self.pad_swing();
         for j in 0..self.core.partners() {
-            self.partner_swing[j] = self.core.partner_swing_at(j, pad);
+            self.partner_swing[j] = self.core.partner_swing_at(j, self.partner_pads[j]);
         }
         self.swing_age = 0.0;
-    }
-
-    /// The middle of the damper's pad (fraction of the strings' length).
-    fn pad(&self) -> f64 {
-        (self.position + 0.5 * DAMPER_WIDTH / self.core.string().params().length).min(1.0)
     }
 
     /// The amplitude (m) of the strings' widest swing under the damper's pad now
     /// ([`UnisonCore::swing_at`]): what a damper the sustain pedal holds partly up meets.
     pub fn pad_swing(&self) -> f64 {
-        self.core.swing_at(self.pad())
+        self.core.swing_at(pad_at(self.position, self.core.string().params().length))
     }
 
     /// Stop at once: the string at rest, no pending note.
@@ -886,9 +897,11 @@ impl PianoVoice {
         // up, or the pedal lifts, and rise as the keys or the pedal go down, as the voice's own.
         let mut rates = [None; MAX_PARTNERS];
         let mut settled = true;
+        let clear = dampers.clear();
         for j in 0..self.core.partners() {
             let swing = self.partner_swing[j];
-            let target = settings.damper_rate * dampers.share_of(self.partner_keys[j], || swing);
+            let free = clear & bit(self.partner_keys[j]) != 0;
+            let target = if free { 0.0 } else { settings.damper_rate * dampers.share(|| swing) };
             let rate = &mut self.partner_dampers[j];
             settle(rate, target, step);
             if *rate != self.partner_applied[j] {
@@ -1096,6 +1109,42 @@ mod tests {
             assert!(fresh.iter().any(|&x| x != 0.0));
             assert!(heard == fresh, "key {key} at striking point ×{}", settings.strike_position);
         }
+    }
+
+    /// Each partner's damper meets the partner's strings under its own key's pad, half the pad's
+    /// width from that key's striking point, not at the struck key's fraction of the length: C4
+    /// struck with the pedal up (the keys without dampers join at the strike), then ringing under
+    /// a half-pressed pedal while the others join.
+    #[test]
+    fn a_partners_damper_meets_its_strings_under_its_own_keys_pad() {
+        let settings = Settings::default();
+        let mut table = PartnerTable::new(FS, &settings);
+        let mut voice = PianoVoice::new(1000, FS);
+        let strike = Strike { channel: 0, key: 60, velocity: 0.7, shifted: false };
+        voice.play_with(strike, &settings, 0, Some((table.ready(), Dampers::default())));
+        let at_strike = voice.core.partners();
+        let half = Dampers { lift: damper_lift(0.5), ..Dampers::default() };
+        let mut out = [0.0; 64];
+        for _ in 0..100 {
+            voice.begin_block(&settings, half, 64, 0, Some(&mut table), &mut 1);
+            voice.render(&mut out);
+        }
+        let partners = voice.core.partners();
+        assert!(at_strike > 0 && partners > at_strike, "{at_strike} partners at the strike, {partners} after");
+        voice.measure_swings();
+        let own = pad_at(voice.position, voice.core.string().params().length);
+        let mut widest_apart: f64 = 0.0;
+        for j in 0..partners {
+            let key = voice.partner_keys[j];
+            let length =
+                table.string(usize::from(key - crate::instrument::partners::PARTNER_KEYS.start)).params().length;
+            let pad = voice.partner_pads[j];
+            let beyond = (pad - PianoVoice::striking_point(key, &settings)) * length;
+            assert!((beyond - 0.5 * DAMPER_WIDTH).abs() < 1e-12, "partner {j} (key {key}): pad {beyond} m on");
+            assert!(voice.partner_swing[j] == voice.core.partner_swing_at(j, pad));
+            widest_apart = widest_apart.max((pad - own).abs());
+        }
+        assert!(widest_apart > 0.01, "the partners' pads lie within {widest_apart} of the key's own");
     }
 
     /// Preparing a silent voice for another key changes nothing it plays after: C4 struck with
