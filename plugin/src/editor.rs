@@ -228,6 +228,8 @@ fn parameters(ui: &mut Ui, p: &QsaParams, setter: &ParamSetter) {
             row(ui, &p.piano.damper, setter);
             row(ui, &p.piano.unison_detune, setter);
             row(ui, &p.piano.stretch, setter);
+            row(ui, &p.piano.half_pedal_from, setter);
+            row(ui, &p.piano.half_pedal_to, setter);
         });
 
         section(&mut columns[2], "Slide", Some(mode == ModeParam::Slide), |ui| {

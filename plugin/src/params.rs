@@ -28,6 +28,8 @@
 //! | `damper` | Damper | 1..=500 1/s | 60 1/s | [`Settings::damper_rate`] |
 //! | `detune` | Unison detune | 0..=20 ct | 2.5 ct | [`Settings::unison_detune`] (spread of each unison, cents) |
 //! | `stretch` | Octave stretch | 0..=2× | 1× | [`Settings::stretch`] (octaves tuned on the partials) |
+//! | `hpfrom` | Half pedal from | 0..=100 % | 20 % | [`Settings::half_pedal_from`] (×0.01 of the sustain pedal's travel: below, the dampers rest on the strings) |
+//! | `hpto` | Half pedal to | 0..=100 % | 80 % | [`Settings::half_pedal_to`] (×0.01: above, the dampers are clear of the strings) |
 //! | `slide` | Slide position | 0..=24 st | 5 st | [`Settings::slide_position`] |
 //! | `follow` | Slide follows key | on/off | on | [`Settings::follow_key`] |
 //! | `glide` | Glide time | 1..=2000 ms | 50 ms | [`Settings::glide_time`] |
@@ -327,6 +329,10 @@ param_group! {
         unison_detune: FloatParam = "detune",
         /// Octave stretch, relative to octaves tuned on the partials.
         stretch: FloatParam = "stretch",
+        /// Where the sustain pedal's half-way zone begins (% of its travel).
+        half_pedal_from: FloatParam = "hpfrom",
+        /// Where it ends (% of its travel).
+        half_pedal_to: FloatParam = "hpto",
     }
 }
 
@@ -508,7 +514,9 @@ mod tests {
             QsaParams::default().param_map().into_iter().map(|(id, _, group)| (id, group)).collect();
         let expected = |id: &str| match id {
             "mode" | "solver" | "segs" | "nb" | "voices" | "guard" => "Engine",
-            "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" | "detune" | "stretch" => "Piano",
+            "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" | "detune" | "stretch" | "hpfrom" | "hpto" => {
+                "Piano"
+            }
             "gain" | "limit" | "width" => "Output",
             _ => "Slide",
         };

@@ -66,6 +66,8 @@ DOCUMENTED = {
     "damper_1_s": "Damper",
     "unison_detune_ct": "Unison detune",
     "octave_stretch": "Octave stretch",
+    "half_pedal_from": "Half pedal from",
+    "half_pedal_to": "Half pedal to",
     "slide_position_st": "Slide position",
     "slide_follows_key": "Slide follows key",
     "glide_time_ms": "Glide time",

@@ -971,7 +971,9 @@ fn parameters_are_grouped_and_slide_and_hand_are_polyphonic() {
     }
     let expected_group = |id: &str| match id {
         "mode" | "solver" | "segs" | "nb" | "voices" | "guard" => "Engine",
-        "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" | "detune" | "stretch" => "Piano",
+        "hard" | "hmass" | "strike" | "damp" | "bright" | "damper" | "detune" | "stretch" | "hpfrom" | "hpto" => {
+            "Piano"
+        }
         "gain" | "limit" | "width" => "Output",
         _ => "Slide",
     };

@@ -484,7 +484,10 @@ fn half_pedal(path: &Path) -> Result<Vec<HalfPedal>, String> {
         let label = match *depth {
             0.0 => "pedal up".to_string(),
             1.0 => "pedal down".to_string(),
-            d => format!("pedal at {d}: dampers {:.0} µm above", 1e6 * qsa_dsp::instrument::damper_lift(f64::from(d))),
+            d => format!(
+                "pedal at {d}: dampers {:.0} µm above",
+                1e6 * qsa_dsp::instrument::damper_lift(f64::from(d), &Settings::default())
+            ),
         };
         (levels.as_slice(), colour, label, 2)
     });
@@ -1034,7 +1037,7 @@ fn readme(
     let half_rows: String = half
         .iter()
         .map(|(depth, levels)| {
-            let lift = qsa_dsp::instrument::damper_lift(f64::from(*depth));
+            let lift = qsa_dsp::instrument::damper_lift(f64::from(*depth), &Settings::default());
             let release = HALF_PEDAL_RELEASE;
             // The pedal-up tone has fallen silent by 2 s: no rate to read.
             let rate = |span| match at(levels, span) {

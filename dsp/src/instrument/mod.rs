@@ -99,9 +99,9 @@ pub use partners::{
     MAX_PARTNER_MODES, PARTNER_BAND, PARTNER_KEYS, PARTNER_TOLERANCE_CENTS, PartnerTable, STRIKING_PARTIALS,
 };
 pub use piano_voice::{
-    DAMPER_UPDATE, DAMPER_WIDTH, Dampers, Elsewhere, FIRST_UNDAMPED_KEY, GUARD_FACTOR, HOVER_LIFTS, PEDAL_CLEAR,
-    PEDAL_REST, PianoVoice, RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike, contact_share, damper_lift, damper_shares,
-    has_damper, struck_strings,
+    DAMPER_UPDATE, DAMPER_WIDTH, Dampers, Elsewhere, FIRST_UNDAMPED_KEY, GUARD_FACTOR, HOVER_LIFTS, PianoVoice,
+    RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike, contact_share, damper_lift, damper_shares, has_damper,
+    struck_strings,
 };
 pub use presets::{
     CATEGORIES, FACTORY_PRESETS, Preset, PresetError, factory_presets, find_preset, load_factory_presets, parse_preset,
@@ -631,7 +631,7 @@ impl Instrument {
     /// keys the sostenuto pedal holds, read through [`for_channel`], and the keys held down.
     fn dampers(&self, channel: u8) -> Dampers {
         Dampers {
-            lift: damper_lift(for_channel(&self.sustain, channel, f64::max)),
+            lift: damper_lift(for_channel(&self.sustain, channel, f64::max), &self.settings),
             held: self.held_keys(),
             caught: for_channel(&self.caught, channel, |a, b| a | b),
         }
@@ -1321,10 +1321,10 @@ mod tests {
     /// C3, G3, C4, G4, C5 and E5, which ring one another's strings), at velocities from 1/127 to
     /// full, the sustain pedal pressed part or all of the way and lifted, the sostenuto and soft
     /// pedals pressed and lifted, voices stolen (4 to 32 voices for about 600 note-ons each), host
-    /// buffers of 1 to 4,096 samples, and over half of each run every piano parameter, the solver
-    /// and the control block sent to either end of its range or anywhere between before one event
-    /// in twenty. No voice's strings and bridge ever hold more than its latest strike's reference
-    /// energy, all the energy it had to give (measured at most 0.998 of it), the guard never fires
+    /// buffers of 1 to 4,096 samples, and over half of each run every piano parameter (the half
+    /// pedal's zone among them), the solver and the control block sent to either end of its range
+    /// or anywhere between before one event in twenty. No voice's strings and bridge ever hold more than its latest strike's reference
+    /// energy, all the energy it had to give (measured at most 0.994 of it), the guard never fires
     /// and every sample is finite. A voice fading out for a stolen note is left out: its fade's
     /// damping weighs its energy anew, and the guard does not read it.
     #[test]
@@ -1386,6 +1386,8 @@ mod tests {
                             stretch: pick(&mut rng, &[0.0, 1.0, 2.0]),
                             damper_rate: extreme(&mut rng, 1.0, 500.0),
                             damper_time: extreme(&mut rng, 0.001, 0.1),
+                            half_pedal_from: pick(&mut rng, &[0.0, 0.2, 0.5, 1.0]),
+                            half_pedal_to: pick(&mut rng, &[0.0, 0.5, 0.8, 1.0]),
                             ..Settings::default()
                         };
                         instrument.set_settings(&settings);
@@ -1577,7 +1579,12 @@ mod tests {
     /// The swing of key `key`'s strings at its damper's pad (m) at 0.1, 0.2, … 4 s, struck at
     /// velocity 0.8 and let go at 0.2 s with the sustain pedal pressed `depth` of its way.
     fn swings_under_the_pedal(key: u8, depth: f32) -> Vec<f64> {
-        let mut instrument = Instrument::new(48_000.0, 2, Settings::default());
+        swings_under_the_pedal_with(key, depth, Settings::default())
+    }
+
+    /// [`swings_under_the_pedal`] under `settings`.
+    fn swings_under_the_pedal_with(key: u8, depth: f32, settings: Settings) -> Vec<f64> {
+        let mut instrument = Instrument::new(48_000.0, 2, settings);
         instrument.handle(Event::Sustain { channel: 0, depth });
         instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.8 });
         let (mut left, mut right) = (vec![0.0f32; 4_800], vec![0.0f32; 4_800]);
@@ -1610,7 +1617,7 @@ mod tests {
         for key in [36u8, 60] {
             let down = swings_under_the_pedal(key, 1.0);
             for depth in [0.4f32, 0.5, 0.6] {
-                let lift = damper_lift(f64::from(depth));
+                let lift = damper_lift(f64::from(depth), &Settings::default());
                 let half = swings_under_the_pedal(key, depth);
                 // `half[k]` is the swing at (k + 1)/10 s; the key is let go at 0.2 s, after `half[1]`.
                 let (early, down_early) = (rate(&half, 1, 2), rate(&down, 1, 2));
@@ -1630,16 +1637,40 @@ mod tests {
         }
     }
 
-    /// The sustain pedal's ends: up to [`PEDAL_REST`] of its way the dampers rest on the strings
-    /// as with the pedal up, and from [`PEDAL_CLEAR`] they are clear of them as with it down,
-    /// bit for bit: C2 and C4 let go at 0.2 s, over 4 s.
+    /// The half pedal's zone is where the player sets it, its ends in either order: C2 let go at
+    /// 0.2 s under the pedal at depths around the ends of the zones 0.3 to 0.9, 0.9 to 0.3 and
+    /// 0.5 to 0.5 (a switch) is bit for bit as with the pedal up below the zone and down above
+    /// it, and within the zone is neither (the dampers hover: its swing at 4 s lies between).
+    #[test]
+    fn the_half_pedal_zone_lies_where_the_player_sets_it() {
+        let key = 36;
+        let (up, down) = (swings_under_the_pedal(key, 0.0), swings_under_the_pedal(key, 1.0));
+        let zones = [(0.3, 0.9), (0.9, 0.3), (0.5, 0.5)];
+        for (from, to) in zones {
+            let settings = Settings { half_pedal_from: from, half_pedal_to: to, ..Settings::default() };
+            let (rest, clear) = (from.min(to) as f32, from.max(to) as f32);
+            let swings = |depth: f32| swings_under_the_pedal_with(key, depth, settings);
+            assert_eq!(swings(rest - 0.01), up, "zone {from}–{to}: resting below it");
+            assert_eq!(swings(clear + 0.01), down, "zone {from}–{to}: clear above it");
+            if clear > rest {
+                let within = swings(0.5 * (rest + clear));
+                println!("zone {from}–{to}: at 4 s {:.3e} m (up {:.3e}, down {:.3e})", within[39], up[39], down[39]);
+                assert!(up[39] < within[39] && within[39] < down[39], "zone {from}–{to}: hovering within it");
+            }
+        }
+    }
+
+    /// The sustain pedal's ends: up to [`Settings::half_pedal_from`] (0.2) of its way the
+    /// dampers rest on the strings as with the pedal up, and from [`Settings::half_pedal_to`]
+    /// (0.8) they are clear of them as with it down, bit for bit: C2 and C4 let go at 0.2 s, over
+    /// 4 s.
     #[test]
     fn the_sustain_pedal_is_up_to_its_rest_point_and_down_from_its_clear_point_to_the_bit() {
         for key in [36u8, 60] {
             let up = swings_under_the_pedal(key, 0.0);
             let down = swings_under_the_pedal(key, 1.0);
             assert!(down[39] > 1e3 * up[39], "up and down differ");
-            // (0.2 in `f32` is a little above `PEDAL_REST`; a MIDI pedal sends 25/127 or 26/127.)
+            // (0.2 in `f32` is a little above 0.2 in `f64`; a MIDI pedal sends 25/127 or 26/127.)
             for depth in [0.1f32, 25.0 / 127.0] {
                 assert_eq!(swings_under_the_pedal(key, depth), up, "key {key}, depth {depth}");
             }

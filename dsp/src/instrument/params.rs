@@ -179,14 +179,15 @@ const fn float(min: f32, max: f32, default: f32, unit: &'static str, scale: Scal
     ParamKind::Float { min, max, default, unit, scale, display, step: None, poly: None }
 }
 
-/// The parameters that say how this machine plays the instrument rather than how it sounds: how
-/// many voices it may hold, and whether it sheds voices when processing falls behind. A preset
+/// The parameters that say how this machine and the player's pedal play the instrument rather
+/// than how it sounds: how many voices it may hold, whether it sheds voices when processing falls
+/// behind, and where along the player's sustain pedal the dampers leave the strings. A preset
 /// leaves them where the player set them unless its file names them (Pianoteq and Kontakt keep
-/// their polyphony outside the sound's presets too).
-pub const PLAYER_SETTINGS: [&str; 2] = ["voices", "guard"];
+/// their polyphony and pedal calibration outside the sound's presets too).
+pub const PLAYER_SETTINGS: [&str; 4] = ["voices", "guard", "hpfrom", "hpto"];
 
 /// Every parameter, in display order (the groups in the order Engine, Piano, Slide, Output).
-pub const PARAMETERS: [ParamSpec; 33] = [
+pub const PARAMETERS: [ParamSpec; 35] = [
     ParamSpec {
         id: "mode",
         name: "Mode",
@@ -315,6 +316,24 @@ pub const PARAMETERS: [ParamSpec; 33] = [
         maps_to: "[`Settings::stretch`] (octaves tuned on the partials)",
         get: |v| v.stretch,
         put: |v, x| v.stretch = x,
+    },
+    ParamSpec {
+        id: "hpfrom",
+        name: "Half pedal from",
+        group: Group::Piano,
+        kind: float(0.0, 100.0, 20.0, " %", Scale::Linear, ValueDisplay::Rounded(0)),
+        maps_to: "[`Settings::half_pedal_from`] (×0.01 of the sustain pedal's travel: below, the dampers rest on the strings)",
+        get: |v| v.half_pedal_from,
+        put: |v, x| v.half_pedal_from = x,
+    },
+    ParamSpec {
+        id: "hpto",
+        name: "Half pedal to",
+        group: Group::Piano,
+        kind: float(0.0, 100.0, 80.0, " %", Scale::Linear, ValueDisplay::Rounded(0)),
+        maps_to: "[`Settings::half_pedal_to`] (×0.01: above, the dampers are clear of the strings)",
+        get: |v| v.half_pedal_to,
+        put: |v, x| v.half_pedal_to = x,
     },
     ParamSpec {
         id: "slide",
@@ -703,6 +722,10 @@ pub struct ParamValues {
     pub unison_detune: f32,
     /// `stretch` (×).
     pub stretch: f32,
+    /// `hpfrom` (% of the sustain pedal's travel).
+    pub half_pedal_from: f32,
+    /// `hpto` (% of the sustain pedal's travel).
+    pub half_pedal_to: f32,
     /// `slide` (semitones).
     pub slide_position: f32,
     /// `follow`.
@@ -761,6 +784,8 @@ impl Default for ParamValues {
             damper: 0.0,
             unison_detune: 0.0,
             stretch: 0.0,
+            half_pedal_from: 0.0,
+            half_pedal_to: 0.0,
             slide_position: 0.0,
             follow_key: false,
             glide_ms: 0.0,
@@ -823,6 +848,8 @@ impl ParamValues {
             damper_rate: f(self.damper),
             unison_detune: f(self.unison_detune),
             stretch: f(self.stretch),
+            half_pedal_from: f(self.half_pedal_from) * 0.01,
+            half_pedal_to: f(self.half_pedal_to) * 0.01,
             slide_position: f(self.slide_position),
             follow_key: self.follow_key,
             glide_time: f(self.glide_ms) * 1e-3,
@@ -910,8 +937,9 @@ mod tests {
     fn ids_are_the_released_ones() {
         let released = [
             "mode", "solver", "segs", "nb", "voices", "guard", "hard", "hmass", "strike", "damp", "bright", "damper",
-            "detune", "stretch", "slide", "follow", "glide", "bend", "hand", "handsrc", "smass", "hstiff", "hdamp",
-            "fdamp", "kappa", "alpha", "pluck", "pickup", "ptone", "sbody", "gain", "limit", "width",
+            "detune", "stretch", "hpfrom", "hpto", "slide", "follow", "glide", "bend", "hand", "handsrc", "smass",
+            "hstiff", "hdamp", "fdamp", "kappa", "alpha", "pluck", "pickup", "ptone", "sbody", "gain", "limit",
+            "width",
         ];
         assert_eq!(PARAM_IDS, released);
     }
@@ -933,6 +961,8 @@ mod tests {
             (s.damper_rate, d.damper_rate),
             (s.unison_detune, d.unison_detune),
             (s.stretch, d.stretch),
+            (s.half_pedal_from, d.half_pedal_from),
+            (s.half_pedal_to, d.half_pedal_to),
             (s.slide_position, d.slide_position),
             (s.glide_time, d.glide_time),
             (s.bend_range, d.bend_range),
@@ -963,7 +993,7 @@ mod tests {
         let fields = |s: &Settings| {
             [s.hardness, s.hammer_mass, s.strike_position, s.damping, s.brightness, s.damper_rate, s.slide_position]
                 .into_iter()
-                .chain([s.unison_detune, s.stretch])
+                .chain([s.unison_detune, s.stretch, s.half_pedal_from, s.half_pedal_to])
                 .chain([s.glide_time, s.bend_range, s.hand_height, s.slide_mass, s.hand_stiffness, s.hand_damping])
                 .chain([s.finger_damping, s.slide_kappa, s.slide_alpha, s.pluck_position, s.pickup_position])
                 .chain([s.pickup_resonance, s.stereo_width])

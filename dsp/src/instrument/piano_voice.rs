@@ -224,30 +224,25 @@ pub fn contact_share(reach: f64) -> f64 {
     (phi - phi.sin() * cos) / std::f64::consts::PI
 }
 
-/// How far down the sustain pedal can go (fraction of its travel) with the dampers still resting
-/// on the strings: the pedal's lost motion.
-pub const PEDAL_REST: f64 = 0.2;
-
-/// How far down the sustain pedal lifts the dampers clear of any motion.
-pub const PEDAL_CLEAR: f64 = 0.8;
-
-/// The dampers' lift (m) at the two ends of the pedal's half-way zone, [`PEDAL_REST`] and
-/// [`PEDAL_CLEAR`].
+/// The dampers' lift (m) at the two ends of the sustain pedal's half-way zone.
 pub const HOVER_LIFTS: (f64, f64) = (2e-6, 2e-3);
 
 /// How far (m) the sustain pedal pressed `depth` of its travel (0..=1) holds the dampers above
-/// the strings (docs/physics.md §6.5): 0 (resting on them) up to [`PEDAL_REST`], infinite (clear
-/// of any motion) from [`PEDAL_CLEAR`], and in between from [`HOVER_LIFTS`]`.0` to `.1` in
-/// equal ratios, so that equal steps of the pedal move the level at which it holds a string by
-/// equal steps in dB.
-pub fn damper_lift(depth: f64) -> f64 {
-    if !(depth > PEDAL_REST) {
+/// the strings (docs/physics.md §6.5), with its half-way zone between
+/// [`Settings::half_pedal_from`] and [`Settings::half_pedal_to`] (in either order): 0 (resting
+/// on them) up to the zone's lower end, the pedal's lost motion; infinite (clear of any motion)
+/// from its upper end; in between from [`HOVER_LIFTS`]`.0` to `.1` in equal ratios, so that
+/// equal steps of the pedal move the level at which it holds a string by equal steps in dB.
+pub fn damper_lift(depth: f64, settings: &Settings) -> f64 {
+    let (from, to) = (settings.half_pedal_from, settings.half_pedal_to);
+    let (rest, clear) = (from.min(to), from.max(to));
+    if !(depth > rest) {
         0.0
-    } else if depth >= PEDAL_CLEAR {
+    } else if depth >= clear {
         f64::INFINITY
     } else {
         let (low, high) = HOVER_LIFTS;
-        low * (high / low).powf((depth - PEDAL_REST) / (PEDAL_CLEAR - PEDAL_REST))
+        low * (high / low).powf((depth - rest) / (clear - rest))
     }
 }
 
@@ -1123,7 +1118,7 @@ mod tests {
         let strike = Strike { channel: 0, key: 60, velocity: 0.7, shifted: false };
         voice.play_with(strike, &settings, 0, Some((table.ready(), Dampers::default())));
         let at_strike = voice.core.partners();
-        let half = Dampers { lift: damper_lift(0.5), ..Dampers::default() };
+        let half = Dampers { lift: damper_lift(0.5, &settings), ..Dampers::default() };
         let mut out = [0.0; 64];
         for _ in 0..100 {
             voice.begin_block(&settings, half, 64, 0, Some(&mut table), &mut 1);

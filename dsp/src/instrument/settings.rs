@@ -86,6 +86,12 @@ pub struct Settings {
     pub damper_rate: f64,
     /// Time for a damper to settle on or lift off the string (s), 0.001..=0.1.
     pub damper_time: f64,
+    /// The sustain pedal's half-way zone, as fractions of its travel (CC64/127), each 0..=1: up
+    /// to the lower of the two the dampers rest on the strings, from the higher they are clear of
+    /// them, and in between they hover ([`crate::instrument::damper_lift`]). Equal ends make the
+    /// pedal a switch there.
+    pub half_pedal_from: f64,
+    pub half_pedal_to: f64,
     /// Output gain (linear), 0..=10.
     pub gain: f64,
     /// Whether the safety limiter holds the output at or below its ceiling (0 dBFS).
@@ -148,6 +154,8 @@ impl Default for Settings {
             stretch: 1.0,
             damper_rate: 60.0,
             damper_time: 0.01,
+            half_pedal_from: 0.2,
+            half_pedal_to: 0.8,
             gain: 1.0,
             limiter: true,
             stereo_width: 0.6,
@@ -193,6 +201,8 @@ impl Settings {
             brightness: clamp(self.brightness, 0.0, 4.0, d.brightness),
             unison_detune: clamp(self.unison_detune, 0.0, 20.0, d.unison_detune),
             stretch: clamp(self.stretch, 0.0, 2.0, d.stretch),
+            half_pedal_from: clamp(self.half_pedal_from, 0.0, 1.0, d.half_pedal_from),
+            half_pedal_to: clamp(self.half_pedal_to, 0.0, 1.0, d.half_pedal_to),
             damper_rate: clamp(self.damper_rate, 1.0, 500.0, d.damper_rate),
             damper_time: clamp(self.damper_time, 0.001, 0.1, d.damper_time),
             gain: clamp(self.gain, 0.0, 10.0, d.gain),
