@@ -1,6 +1,7 @@
 //! The editor drawn headless, as a host opens it (default size), at rest, with voices sounding
-//! and with each factory preset chosen: every character is in egui's default fonts (no
-//! missing-glyph boxes), no text is drawn over other text, and nothing is cut off by the window.
+//! and with each factory preset chosen: every parameter is shown, every character is in egui's
+//! default fonts (no missing-glyph boxes), no text is drawn over other text, and nothing is cut
+//! off by the window.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -157,5 +158,15 @@ fn the_editor_fits_its_window_without_missing_glyphs_or_overlaps() {
 fn every_factory_preset_fits_the_editor() {
     for preset in factory_presets() {
         check(&format!("preset {}", preset.id), &[], &preset.id);
+    }
+}
+
+/// The editor shows every parameter the host sees: each name in the parameter table is drawn in
+/// the default window.
+#[test]
+fn the_editor_shows_every_parameter() {
+    let (shown, _) = draw(&[], "", vec2(SIZE.0 as f32, SIZE.1 as f32));
+    for spec in &qsa_dsp::instrument::PARAMETERS {
+        assert!(shown.iter().any(|(text, _)| text == spec.name), "{} is not shown", spec.name);
     }
 }
