@@ -199,6 +199,12 @@ pub fn stretch_cents(key: u8, brightness: f64) -> f64 {
     cents
 }
 
+/// Where the rule's hammer strikes MIDI key `key`'s strings (fraction of the length): the
+/// [`PianoNote::strike_position`] of [`piano_note`], without the rest of the rule.
+pub fn strike_position(key: u8) -> f64 {
+    through(f64::from(key.min(127)), [0.12, 0.12, 0.0625]).clamp(0.04, 0.2)
+}
+
 /// A plausible piano string and hammer for MIDI key `key` (0..=127): the rule in the module docs.
 pub fn piano_note(key: u8) -> PianoNote {
     let k = f64::from(key.min(127));
@@ -222,7 +228,7 @@ pub fn piano_note(key: u8) -> PianoNote {
         hammer_mass: hammer_mass(key.min(127)) / unison_strings(key.min(127)) as f64,
         kappa: log_through(k, [4e8, 4.5e9, 1e12]).clamp(1e8, 1e13),
         alpha: through(k, [2.3, 2.5, 3.0]).clamp(2.0, 3.5),
-        strike_position: through(k, [0.12, 0.12, 0.0625]).clamp(0.04, 0.2),
+        strike_position: strike_position(key),
     }
 }
 

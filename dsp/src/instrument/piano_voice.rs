@@ -70,7 +70,7 @@ use crate::instrument::memo::{ENERGY_INTERVAL, Memo};
 use crate::instrument::partners::PartnerTable;
 use crate::instrument::settings::{Settings, hammer_speed};
 use crate::instrument::solvers::Solvers;
-use crate::preset::{piano_note, stretch_cents};
+use crate::preset::{piano_note, stretch_cents, strike_position};
 use crate::scene::{MAX_PARTNERS, Shared, UnisonCore, UnisonParams, Watch};
 use crate::string::{Damping, ModalString, StringParams};
 
@@ -507,7 +507,7 @@ impl PianoVoice {
 
     /// Where the hammer strikes `key`'s strings under `settings` (fraction of the length).
     pub fn striking_point(key: u8, settings: &Settings) -> f64 {
-        (piano_note(key).strike_position * settings.strike_position).clamp(0.02, 0.5)
+        (strike_position(key) * settings.strike_position).clamp(0.02, 0.5)
     }
 
     /// Play `strike` now: on the same string if this voice already sounds that key (a re-strike),
