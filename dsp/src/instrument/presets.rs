@@ -17,9 +17,9 @@
 //!
 //! A parameter the preset leaves out takes its default ([`ParamValues::default`]), so a preset
 //! sets every parameter but the player's settings ([`PLAYER_SETTINGS`]: voices, the overload
-//! guard and the half pedal's zone), which it sets only when it names them ([`Preset::sets`]). Unknown keys, unknown
-//! parameter ids, values of the wrong kind or outside the parameter's range are errors naming the
-//! preset and the key; nothing here panics.
+//! guard and the half pedal's zone), which it sets only when it names them ([`Preset::sets`]).
+//! Unknown keys, unknown parameter ids, values of the wrong kind or outside the parameter's range
+//! are errors naming the preset and the key; nothing here panics.
 
 use std::sync::OnceLock;
 

@@ -86,11 +86,12 @@ pub struct Settings {
     pub damper_rate: f64,
     /// Time for a damper to settle on or lift off the string (s), 0.001..=0.1.
     pub damper_time: f64,
-    /// The sustain pedal's half-way zone, as fractions of its travel (CC64/127), each 0..=1: up
-    /// to the lower of the two the dampers rest on the strings, from the higher they are clear of
-    /// them, and in between they hover ([`crate::instrument::damper_lift`]). Equal ends make the
-    /// pedal a switch there.
+    /// One end of the sustain pedal's half-way zone, as a fraction of its travel (CC64/127),
+    /// 0..=1: up to the lower of the two ends the dampers rest on the strings, from the higher
+    /// they are clear of them, and in between they hover ([`crate::instrument::damper_lift`]).
+    /// Equal ends make the pedal a switch there.
     pub half_pedal_from: f64,
+    /// The zone's other end, 0..=1 (see [`half_pedal_from`](Self::half_pedal_from)).
     pub half_pedal_to: f64,
     /// Output gain (linear), 0..=10.
     pub gain: f64,
