@@ -509,6 +509,15 @@ fn the_pedal_pressed_after_the_strike_adds_no_click() {
     }
 }
 
+/// A chord from the bass to the treble (A0, C3, C4, C6) struck at once with the sustain pedal at
+/// `depth` of its travel, and let go at 0.1 s.
+fn chord_let_go_under_the_pedal(depth: f32) -> Score {
+    let mut score: Score = vec![(0, Event::Sustain { channel: 0, depth })];
+    score.extend([(21u8, 1.0f32), (48, 0.7), (60, 0.6), (84, 0.9)].map(|(k, v)| (0, on(k, v))));
+    score.extend([21u8, 48, 60, 84].map(|k| (4_800, off(k))));
+    score
+}
+
 /// The sustain pedal moved through its half-way zone, where the dampers hover above the strings
 /// and take what swings beyond their lift, adds no click: a chord from the bass to the treble
 /// struck with the pedal down and let go at 0.1 s, the pedal then raised from 127 to 0 one MIDI
@@ -517,10 +526,7 @@ fn the_pedal_pressed_after_the_strike_adds_no_click() {
 /// 1- and 64-sample host buffers.
 #[test]
 fn moving_the_sustain_pedal_through_its_half_way_zone_adds_no_click() {
-    let keys = [21u8, 48, 60, 84];
-    let mut score: Score = vec![(0, Event::Sustain { channel: 0, depth: 1.0 })];
-    score.extend([(21u8, 1.0f32), (48, 0.7), (60, 0.6), (84, 0.9)].map(|(k, v)| (0, on(k, v))));
-    score.extend(keys.map(|k| (4_800, off(k))));
+    let mut score = chord_let_go_under_the_pedal(1.0);
     score.extend((0..=127u16).map(|step| {
         (9_600 + 192 * usize::from(step), Event::Sustain { channel: 0, depth: f32::from(127 - step) / 127.0 })
     }));
@@ -543,10 +549,7 @@ fn moving_the_sustain_pedal_through_its_half_way_zone_adds_no_click() {
 /// 2.8 dB in both).
 #[test]
 fn jumping_the_half_pedals_zone_adds_no_click() {
-    let keys = [21u8, 48, 60, 84];
-    let mut score: Score = vec![(0, Event::Sustain { channel: 0, depth: 0.5 })];
-    score.extend([(21u8, 1.0f32), (48, 0.7), (60, 0.6), (84, 0.9)].map(|(k, v)| (0, on(k, v))));
-    score.extend(keys.map(|k| (4_800, off(k))));
+    let score = chord_let_go_under_the_pedal(0.5);
     let zones = [(0.2, 0.8), (0.0, 0.0), (1.0, 1.0), (0.45, 0.55), (0.0, 1.0), (0.6, 0.6), (0.2, 0.8), (1.0, 0.0)];
     let segment = 4_800;
     for size in [1, 64] {
