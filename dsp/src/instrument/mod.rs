@@ -1323,10 +1323,11 @@ mod tests {
     /// pedals pressed and lifted, voices stolen (4 to 32 voices for about 600 note-ons each), host
     /// buffers of 1 to 4,096 samples, and over half of each run every piano parameter (the half
     /// pedal's zone among them), the solver and the control block sent to either end of its range
-    /// or anywhere between before one event in twenty. No voice's strings and bridge ever hold more than its latest strike's reference
-    /// energy, all the energy it had to give (measured at most 0.994 of it), the guard never fires
-    /// and every sample is finite. A voice fading out for a stolen note is left out: its fade's
-    /// damping weighs its energy anew, and the guard does not read it.
+    /// or anywhere between before one event in twenty. No voice's strings and bridge ever hold
+    /// more than its latest strike's reference energy, all the energy it had to give (measured at
+    /// most 0.994 of it), the guard never fires and every sample is finite. A voice fading out for
+    /// a stolen note is left out: its fade's damping weighs its energy anew, and the guard does not
+    /// read it.
     #[test]
     fn every_voice_stays_within_its_strikes_energy_through_steals_pedalling_and_parameter_jumps() {
         use crate::contact::Method;
