@@ -606,7 +606,7 @@ impl PianoVoice {
         }
         self.partner_keys = list.as_ref().map_or([0; MAX_PARTNERS], |l| l.keys);
         if let Some(list) = &list {
-            self.place_partner_pads(settings, list, 0);
+            self.place_partner_pads(settings, list, 0, self.core.partners());
         }
         let present = self.partner_keys[..self.core.partners()].iter().fold(0, |m, &k| m | bit(k));
         self.partners_waiting = list.map_or(0, |l| l.all & !present);
@@ -646,7 +646,7 @@ impl PianoVoice {
         let had = self.core.partners();
         let added = self.core.add_partners(&list.strings[..list.count]);
         self.partner_keys[had..had + added].copy_from_slice(&list.keys[..added]);
-        self.place_partner_pads(settings, &list, had);
+        self.place_partner_pads(settings, &list, had, added);
         // A retuned table may no longer pair them: they stop waiting too.
         self.partners_waiting &= !lifted & list.all;
         if added > 0 {
@@ -659,13 +659,11 @@ impl PianoVoice {
         }
     }
 
-    /// Where the dampers of the partners from the `first`-th on, `list`'s in turn, touch their
-    /// strings: each at its own key's pad.
-    fn place_partner_pads(&mut self, settings: &Settings, list: &PartnerList, first: usize) {
-        let end = (first + list.count).min(MAX_PARTNERS);
-        for (pad, (&key, (string, _))) in
-            self.partner_pads[first..end].iter_mut().zip(list.keys.iter().zip(&list.strings))
-        {
+    /// Where the dampers of the `count` partners from the `first`-th on, `list`'s first ones in
+    /// turn, touch their strings: each at its own key's pad.
+    fn place_partner_pads(&mut self, settings: &Settings, list: &PartnerList, first: usize, count: usize) {
+        let pads = &mut self.partner_pads[first..first + count];
+        for (pad, (&key, (string, _))) in pads.iter_mut().zip(list.keys.iter().zip(&list.strings)) {
             *pad = pad_at(Self::striking_point(key, settings), string.params().length);
         }
     }
