@@ -451,12 +451,14 @@ impl SlideVoice {
         self.motion
     }
 
-    /// Stop at once.
+    /// Stop at once: the string and the slide at rest, the slide lifted off the string and the
+    /// fingers off, so that nothing of the note is heard in the next.
     pub fn silence(&mut self) {
         self.shed_fade.clear();
         self.sounding = false;
         self.key_down = false;
         self.pluck = None;
+        self.rest_lifted();
     }
 
     /// Energy of the string, the slide and the contact (J).
@@ -500,7 +502,6 @@ impl SlideVoice {
         self.trips += 1;
         self.guard_fade.clear();
         self.silence();
-        self.rest_lifted();
     }
 
     /// Bring the string and the slide to rest, the slide lifted and the fingers off.
@@ -522,9 +523,7 @@ impl SlideVoice {
             return;
         }
         if self.shed_fade.is_silent() {
-            self.shed_fade.clear();
             self.silence();
-            self.rest_lifted();
             return;
         }
         self.fresh = false;
@@ -885,5 +884,20 @@ mod tests {
         assert!(out.iter().all(|&x| x == 0.0));
         assert!(!voice.sounding);
         assert_eq!(voice.guard_trips(), 1);
+    }
+
+    /// Silenced at once (all sound off), a ringing voice keeps nothing of its note: on either
+    /// guitar its string, slide and body hold no energy, and its next note starts from rest.
+    #[test]
+    fn a_silenced_voice_keeps_nothing_of_its_note() {
+        for body in [SlideBody::Pickup, SlideBody::Acoustic] {
+            let (mut voice, _) = plucked_on(body, 40);
+            let ringing = voice.energy();
+            assert!(ringing > 1e-6, "{body:?}: {ringing} J before");
+            voice.silence();
+            assert!(!voice.sounding);
+            assert_eq!(voice.energy(), 0.0, "{body:?}: the energy left");
+            assert_eq!(voice.core.compressions(), (-HAND_RANGE.0, -HAND_RANGE.0), "{body:?}: the slide lifted");
+        }
     }
 }
