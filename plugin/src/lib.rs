@@ -203,7 +203,7 @@ impl Plugin for QsaStrings {
 
     fn reset(&mut self) {
         if let Some(engine) = &mut self.engine {
-            engine.handle(Event::AllSoundOff);
+            engine.reset();
         }
         self.guard.reset();
     }

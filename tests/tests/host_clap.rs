@@ -697,6 +697,53 @@ fn sample_rates_from_22_to_192_khz() {
     }
 }
 
+/// A host whose session changes its sample rate deactivates the instance while notes ring and
+/// activates it at the new rate (up, down, back to a rate used before, and the same rate again).
+/// The notes played after each activation sound as on a fresh instance at that rate, to the bit:
+/// nothing of the notes held before is heard, and nothing of the old rate is left. In each mode,
+/// with the sustain pedal held across the change.
+#[test]
+fn a_new_sample_rate_from_the_host_sounds_as_a_fresh_instance_at_that_rate() {
+    let bundle = release_bundle();
+    let rates = [96_000.0, 44_100.0, 192_000.0, 22_050.0, 22_050.0, 48_000.0];
+    for (mode, keys) in [("piano", [45u8, 57, 64, 69]), ("slide", [45, 52, 57, 60])] {
+        let setup = [param("mode", if mode == "piano" { 0.0 } else { 1.0 })];
+        // A chord struck under the pedal and still sounding when the host stops.
+        let held: Vec<(usize, Ev)> = std::iter::once((0, Ev::Midi([0xB0, 64, 127])))
+            .chain(keys.iter().enumerate().map(|(i, &k)| (100 + 50 * i, Ev::On(0, k, 0.9))))
+            .collect();
+        // The notes after the change: a key struck, released and struck again, with the pedal up.
+        let after = [
+            (0, Ev::Midi([0xB0, 64, 0])),
+            (10, Ev::On(0, 69, 0.7)),
+            (3000, Ev::Off(0, 69)),
+            (6000, Ev::On(0, 69, 0.5)),
+        ];
+        let mut host = Plugin::new(&bundle, FS, 4096, &setup);
+        let mut fs = FS;
+        for &rate in &rates {
+            let before = host.render_blocks(&held, (0.3 * fs) as usize, 512);
+            assert!(before.peak() > AUDIBLE, "{mode}: the chord at {fs} Hz is silent");
+            host.reactivate_at(rate);
+            fs = rate;
+            let samples = (0.3 * fs) as usize;
+            let heard = host.render_blocks(&after, samples, 1024);
+            let fresh = Plugin::new(&bundle, fs, 4096, &setup).render_blocks(&after, samples, 1024);
+            heard.assert_finite(&format!("{mode} after the change to {fs} Hz"));
+            assert!(fresh.peak() > AUDIBLE, "{mode}: the fresh instance at {fs} Hz is silent");
+            if let Some(i) = bit_identical(&heard, &fresh) {
+                panic!(
+                    "{mode} after the change to {fs} Hz differs from a fresh instance from sample {i}: \
+                     {} against {}",
+                    heard.left.get(i).copied().unwrap_or(f32::NAN),
+                    fresh.left.get(i).copied().unwrap_or(f32::NAN)
+                );
+            }
+            println!("{mode} at {fs} Hz: as a fresh instance, peak {:.3}", heard.peak());
+        }
+    }
+}
+
 /// Garbage as saved state (random bytes, a plausible length prefix before random bytes, valid
 /// JSON of the wrong shape, a truncated real state) is refused, and every parameter keeps its
 /// value; a real saved state still loads afterwards and restores its values; the instrument

@@ -951,3 +951,72 @@ fn the_click_detector_finds_a_small_step_and_passes_a_clean_render() {
         );
     }
 }
+
+/// A busy session on every channel: a chord under the sustain and soft pedals, a key caught by
+/// the sostenuto, re-strikes, pitch bends, pressures and the mod wheel, MPE notes with their own
+/// tuning, with notes still held at its end.
+fn busy_session() -> Score {
+    let mut score: Score =
+        vec![(0, Event::Sustain { channel: 0, depth: 0.6 }), (0, Event::SoftPedal { channel: 1, down: true })];
+    for (i, key) in [33u8, 45, 57, 64, 69, 76, 88, 96].into_iter().enumerate() {
+        score.push((37 * i, Event::NoteOn { channel: (i % 3) as u8, key, velocity: 0.3 + 0.08 * i as f32 }));
+    }
+    score.extend([
+        (400, Event::Sostenuto { channel: 0, down: true }),
+        (900, Event::PitchBend { channel: 1, value: -0.7 }),
+        (1_300, Event::ChannelPressure { channel: 2, value: 0.8 }),
+        (1_700, Event::ModWheel { channel: 0, value: 0.5 }),
+        (2_100, Event::NoteOnWithId { channel: 3, key: 60, velocity: 0.9, voice: 7 }),
+        (2_200, Event::NoteTuning { note: NoteTarget::voice(7), semitones: 1.5 }),
+        (2_500, on(57, 1.0)),
+        (3_100, off(45)),
+        (3_700, Event::PolyPressure { channel: 0, key: 57, value: 0.6 }),
+        (4_400, on(57, 0.2)),
+    ]);
+    score.sort_by_key(|e| e.0);
+    score
+}
+
+/// `Instrument::reset` (what a host's reset calls) leaves the instrument as it was made: after a
+/// busy session cut off at a sample off the control blocks' grid, with notes, pedals and
+/// controllers still held, what follows is the same, to the bit, as on an instrument just made
+/// with the same settings. In both modes, at 44.1 and 48 kHz, with a control block of 64 samples
+/// and of 37, and in random buffers. The notes that sounded end at sample 0.
+#[test]
+fn a_reset_instrument_renders_as_one_just_made() {
+    let after: Score = vec![
+        (0, on(69, 0.7)),
+        (40, Event::PitchBend { channel: 0, value: 0.3 }),
+        (2_000, off(69)),
+        (2_900, Event::Sustain { channel: 0, depth: 1.0 }),
+        (3_000, on(57, 0.5)),
+        (3_050, on(64, 0.4)),
+        (5_000, off(57)),
+    ];
+    for fs in [44_100.0, FS] {
+        for mode in [Mode::Piano, Mode::Slide] {
+            for block in [64, 37] {
+                let settings = Settings { mode, block, ..Default::default() };
+                let what = format!("{mode:?} at {fs} Hz, control blocks of {block}");
+                let samples = (0.25 * fs) as usize;
+                let fresh = play(&mut Instrument::new(fs, 12, settings), &after, samples, || 256);
+                assert!(rms(&fresh) > 1e-4, "{what}: the notes after are silent");
+                let mut used = Instrument::new(fs, 12, settings);
+                let mut rng = seeded_rng(block as u64);
+                let session = play(&mut used, &busy_session(), 6_001, || rng.random_range(1..300));
+                assert!(rms(&session[4_000..]) > 1e-4, "{what}: the session is silent at its end");
+                let _ = used.drain_ended().count();
+                used.reset();
+                assert_eq!(used.now(), 0, "{what}: the clock");
+                let ended: Vec<u64> = used.drain_ended().map(|n| n.at).collect();
+                assert!(
+                    !ended.is_empty() && ended.iter().all(|&at| at == 0),
+                    "{what}: the notes that sounded end at 0, {ended:?}"
+                );
+                let heard = play(&mut used, &after, samples, || rng.random_range(1..300));
+                let first = heard.iter().zip(&fresh).position(|(a, b)| a.to_bits() != b.to_bits());
+                assert_eq!(first, None, "{what}: differs from an instrument just made from this sample on");
+            }
+        }
+    }
+}

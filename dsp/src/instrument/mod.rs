@@ -510,6 +510,26 @@ impl Instrument {
         self.notes.drain_ended()
     }
 
+    /// Return to the state the instrument was made in, without allocating: every voice silent,
+    /// the pedals and every channel's controllers at rest, the output stage empty and the clock
+    /// at zero, so that the control blocks start again at the next sample. What follows renders
+    /// to the bit as on an instrument just made at this sample rate with these settings: a host
+    /// that resets the instrument before each bounce gets the same bounce each time. The notes
+    /// that were sounding end at sample 0 ([`Self::drain_ended`]); the counts of steals, sheds
+    /// and guard trips go on.
+    pub fn reset(&mut self) {
+        self.handle_event(Event::AllSoundOff);
+        self.channels = [ChannelState::default(); 16];
+        self.now = 0;
+        self.in_block = 0;
+        self.notes.end_all(0);
+        self.voices.iter_mut().for_each(|v| v.started = 0);
+        let settings = self.settings;
+        self.slides.iter_mut().for_each(|v| v.reset(&settings));
+        self.sides.reset();
+        self.output.reset();
+    }
+
     /// Handle one event at the current sample.
     pub fn handle(&mut self, event: Event) {
         self.handle_event(event);
@@ -1023,6 +1043,13 @@ impl BodySides {
             heard_before: false,
             gains: [1.0; 2],
         }
+    }
+
+    /// As made: nothing heard, the gains where they start.
+    fn reset(&mut self) {
+        self.heard = false;
+        self.heard_before = false;
+        self.gains = [1.0; 2];
     }
 
     /// Start a block: no voice has put its shares on the buses yet.

@@ -144,6 +144,11 @@ impl NoteBook {
         }
     }
 
+    /// Every live note ends at sample `at`, in the order of its voice's index.
+    pub(crate) fn end_all(&mut self, at: u64) {
+        self.check_live(at, |_| false);
+    }
+
     /// [`check`](Self::check) every voice with a live note, in the order of their indices, with
     /// `sounding(index)` its state at sample `at`.
     pub(crate) fn check_live(&mut self, at: u64, sounding: impl Fn(usize) -> bool) {

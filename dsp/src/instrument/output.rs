@@ -115,6 +115,14 @@ impl OutputStage {
         self.held = 1.0;
     }
 
+    /// As made: silence in the delay line from its first entry, the limiter released and the
+    /// gain at its target.
+    pub fn reset(&mut self) {
+        self.clear();
+        self.at = 0;
+        self.smooth = (self.target, self.target);
+    }
+
     /// Apply the smoothed gain, then the limiter if `limit`, to the frames in `left` and `right`
     /// (in place, the same length).
     pub fn process(&mut self, left: &mut [f32], right: &mut [f32], limit: bool) {

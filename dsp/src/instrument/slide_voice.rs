@@ -277,15 +277,8 @@ impl SlideVoice {
         let string = ModalString::band_limited(g.string, sample_rate, settings.max_frequency.min(0.5 * sample_rate))
             .expect("the slide-guitar preset is a valid string");
         let length = g.string.length;
-        let x_o = Self::slide_position(length, settings.slide_position);
-        let rest = SlideControls {
-            slide_position: x_o,
-            hand_height: HAND_RANGE.0,
-            left_position: (x_o - TRAIL).max(0.002),
-            left_force: 0.0,
-            right_position: settings.pluck_position * length,
-            right_force: 0.0,
-        };
+        let rest = Self::at_rest(length, settings);
+        let x_o = rest.slide_position;
         let slide = Self::slide_params(settings);
         let params = SlideStringParams {
             string: g.string,
@@ -336,6 +329,20 @@ impl SlideVoice {
             unweighed: 0,
             body: SlideBody::Pickup,
             pickup: settings.pickup_position,
+        }
+    }
+
+    /// The controls of a voice at rest on a string of length `length` (m) under `settings`: the
+    /// slide lifted above its position, the fingers off.
+    fn at_rest(length: f64, settings: &Settings) -> SlideControls {
+        let x_o = Self::slide_position(length, settings.slide_position);
+        SlideControls {
+            slide_position: x_o,
+            hand_height: HAND_RANGE.0,
+            left_position: (x_o - TRAIL).max(0.002),
+            left_force: 0.0,
+            right_position: settings.pluck_position * length,
+            right_force: 0.0,
         }
     }
 
@@ -459,6 +466,22 @@ impl SlideVoice {
         self.key_down = false;
         self.pluck = None;
         self.rest_lifted();
+    }
+
+    /// As made under `settings`, but for the guitar it was last on and the guard's count of
+    /// trips: silent, its controls at rest where `settings` put them, with no note started and
+    /// the energy weighed afresh.
+    pub fn reset(&mut self, settings: &Settings) {
+        self.guard_fade.clear();
+        self.silence();
+        let rest = Self::at_rest(self.length, settings);
+        self.live.0 = rest;
+        self.slide_motion = Motion::at_rest(rest.slide_position);
+        self.core.restart(self.body == SlideBody::Acoustic, rest);
+        self.glided = 0.0;
+        self.fresh = false;
+        self.started = 0;
+        self.unweighed = 0;
     }
 
     /// Energy of the string, the slide and the contact (J).

@@ -780,6 +780,14 @@ impl SlideCore {
         self.last_force = 0.0;
     }
 
+    /// As made, with the body as it is: [`set_body`](Self::set_body)`(on, controls)`, the
+    /// control blocks counted from this step and the energy's books at zero. Never allocates.
+    pub fn restart(&mut self, on: bool, controls: SlideControls) {
+        self.set_body(on, controls);
+        (self.n, self.k) = (0, 0);
+        (self.losses, self.control_work) = (0.0, 0.0);
+    }
+
     /// Attach `body` at the string's far end (the bridge, `x = L`), at rest, the string's end
     /// moving with it if `on` (see [`set_body`](Self::set_body)). Call it on a core at rest,
     /// before its first step. Allocates: call it before the audio thread runs.

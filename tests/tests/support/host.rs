@@ -226,9 +226,16 @@ impl Plugin {
     /// Stop processing, deactivate and activate again with the same configuration, as a host
     /// does to apply a change that needs a restart (here: `Voices`).
     pub fn reactivate(&mut self) {
+        self.reactivate_at(self.config.sample_rate);
+    }
+
+    /// Stop processing, deactivate and activate again at `sample_rate`, as a host does when its
+    /// session's sample rate changes.
+    pub fn reactivate_at(&mut self, sample_rate: f64) {
         if let Some(processor) = self.processor.take() {
             self.instance.deactivate(processor.stop_processing());
         }
+        self.config.sample_rate = sample_rate;
         let processor =
             self.instance.activate(|_, _| (), self.config).expect("activate").start_processing().expect("start");
         self.processor = Some(processor);
