@@ -124,6 +124,7 @@ fn engine_event<S>(event: &NoteEvent<S>) -> Option<Event> {
             66 => Event::Sostenuto { channel, down: value >= 0.5 },
             67 => Event::SoftPedal { channel, down: value >= 0.5 },
             120 => Event::AllSoundOff,
+            121 => Event::ResetControllers { channel },
             123 => Event::AllNotesOff,
             _ => return None,
         },

@@ -784,6 +784,34 @@ fn garbage_state_is_refused_and_the_previous_state_kept() {
     assert!(audio.peak() > AUDIBLE, "the instrument still plays after garbage state");
 }
 
+/// CC121 (reset all controllers) reaches the engine: a piano note held under the sustain and
+/// soft pedals, then CC121 on its channel, then the key released, is damped as with both pedals
+/// let up by their own messages at that sample, to the bit; without either, it rings on (14 dB
+/// louder a quarter of a second after the release, at least).
+#[test]
+fn reset_all_controllers_from_the_host_lets_the_pedals_up() {
+    let bundle = release_bundle();
+    let score = |at_reset: &[[u8; 3]]| -> Score {
+        let mut score: Score =
+            vec![(0, Ev::Midi([0xB0, 64, 127])), (0, Ev::Midi([0xB0, 67, 127])), (10, Ev::Midi([0x90, 48, 100]))];
+        score.extend(at_reset.iter().map(|&m| (4_800, Ev::Midi(m))));
+        score.push((9_600, Ev::Midi([0x80, 48, 0])));
+        score
+    };
+    let render = |score: &Score| Plugin::at_48k(&bundle, &[]).render_blocks(score, 24_000, 512);
+    let reset = render(&score(&[[0xB0, 121, 0]]));
+    let let_up = render(&score(&[[0xB0, 64, 0], [0xB0, 67, 0]]));
+    let held = render(&score(&[]));
+    reset.assert_finite("after CC121");
+    if let Some(n) = bit_identical(&reset, &let_up) {
+        panic!("CC121 differs from the pedals let up from sample {n}");
+    }
+    let rms = |a: &Audio| (a.left[21_600..].iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / 2_400.0).sqrt();
+    let (damped, ringing) = (rms(&reset), rms(&held));
+    println!("0.25–0.3 s after the release: rms {damped:.2e} with CC121, {ringing:.2e} with the pedal held");
+    assert!(ringing > 5.0 * damped, "the note under the held pedal rings on: {ringing} against {damped}");
+}
+
 /// The same MIDI file through the offline renderer (`cargo xtask render --midi`) and through the
 /// `.clap` in a host gives identical samples: the file's raw MIDI messages go to the plugin at the
 /// sample offsets the renderer uses, every parameter at its default, in 512-sample host blocks.

@@ -14,8 +14,8 @@
 //!   the plugin, which it does every 500 permutations.
 //! - Meanwhile notes (CLAP note events and MIDI note messages: single keys, repeated keys,
 //!   chords, releases), the sustain, sostenuto and soft pedals (CC64, CC66, CC67), pitch bend,
-//!   channel and poly pressure, the mod wheel (CC1) and all-notes-off (CC123) play on every
-//!   channel.
+//!   channel and poly pressure, the mod wheel (CC1), reset-all-controllers (CC121) and
+//!   all-notes-off (CC123) play on every channel.
 //!
 //! The default run is 2,000 permutations with a fixed seed; `QSA_FUZZ_PERMUTATIONS=20000` runs
 //! longer and `QSA_FUZZ_SEED=n` picks another seed. A failure names the seed, the permutation,
@@ -302,10 +302,10 @@ impl Generator {
                 }
                 0
             }
-            // Sustain pedal, or the sostenuto or soft pedal.
+            // Sustain pedal, or the sostenuto or soft pedal, or reset all controllers.
             72..=78 => {
                 let value = [0, 127, self.value7()][self.rng.random_range(0..3)];
-                let pedal = [64, 64, 66, 67][self.rng.random_range(0..4)];
+                let pedal = [64, 64, 66, 67, 121][self.rng.random_range(0..5)];
                 score.push((t, Ev::Midi([0xB0 | channel, pedal, value])));
                 0
             }

@@ -1020,3 +1020,54 @@ fn a_reset_instrument_renders_as_one_just_made() {
         }
     }
 }
+
+/// CC121 (reset all controllers) on a channel is, to the bit, each of that channel's controllers
+/// moved to rest by its own message at that sample: the pitch bend to the centre, the channel
+/// and poly pressures and the mod wheel to 0, the sustain, sostenuto and soft pedals up. Another
+/// channel keeps its own. In both modes, with the notes held across the reset, released after
+/// it (the dampers fall as the pedals now say) and a note struck after it (the soft pedal up).
+#[test]
+fn reset_all_controllers_moves_each_controller_of_its_channel_to_rest() {
+    let held: Score = vec![
+        (0, Event::Sustain { channel: 0, depth: 1.0 }),
+        (0, Event::Sustain { channel: 1, depth: 0.7 }),
+        (0, Event::SoftPedal { channel: 0, down: true }),
+        (10, on(50, 0.8)),
+        (10, Event::NoteOn { channel: 1, key: 57, velocity: 0.8 }),
+        (20, Event::Sostenuto { channel: 0, down: true }),
+        (30, Event::PitchBend { channel: 0, value: 0.6 }),
+        (30, Event::PitchBend { channel: 1, value: -0.4 }),
+        (40, Event::ChannelPressure { channel: 0, value: 0.9 }),
+        (40, Event::PolyPressure { channel: 0, key: 50, value: 0.7 }),
+        (50, Event::ModWheel { channel: 0, value: 0.8 }),
+        (50, Event::ModWheel { channel: 1, value: 0.5 }),
+    ];
+    let after = |at_reset: &[Event]| -> Score {
+        let mut score = held.clone();
+        score.extend(at_reset.iter().map(|&e| (3_000, e)));
+        score.extend([(5_000, off(50)), (5_000, Event::NoteOff { channel: 1, key: 57 }), (6_000, on(62, 0.6))]);
+        score
+    };
+    let reset = after(&[Event::ResetControllers { channel: 0 }]);
+    let at_rest = after(&[
+        Event::PitchBend { channel: 0, value: 0.0 },
+        Event::ChannelPressure { channel: 0, value: 0.0 },
+        Event::PolyPressure { channel: 0, key: 50, value: 0.0 },
+        Event::ModWheel { channel: 0, value: 0.0 },
+        Event::Sustain { channel: 0, depth: 0.0 },
+        Event::Sostenuto { channel: 0, down: false },
+        Event::SoftPedal { channel: 0, down: false },
+    ]);
+    let untouched = after(&[]);
+    for mode in [Mode::Piano, Mode::Slide] {
+        let render = |score: &Score| {
+            play(&mut Instrument::new(FS, 8, Settings { mode, ..Default::default() }), score, 14_400, || 64)
+        };
+        let reference = render(&at_rest);
+        let heard = render(&reset);
+        let first = heard.iter().zip(&reference).position(|(a, b)| a.to_bits() != b.to_bits());
+        assert_eq!(first, None, "{mode:?}: differs from the controllers moved to rest from this sample on");
+        let moved = render(&untouched).iter().zip(&reference).map(|(a, b)| f64::from(a - b).abs()).fold(0.0, f64::max);
+        assert!(moved > 1e-3, "{mode:?}: the controllers at rest change the sound by only {moved}");
+    }
+}

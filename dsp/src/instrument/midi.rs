@@ -6,7 +6,7 @@
 use crate::instrument::Event;
 
 /// The engine event for a channel message `status, data1, data2`, if the engine plays it
-/// (notes, poly and channel pressure, pitch bend, CC1, CC64, CC66, CC67, CC120, CC123).
+/// (notes, poly and channel pressure, pitch bend, CC1, CC64, CC66, CC67, CC120, CC121, CC123).
 pub fn event_from_midi(status: u8, data1: u8, data2: u8) -> Option<Event> {
     let channel = status & 0x0f;
     let (key, value) = (data1 & 0x7f, data2 & 0x7f);
@@ -27,6 +27,7 @@ pub fn event_from_midi(status: u8, data1: u8, data2: u8) -> Option<Event> {
             66 => Event::Sostenuto { channel, down: unit(value) >= 0.5 },
             67 => Event::SoftPedal { channel, down: unit(value) >= 0.5 },
             120 => Event::AllSoundOff,
+            121 => Event::ResetControllers { channel },
             123 => Event::AllNotesOff,
             _ => return None,
         },

@@ -201,6 +201,13 @@ pub enum Event {
         /// Pedal down.
         down: bool,
     },
+    /// Reset all controllers of a channel (CC121): its pitch bend to the centre, its channel
+    /// and poly pressures and the mod wheel to 0, its three pedals up (MIDI RP-015). The notes
+    /// play on.
+    ResetControllers {
+        /// MIDI channel, 0..=15.
+        channel: u8,
+    },
     /// Release every key and pedal (CC123), letting the notes ring out under their dampers.
     AllNotesOff,
     /// Silence everything at once (CC120).
@@ -578,6 +585,15 @@ impl Instrument {
             Event::Sustain { channel, depth } => self.sustain[usize::from(channel & 15)] = unit(depth, 0.0),
             Event::SoftPedal { channel, down } => self.soft[usize::from(channel & 15)] = down,
             Event::Sostenuto { channel, down } => self.sostenuto(channel & 15, down),
+            Event::ResetControllers { channel } => {
+                let channel = channel & 15;
+                let c = usize::from(channel);
+                self.channels[c] = ChannelState::default();
+                self.sustain[c] = 0.0;
+                self.soft[c] = false;
+                self.sostenuto(channel, false);
+                self.slides.iter_mut().filter(|v| v.strike.channel == channel).for_each(|v| v.poly_pressure = 0.0);
+            }
             Event::AllNotesOff => {
                 self.sustain = [0.0; 16];
                 self.soft = [false; 16];
