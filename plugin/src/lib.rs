@@ -10,8 +10,11 @@
 //!   framework; the engine samples them at its control-block boundaries, so host buffer sizes never
 //!   change the output.
 //! - MIDI: notes; CC64 sustain (continuous: half-pedalling), CC66 sostenuto, CC67 soft pedal
-//!   (una corda), CC1 mod wheel, CC120 all sound off, CC123 all notes off; pitch bend moves the
-//!   slide; channel and poly pressure can press it (per channel, so MPE works).
+//!   (una corda), CC1 mod wheel, CC120 all sound off, CC121 reset all controllers, CC123 all
+//!   notes off; pitch bend moves the slide; channel and poly pressure can press it (per channel,
+//!   so MPE works).
+//! - `reset` (each activation and start of processing) returns the engine to how it was made
+//!   ([`Instrument::reset`]): what follows is a new instance's output, to the bit.
 //! - Per note (slide mode): CLAP and VST3 tuning expressions move the note's slide, CLAP pressure
 //!   expressions (nice-plug delivers them, like MIDI poly aftertouch and VST3 poly pressure, as
 //!   `PolyPressure`) are its poly pressure, and CLAP polyphonic modulation offsets its `slide` and

@@ -910,7 +910,7 @@ mod tests {
     }
 
     /// Silenced at once (all sound off), a ringing voice keeps nothing of its note: on either
-    /// guitar its string, slide and body hold no energy, and its next note starts from rest.
+    /// guitar its string, slide and body hold no energy, and the slide is lifted.
     #[test]
     fn a_silenced_voice_keeps_nothing_of_its_note() {
         for body in [SlideBody::Pickup, SlideBody::Acoustic] {
