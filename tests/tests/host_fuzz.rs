@@ -11,7 +11,8 @@
 //!   end with a hold of up to a tenth of a second, and land anywhere inside the host's buffers,
 //!   whose sizes are random from 1 to 4,096 samples: the changes are sample-accurate (CLAP
 //!   parameter events timed inside a buffer). `Voices` takes effect when the host re-activates
-//!   the plugin, which it does every 500 permutations.
+//!   the plugin, which it does every 500 permutations, each time at the next of 96, 44.1, 22.05
+//!   and 48 kHz (it starts at 48 kHz).
 //! - Meanwhile notes (CLAP note events and MIDI note messages: single keys, repeated keys,
 //!   chords, releases), the sustain, sostenuto and soft pedals (CC64, CC66, CC67), pitch bend,
 //!   channel and poly pressure, the mod wheel (CC1), reset-all-controllers (CC121) and
@@ -38,8 +39,20 @@ mod bundle;
 mod host;
 use host::{Ev, PARAMETERS, Plugin, Score, clap_id, release_bundle};
 
-/// Sample rate of the fuzzed instance.
+/// Sample rate of the fuzzed instance as it starts.
 const FS: f64 = 48_000.0;
+
+/// The sample rates of the re-activations, in turn: a host's session switched to another rate
+/// (the times below stay counted in samples).
+const RATES: [f64; 4] = [96_000.0, 44_100.0, 22_050.0, 48_000.0];
+
+/// The sample rate in force for permutation `index`.
+fn rate_at(index: usize) -> f64 {
+    match index / REACTIVATE_EVERY {
+        0 => FS,
+        n => RATES[(n - 1) % RATES.len()],
+    }
+}
 
 /// Largest host buffer (the instance is activated for it).
 const MAX_HOST_BUFFER: usize = 4096;
@@ -390,9 +403,11 @@ fn failure(plugin: &mut Plugin, run: &Run, seed: u64, sample: usize, value: f32,
         .map(|e| format!("{}: {:?}", e.0, e.1))
         .collect();
     let mut report = format!(
-        "seed {seed}: sample {sample} is {value} ({what}); {} samples into permutation {index} of {}.\n  in force: {}",
+        "seed {seed}: sample {sample} is {value} ({what}); {} samples into permutation {index} of {}, at {} Hz.\n  \
+         in force: {}",
         sample - p.start,
         run.permutations.len(),
+        rate_at(index),
         describe(plugin, run, index)
     );
     if index > 0 {
@@ -434,9 +449,11 @@ fn random_parameter_permutations_never_give_a_non_finite_or_loud_sample() {
     let start = Instant::now();
     let run = Run::new(seed, count);
     println!(
-        "seed {seed}: {count} permutations of {} parameters, {} events, {:.1} s of audio at {FS} Hz",
+        "seed {seed}: {count} permutations of {} parameters, {} events, {} samples of audio ({:.1} s at {FS} Hz; \
+         re-activated every {REACTIVATE_EVERY} permutations at {RATES:?} Hz in turn)",
         run.params.len(),
         run.score.len(),
+        run.samples,
         run.samples as f64 / FS
     );
     // When notes start: CLAP note-ons and MIDI note-ons with a non-zero velocity.
@@ -463,7 +480,7 @@ fn random_parameter_permutations_never_give_a_non_finite_or_loud_sample() {
     let mut next_event = 0;
     for first in (0..count).step_by(PERMUTATIONS_PER_CALL) {
         if first > 0 && first % REACTIVATE_EVERY == 0 {
-            plugin.reactivate();
+            plugin.reactivate_at(rate_at(first));
         }
         let (from, to) = run.span(first, first + PERMUTATIONS_PER_CALL);
         let end = run.score[next_event..].partition_point(|e| e.0 < to) + next_event;
@@ -525,7 +542,7 @@ fn random_parameter_permutations_never_give_a_non_finite_or_loud_sample() {
     }
     let elapsed = start.elapsed().as_secs_f64();
     let db = |x: f32| 20.0 * f64::from(x).log10();
-    println!("rendered in {elapsed:.1} s ({:.1}× real time)", run.samples as f64 / FS / elapsed);
+    println!("rendered in {elapsed:.1} s ({:.0} samples a second)", run.samples as f64 / elapsed);
     let mut loudest: Vec<usize> = (0..count).collect();
     loudest.sort_by(|&a, &b| peaks[b].0.total_cmp(&peaks[a].0));
     for &index in loudest.iter().take(3) {
