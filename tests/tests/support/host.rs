@@ -223,14 +223,8 @@ impl Plugin {
         Self { instance, processor: Some(processor), config, max_block }
     }
 
-    /// Stop processing, deactivate and activate again with the same configuration, as a host
-    /// does to apply a change that needs a restart (here: `Voices`).
-    pub fn reactivate(&mut self) {
-        self.reactivate_at(self.config.sample_rate);
-    }
-
-    /// Stop processing, deactivate and activate again at `sample_rate`, as a host does when its
-    /// session's sample rate changes.
+    /// Stop processing, deactivate and activate again at `sample_rate`, as a host does to apply
+    /// a change that needs a restart (`Voices`) or when its session's sample rate changes.
     pub fn reactivate_at(&mut self, sample_rate: f64) {
         if let Some(processor) = self.processor.take() {
             self.instance.deactivate(processor.stop_processing());
