@@ -473,11 +473,12 @@ impl SlideVoice {
     /// the energy weighed afresh.
     pub fn reset(&mut self, settings: &Settings) {
         self.guard_fade.clear();
-        self.silence();
         let rest = Self::at_rest(self.length, settings);
         self.live.0 = rest;
         self.slide_motion = Motion::at_rest(rest.slide_position);
-        self.core.restart(self.body == SlideBody::Acoustic, rest);
+        // The rest is lifted already, so silencing brings the core to rest on it.
+        self.silence();
+        self.core.restart();
         self.glided = 0.0;
         self.fresh = false;
         self.started = 0;

@@ -780,10 +780,9 @@ impl SlideCore {
         self.last_force = 0.0;
     }
 
-    /// As made, with the body as it is: [`set_body`](Self::set_body)`(on, controls)`, the
-    /// control blocks counted from this step and the energy's books at zero. Never allocates.
-    pub fn restart(&mut self, on: bool, controls: SlideControls) {
-        self.set_body(on, controls);
+    /// As made, for a core brought to rest ([`rest`](Self::rest)): the control blocks counted
+    /// from this step and the energy's books at zero.
+    pub fn restart(&mut self) {
         (self.n, self.k) = (0, 0);
         (self.losses, self.control_work) = (0.0, 0.0);
     }
