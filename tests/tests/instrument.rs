@@ -684,7 +684,7 @@ fn output_does_not_depend_on_host_buffers() {
 }
 
 /// Garbage in one block: 10,000 random events (any channel, keys 0 and 127, velocity 0, NaN,
-/// note-offs without note-ons, the three pedals), NaN and infinite settings: no panic, finite output, and
+/// note-offs without note-ons, releases and chokes of any notes, the three pedals), NaN and infinite settings: no panic, finite output, and
 /// no allocation in `handle`, `set_settings` or `process`.
 #[test]
 fn garbage_input_is_safe_and_allocation_free() {
@@ -694,7 +694,7 @@ fn garbage_input_is_safe_and_allocation_free() {
         .map(|_| {
             let channel = rng.random_range(0..=255u8);
             let key = rng.random_range(0..=255u8);
-            match rng.random_range(0..6) {
+            match rng.random_range(0..8) {
                 0 => Event::NoteOn { channel, key, velocity: rng.random_range(0.0..1.5) },
                 1 => Event::NoteOn { channel, key, velocity: f32::NAN },
                 2 => Event::NoteOff { channel, key },
@@ -709,6 +709,14 @@ fn garbage_input_is_safe_and_allocation_free() {
                     }
                 }
                 4 => Event::NoteOn { channel, key: [0, 127][usize::from(key % 2)], velocity: 0.0 },
+                5 | 6 => {
+                    let note = NoteTarget {
+                        voice: rng.random_bool(0.3).then(|| rng.random_range(-2..20)),
+                        channel: rng.random_bool(0.7).then_some(channel),
+                        key: rng.random_bool(0.7).then_some(key),
+                    };
+                    if rng.random_bool(0.5) { Event::Release { note } } else { Event::Choke { note } }
+                }
                 _ => Event::AllNotesOff,
             }
         })
@@ -1071,4 +1079,169 @@ fn reset_all_controllers_moves_each_controller_of_its_channel_to_rest() {
         let moved = render(&untouched).iter().zip(&reference).map(|(a, b)| f64::from(a - b).abs()).fold(0.0, f64::max);
         assert!(moved > 1e-3, "{mode:?}: the controllers at rest change the sound by only {moved}");
     }
+}
+
+/// A note-off that addresses many notes (a CLAP note-off with its channel, its key or both left
+/// open, or naming a note by its voice id alone) is, to the bit, a note-off at that sample for
+/// each key it addresses: the keys held down on its channels and the keys of the notes it names.
+/// It changes the sound (the notes it addresses are released, under no pedal). Both modes, with
+/// notes on four channels, one of them with a voice id, and two keys on one channel (in slide
+/// mode played legato on one voice).
+#[test]
+fn a_note_off_addressing_many_notes_releases_each_key_as_its_own_note_off() {
+    let held: Score = vec![
+        (0, on(48, 0.7)),
+        (0, on(55, 0.6)),
+        (0, Event::NoteOn { channel: 1, key: 60, velocity: 0.8 }),
+        (0, Event::NoteOnWithId { channel: 2, key: 64, velocity: 0.7, voice: 9 }),
+        (0, Event::NoteOn { channel: 3, key: 67, velocity: 0.5 }),
+    ];
+    let every = NoteTarget::default();
+    let cases: [(NoteTarget, &[(u8, u8)]); 5] = [
+        (NoteTarget { channel: Some(0), ..every }, &[(0, 48), (0, 55)]),
+        (NoteTarget { key: Some(60), ..every }, &[(1, 60)]),
+        (NoteTarget::voice(9), &[(2, 64)]),
+        (NoteTarget { voice: Some(9), channel: Some(2), key: Some(67) }, &[]),
+        (every, &[(0, 48), (0, 55), (1, 60), (2, 64), (3, 67)]),
+    ];
+    for mode in [Mode::Piano, Mode::Slide] {
+        let render = |at: &[Event]| {
+            let mut score = held.clone();
+            score.extend(at.iter().map(|&e| (4_800, e)));
+            play(&mut Instrument::new(FS, 8, Settings { mode, ..Default::default() }), &score, 14_400, || 64)
+        };
+        let untouched = render(&[]);
+        for (target, keys) in cases {
+            let heard = render(&[Event::Release { note: target }]);
+            let offs: Vec<Event> = keys.iter().map(|&(channel, key)| Event::NoteOff { channel, key }).collect();
+            let reference = render(&offs);
+            let first = heard.iter().zip(&reference).position(|(a, b)| a.to_bits() != b.to_bits());
+            assert_eq!(first, None, "{mode:?}, {target:?}: differs from the note-offs of {keys:?} from this sample on");
+            let moved = heard.iter().zip(&untouched).map(|(a, b)| f64::from(a - b).abs()).fold(0.0, f64::max);
+            println!("{mode:?}, {target:?}: releases {keys:?}, changing the output by up to {moved:.2e}");
+            assert_eq!(moved > 1e-4, !keys.is_empty(), "{mode:?}, {target:?}: changes the output by {moved:.2e}");
+        }
+    }
+}
+
+/// The sample by which a voice faded out from the control block after sample `t` has fallen
+/// silent and its note ended: the steal's fade ([`STEAL_TIME`]) in whole blocks of `block`, and
+/// the block in which the voice finds its fade over.
+fn faded_by(t: usize, block: usize) -> usize {
+    let fade = (STEAL_TIME * FS).ceil() as usize;
+    t.div_ceil(block) * block + fade.div_ceil(block) * block + block
+}
+
+/// A choke stops the notes it addresses whatever the pedals: with the sustain pedal down and
+/// every key let go (in slide mode, every key held), choking a note by its voice id, then a key on any channel, then every note,
+/// ends each addressed note within the steal's fade (5 ms, in whole control blocks) while the
+/// others ring on, and the dry output (the voices' sum) is exactly zero once all are choked,
+/// where without the chokes it still rings at 0.45 s. The fades stay below [`CLICK_DB`] in the
+/// output a listener hears, in 1- and 64-sample buffers. Both modes; the chokes allocate nothing.
+#[test]
+fn a_choke_ends_the_notes_it_addresses_under_the_pedal_within_the_fade_and_without_a_click() {
+    let block = Settings::default().block;
+    let chokes = [
+        (9_600, NoteTarget::voice(5), 60u8),
+        (14_400, NoteTarget { key: Some(48), ..Default::default() }, 48),
+        (19_200, NoteTarget::default(), 67),
+    ];
+    let pedalled: Score = vec![
+        (0, Event::Sustain { channel: 0, depth: 1.0 }),
+        (0, on(48, 0.8)),
+        (0, Event::NoteOnWithId { channel: 1, key: 60, velocity: 0.7, voice: 5 }),
+        (0, Event::NoteOn { channel: 2, key: 67, velocity: 0.6 }),
+        (4_800, off(48)),
+        (4_800, Event::NoteOff { channel: 1, key: 60 }),
+        (4_800, Event::NoteOff { channel: 2, key: 67 }),
+    ];
+    let samples = 24_000;
+    for mode in [Mode::Piano, Mode::Slide] {
+        let settings = Settings { mode, ..Default::default() };
+        // The slide guitar has no pedal: its keys stay down.
+        let score: Score =
+            pedalled.iter().filter(|e| mode == Mode::Piano || !matches!(e.1, Event::NoteOff { .. })).copied().collect();
+        // Without the chokes the pedal (or the keys) hold every note.
+        let mut free = Instrument::new(FS, 8, settings);
+        free.set_raw_output(true);
+        let ringing = rms(&play(&mut free, &score, samples, || 64)[21_600..]);
+        for raw in [true, false] {
+            for size in [1usize, 64] {
+                let what = format!("{mode:?}, {} output, buffers of {size}", if raw { "dry" } else { "heard" });
+                let mut p = Instrument::new(FS, 8, settings);
+                p.set_raw_output(raw);
+                let latency = p.latency();
+                let mut out = Vec::new();
+                let mut from = 0;
+                for &(t, target, key) in &chokes {
+                    let before: Score =
+                        score.iter().filter(|e| (from..t).contains(&e.0)).map(|&(s, e)| (s - from, e)).collect();
+                    out.extend(play(&mut p, &before, t - from, || size));
+                    let _ = p.drain_ended().count();
+                    let sounding = p.sounding();
+                    assert_eq!(
+                        allocations_in(|| p.handle(Event::Choke { note: target })),
+                        0,
+                        "{what}: the choke allocates"
+                    );
+                    out.extend(play(&mut p, &Vec::new(), faded_by(t, block) - t, || size));
+                    from = faded_by(t, block);
+                    let ended: Vec<(u8, u64)> = p.drain_ended().map(|e| (e.note.key, e.at)).collect();
+                    assert!(
+                        ended.len() == 1 && ended[0].0 == key && ended[0].1 > t as u64,
+                        "{what}: the choke at {t} ends {ended:?}, not key {key} alone"
+                    );
+                    assert_eq!(p.sounding(), sounding - 1, "{what}: the others ring on");
+                }
+                out.extend(play(&mut p, &Vec::new(), samples - from, || size));
+                if raw {
+                    let last = out.iter().rposition(|v| *v != 0.0).unwrap_or(0);
+                    println!("{what}: silent from {} (the last choke at 19,200); {ringing:.2e} rms without", last + 1);
+                    assert!(last < from + latency, "{what}: sounds at {last}");
+                    assert!(ringing > 1e-3, "{what}: without the chokes the notes ring at {ringing:.2e} rms");
+                } else {
+                    let attack = 0..latency + 384;
+                    let (db, at) = click_strength(&wide(&out), FS, std::slice::from_ref(&attack));
+                    println!("{what}: worst click {db:.1} dB at {at}");
+                    assert!(db < CLICK_DB, "{what}: {db:.1} dB at sample {at}");
+                }
+            }
+        }
+    }
+}
+
+/// A choke reaching a note that waits for a stolen voice's fade drops it: with one voice, a note
+/// that steals it and is choked a sample later is never struck, both notes end within the fade
+/// and the dry output is exactly zero after it; a note played next sounds as on a fresh voice.
+#[test]
+fn a_choked_note_waiting_for_a_stolen_voice_is_never_struck() {
+    let block = Settings::default().block;
+    let mut p = piano(1);
+    p.set_raw_output(true);
+    let latency = p.latency();
+    let score: Score =
+        vec![(0, on(48, 0.8)), (4_800, on(60, 0.9)), (4_801, Event::Choke { note: NoteTarget::key(0, 60) })];
+    let out = play(&mut p, &score, 9_600, || 64);
+    let ended: Vec<(u8, u64)> = p.drain_ended().map(|e| (e.note.key, e.at)).collect();
+    let by = faded_by(4_801, block) as u64;
+    assert!(
+        ended.len() == 2 && ended[0] == (48, 4_800) && ended[1].0 == 60 && ended[1].1 <= by,
+        "both notes end within the fade: {ended:?}"
+    );
+    let last = out.iter().rposition(|v| *v != 0.0).unwrap_or(0);
+    assert!(last < by as usize + latency, "the dry output sounds at {last}");
+    let next = play(&mut p, &vec![(0, on(62, 0.7))], 9_600, || 64);
+    let fresh = play(
+        &mut {
+            let mut f = piano(1);
+            f.set_raw_output(true);
+            f
+        },
+        &vec![(0, on(62, 0.7))],
+        9_600,
+        || 64,
+    );
+    let first = next.iter().zip(&fresh).position(|(a, b)| a.to_bits() != b.to_bits());
+    println!("ended {ended:?}; silent from {}; the next note differs from a fresh voice's from {first:?}", last + 1);
+    assert!(rms(&next) > 1e-3 && first.is_none(), "the next note plays as on a fresh voice");
 }

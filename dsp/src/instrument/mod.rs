@@ -47,7 +47,8 @@
 //! voice or, when none is free, steals the least audible one (the quietest output over its latest
 //! block): that voice fades out over 5 ms at a decay rate of 2000/s before its new note starts, so
 //! stealing does not click. A piano voice is released when its string's energy falls 140 dB below
-//! its strike's.
+//! its strike's. A host's choke ([`Event::Choke`]) fades the notes it addresses out the same way,
+//! whatever the pedals, and ends them.
 //!
 //! # Output
 //!
@@ -207,6 +208,20 @@ pub enum Event {
     ResetControllers {
         /// MIDI channel, 0..=15.
         channel: u8,
+    },
+    /// Release the keys of the addressed notes, as their note-offs do. A CLAP note-off may leave
+    /// its channel or key open, releasing every note on a key or a channel (or all of them), or
+    /// name a note by its voice id alone.
+    Release {
+        /// The notes: a key held down counts when the target names no voice id.
+        note: NoteTarget,
+    },
+    /// Stop the addressed notes whatever the pedals: their keys are released and their voices
+    /// fade out over [`STEAL_TIME`], as a stolen voice does, and fall silent, the notes ending
+    /// (a CLAP note choke: a drum pad choked by another, or a host's stop that ends every note).
+    Choke {
+        /// The notes: a key held down counts when the target names no voice id.
+        note: NoteTarget,
     },
     /// Release every key and pedal (CC123), letting the notes ring out under their dampers.
     AllNotesOff,
@@ -552,14 +567,14 @@ impl Instrument {
             Event::NoteOn { channel, key, .. }
             | Event::NoteOnWithId { channel, key, .. }
             | Event::NoteOff { channel, key } => {
-                let (channel, key) = (channel & 15, key & 127);
-                self.keys_down[usize::from(channel)] &= !(1 << key);
-                for v in &mut self.voices {
-                    v.key_up(channel, key);
-                }
-                for v in self.slides.iter_mut().filter(|v| v.strike.channel == channel && v.strike.key == key) {
-                    v.key_up();
-                }
+                let mut keys = [0; 16];
+                keys[usize::from(channel & 15)] = 1 << (key & 127);
+                self.keys_up(&keys);
+            }
+            Event::Release { note } => self.keys_up(&self.addressed_keys(note)),
+            Event::Choke { note } => {
+                self.keys_up(&self.addressed_keys(note));
+                self.choke(note);
             }
             Event::PitchBend { channel, value } => self.channels[usize::from(channel & 15)].bend = unit(value, -1.0),
             Event::ChannelPressure { channel, value } => {
@@ -631,6 +646,60 @@ impl Instrument {
         };
         if let Some(i) = index {
             self.notes.start(i, note, self.now);
+        }
+    }
+
+    /// Release `keys` (one bit per MIDI key, a word per channel), as their note-offs do: their
+    /// dampers fall unless a pedal holds them, and their slides let go.
+    fn keys_up(&mut self, keys: &[u128; 16]) {
+        let released = |channel: u8, key: u8| keys[usize::from(channel & 15)] >> (key & 127) & 1 == 1;
+        for (down, up) in self.keys_down.iter_mut().zip(keys) {
+            *down &= !up;
+        }
+        for v in &mut self.voices {
+            v.keys_up(released);
+        }
+        for v in self.slides.iter_mut().filter(|v| released(v.strike.channel, v.strike.key)) {
+            v.key_up();
+        }
+    }
+
+    /// The keys `target` addresses, a word of bits per channel: those of the sounding notes it
+    /// matches and, when it names no voice id, the keys held down on its channels.
+    fn addressed_keys(&self, target: NoteTarget) -> [u128; 16] {
+        let mut keys = [0; 16];
+        if target.voice.is_none() {
+            let on_key = target.key.map_or(u128::MAX, |k| 1 << (k & 127));
+            for (c, (keys, down)) in keys.iter_mut().zip(self.keys_down).enumerate() {
+                if target.channel.is_none_or(|channel| usize::from(channel & 15) == c) {
+                    *keys = down & on_key;
+                }
+            }
+        }
+        let (_, slides) = self.pools();
+        for note in self.notes.live_in(0..slides.end).filter_map(|i| self.notes.get(i)) {
+            if target.matches(&note) {
+                keys[usize::from(note.channel)] |= 1 << note.key;
+            }
+        }
+        keys
+    }
+
+    /// Fade out the voices of the notes `target` addresses and let them fall silent
+    /// ([`Event::Choke`]).
+    fn choke(&mut self, target: NoteTarget) {
+        let fs = self.sample_rate;
+        let (pianos, slides) = self.pools();
+        for i in self.notes.live_in(0..slides.end) {
+            if !self.notes.get(i).is_some_and(|note| target.matches(&note)) {
+                continue;
+            }
+            match self.voices.get_mut(i) {
+                Some(voice) => voice.choke(fs),
+                None => {
+                    self.slides[i - pianos.end].shed(fs);
+                }
+            }
         }
     }
 

@@ -703,6 +703,17 @@ impl PianoVoice {
         true
     }
 
+    /// Fade out over [`STEAL_TIME`] and fall silent whatever the dampers, the note ending: a host
+    /// choked the note. A note waiting for a steal fade is dropped, the fade under way ending the
+    /// voice instead.
+    pub fn choke(&mut self, sample_rate: f64) {
+        if self.pending.take().is_some() {
+            self.shedding = true;
+        } else {
+            self.shed(sample_rate);
+        }
+    }
+
     /// Every mode decays at [`STEAL_RATE`] for [`STEAL_TIME`], the state untouched.
     fn fade_out(&mut self, sample_rate: f64) {
         self.fade_left = (STEAL_TIME * sample_rate).ceil() as usize;
@@ -731,9 +742,14 @@ impl PianoVoice {
 
     /// Release `key` on `channel` if this voice plays it (or will, after a steal fade).
     pub fn key_up(&mut self, channel: u8, key: u8) {
+        self.keys_up(|c, k| (c, k) == (channel, key));
+    }
+
+    /// Release the key this voice plays (or will, after a steal fade) if `released(channel, key)`.
+    pub fn keys_up(&mut self, released: impl Fn(u8, u8) -> bool) {
         match self.pending {
-            Some(p) if p.channel == channel && p.key == key => self.pending_released = true,
-            _ if self.sounding && self.strike.channel == channel && self.strike.key == key => self.key_down = false,
+            Some(p) if released(p.channel, p.key) => self.pending_released = true,
+            _ if self.sounding && released(self.strike.channel, self.strike.key) => self.key_down = false,
             _ => {}
         }
     }
