@@ -9,6 +9,8 @@
 //!   renders up to the next one. Parameter changes arrive split sample-accurately by the
 //!   framework; the engine samples them at its control-block boundaries, so host buffer sizes never
 //!   change the output.
+//! - Notes end by note-off, or at once by a CLAP note choke (a faded stop whatever the pedals);
+//!   CLAP note-offs and chokes may address every note of a key, a channel or all of them.
 //! - MIDI: notes; CC64 sustain (continuous: half-pedalling), CC66 sostenuto, CC67 soft pedal
 //!   (una corda), CC1 mod wheel, CC120 all sound off, CC121 reset all controllers, CC123 all
 //!   notes off; pitch bend moves the slide; channel and poly pressure can press it (per channel,
@@ -96,10 +98,13 @@ fn engine_event<S>(event: &NoteEvent<S>) -> Option<Event> {
             let (channel, key) = note(&channel, &key)?;
             Event::NoteOn { channel, key, velocity }
         }
-        NoteEvent::NoteOff { channel, key, .. } | NoteEvent::Choke { channel, key, .. } => {
-            let (channel, key) = note(&channel, &key)?;
+        NoteEvent::NoteOff { channel: Channel::Number(channel), key: Key::Number(key), .. } => {
             Event::NoteOff { channel, key }
         }
+        // CLAP note-offs and chokes may leave the channel or key open (all of them) or name a
+        // note by its id alone.
+        NoteEvent::NoteOff { voice_id, channel, key, .. } => Event::Release { note: target(voice_id, channel, key) },
+        NoteEvent::Choke { voice_id, channel, key, .. } => Event::Choke { note: target(voice_id, channel, key) },
         // MIDI poly aftertouch (and VST3 poly pressure without a note id): as the offline renderer.
         NoteEvent::PolyPressure {
             voice_id: VoiceID::Wildcard,

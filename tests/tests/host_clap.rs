@@ -165,7 +165,8 @@ fn core_notes(bundle: &Path) {
 }
 
 /// 10,000 random MIDI and note events in one 8192-sample block (every status byte, data bytes
-/// beyond 127, all channels, keys 0..=127, velocity 0, stray note-offs, pedals, all-notes-off),
+/// beyond 127, all channels, keys 0..=127, velocity 0, stray note-offs, CLAP note-offs and chokes
+/// with wildcards, pedals, all-notes-off),
 /// in both modes: every sample finite, and CC120 (all sound off) afterwards gives exact silence,
 /// so the instrument is still under control.
 fn core_random_events(bundle: &Path) {
@@ -192,7 +193,7 @@ fn random_events(seed: u64, count: usize, samples: usize) -> Score {
             let t = rng.random_range(0..samples);
             let ch = rng.random_range(0..16u8);
             let (a, b) = (rng.random_range(0..=127u8), rng.random_range(0..=127u8));
-            let ev = match rng.random_range(0..12) {
+            let ev = match rng.random_range(0..14) {
                 0..=2 => Ev::Midi([0x90 | ch, a, [0, b][rng.random_range(0..2)]]),
                 3 => Ev::Midi([0x80 | ch, a, b]),
                 4 => Ev::Midi([0xB0 | ch, [1, 64, 120, 123, a][rng.random_range(0..5)], b]),
@@ -206,6 +207,14 @@ fn random_events(seed: u64, count: usize, samples: usize) -> Score {
                     [0.0, 1.0, f64::NAN, rng.random_range(0.0..1.0)][rng.random_range(0..4)],
                 ),
                 10 => Ev::Off(ch, a),
+                11 | 12 => {
+                    let target = Target {
+                        note_id: rng.random_bool(0.2).then(|| rng.random_range(0..4)),
+                        channel: rng.random_bool(0.6).then_some(ch),
+                        key: rng.random_bool(0.6).then_some(a),
+                    };
+                    if rng.random_bool(0.5) { Ev::OffAt(target) } else { Ev::Choke(target) }
+                }
                 _ => Ev::On(ch, a, rng.random_range(0.0..1.0)),
             };
             (t, ev)
@@ -1027,6 +1036,88 @@ fn clap_note_ends_are_reported() {
     assert!(find(-1).is_empty(), "the held MIDI note has not ended");
     let silenced = p.render_blocks(&[(100, Ev::Midi([0xB0, 120, 0]))], 512, 512);
     assert_eq!(silenced.note_ends, [(100, -1, 1, 62)], "all sound off ends the MIDI note at once");
+}
+
+/// CLAP note-offs with wildcards, or naming a note by its id alone, are, to the bit, a note-off
+/// for each key they address at that sample: every key of channel 0, the note with id 7, every
+/// note. Notes on three channels, released under no pedal, so each release changes the sound.
+#[test]
+fn clap_note_offs_with_wildcards_release_each_addressed_key() {
+    let bundle = release_bundle();
+    let held: Score =
+        vec![(0, Ev::On(0, 48, 0.7)), (0, Ev::On(0, 55, 0.6)), (0, on_id(1, 60, 7)), (0, Ev::On(2, 67, 0.5))];
+    let render = |at: &[Ev]| {
+        let mut score = held.clone();
+        score.extend(at.iter().map(|&e| (4_800, e)));
+        Plugin::at_48k(&bundle, &[]).render_blocks(&score, 14_400, 512)
+    };
+    let untouched = render(&[]);
+    let every = Target { note_id: None, channel: None, key: None };
+    let cases: [(Target, &[(u8, u8)]); 3] = [
+        (Target { channel: Some(0), ..every }, &[(0, 48), (0, 55)]),
+        (Target::id(7), &[(1, 60)]),
+        (every, &[(0, 48), (0, 55), (1, 60), (2, 67)]),
+    ];
+    for (target, keys) in cases {
+        let heard = render(&[Ev::OffAt(target)]);
+        let offs: Vec<Ev> = keys.iter().map(|&(channel, key)| Ev::Off(channel, key)).collect();
+        if let Some(n) = bit_identical(&heard, &render(&offs)) {
+            panic!("{target:?}: differs from the note-offs of {keys:?} from sample {n}");
+        }
+        let change = relative_change(&heard, &untouched, 4_800);
+        println!("{target:?}: releases {keys:?}, a change of {change:.3} after it");
+        assert!(change > 0.05, "{target:?}: the release changes the sound by only {change}");
+    }
+}
+
+/// A CLAP note choke ends the notes it addresses at once whatever the pedals, and the plugin
+/// reports their ends: under the sustain pedal, with every key let go, chokes by note id, by
+/// channel and of every note each end their notes within the steal's fade (5 ms in whole control
+/// blocks of 64 samples, from the block after the choke). After the last, the output falls by
+/// more than 20 dB in 0.2 s and 35 dB in 0.45 s, as the soundboard rings out (docs/physics.md
+/// §13.2), where the pedalled notes without the chokes fall by less than 10 dB.
+#[test]
+fn a_clap_choke_ends_its_notes_under_the_pedal_and_reports_their_ends() {
+    let bundle = release_bundle();
+    let mut score: Score = vec![
+        (0, Ev::Midi([0xB0, 64, 127])),
+        (0, on_id(0, 48, 1)),
+        (0, on_id(1, 60, 2)),
+        (0, Ev::On(2, 67, 0.6)),
+        (4_800, Ev::Off(0, 48)),
+        (4_800, Ev::Off(1, 60)),
+        (4_800, Ev::Off(2, 67)),
+    ];
+    let render = |score: &Score| Plugin::at_48k(&bundle, &[]).render_blocks(score, 48_000, 512);
+    let ringing = render(&score);
+    assert!(ringing.note_ends.is_empty(), "the pedal holds every note: {:?}", ringing.note_ends);
+    let every = Target { note_id: None, channel: None, key: None };
+    let chokes = [
+        (9_600, Target::id(2), (2, 1, 60)),
+        (14_400, Target { channel: Some(0), ..every }, (1, 0, 48)),
+        (19_200, every, (-1, 2, 67)),
+    ];
+    score.extend(chokes.iter().map(|&(t, target, _)| (t, Ev::Choke(target))));
+    let choked = render(&score);
+    println!("note ends: {:?}", choked.note_ends);
+    assert_eq!(choked.note_ends.len(), 3, "{:?}", choked.note_ends);
+    // The fade (240 samples at 48 kHz) in whole blocks from the next block, and the block that finds it over.
+    let fade = (qsa_dsp::instrument::STEAL_TIME * 48_000.0).ceil() as usize;
+    for (&(t, _, (id, channel, key)), &(at, end_id, end_channel, end_key)) in chokes.iter().zip(&choked.note_ends) {
+        let by = t.div_ceil(64) * 64 + fade.div_ceil(64) * 64 + 64;
+        assert_eq!((end_id, end_channel, end_key), (id, channel, key), "the choke at {t} ends its note");
+        assert!((t + 1..=by).contains(&at), "the choke at {t} ends its note at {at}, by {by} at the latest");
+    }
+    // Mean square over 50 ms from `from` (dB).
+    let level = |a: &Audio, from: usize| {
+        10.0 * (a.left[from..from + 2_400].iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / 2_400.0).log10()
+    };
+    let before = level(&choked, 19_200 - 2_400);
+    let falls = [9_600, 21_600].map(|after| before - level(&choked, 19_200 + after));
+    let held = before - level(&ringing, 19_200 + 21_600);
+    println!("before the last choke {before:.1} dB; after it, down {falls:.1?} dB at 0.2 and 0.45 s ({held:.1} held)");
+    assert!(falls[0] > 20.0 && falls[1] > 35.0, "the output falls by {falls:.1?} dB");
+    assert!(held < 10.0, "the pedalled notes, unchoked, fall by {held:.1} dB");
 }
 
 /// The host sees the editor's sections as parameter groups (CLAP `module`): Engine, Piano, Slide,

@@ -14,7 +14,8 @@
 //!   the plugin, which it does every 500 permutations, each time at the next of 96, 44.1, 22.05
 //!   and 48 kHz (it starts at 48 kHz).
 //! - Meanwhile notes (CLAP note events and MIDI note messages: single keys, repeated keys,
-//!   chords, releases), the sustain, sostenuto and soft pedals (CC64, CC66, CC67), pitch bend,
+//!   chords, releases, CLAP chokes and note-offs of a key on every channel or of every note),
+//!   the sustain, sostenuto and soft pedals (CC64, CC66, CC67), pitch bend,
 //!   channel and poly pressure, the mod wheel (CC1), reset-all-controllers (CC121) and
 //!   all-notes-off (CC123) play on every channel.
 //!
@@ -37,7 +38,7 @@ use rand_pcg::Pcg64;
 mod bundle;
 #[path = "support/host.rs"]
 mod host;
-use host::{Ev, PARAMETERS, Plugin, Score, clap_id, release_bundle};
+use host::{Ev, PARAMETERS, Plugin, Score, Target, clap_id, release_bundle};
 
 /// Sample rate of the fuzzed instance as it starts.
 const FS: f64 = 48_000.0;
@@ -261,13 +262,19 @@ impl Generator {
         }
     }
 
-    /// Release a held key (CLAP note-off, MIDI note-off or note-on at velocity 0).
+    /// Release a held key: a CLAP note-off, a MIDI note-off or note-on at velocity 0, a CLAP
+    /// choke, or a CLAP note-off for the key on every channel.
     fn release(&mut self, t: usize, index: usize, score: &mut Score) {
         let (channel, key) = self.held.remove(index);
-        let ev = match self.rng.random_range(0..3) {
+        let ev = match self.rng.random_range(0..5) {
             0 => Ev::Off(channel, key),
             1 => Ev::Midi([0x80 | channel, key, self.rng.random_range(0..=127)]),
-            _ => Ev::Midi([0x90 | channel, key, 0]),
+            2 => Ev::Midi([0x90 | channel, key, 0]),
+            3 => Ev::Choke(Target::key(channel, key)),
+            _ => {
+                self.held.retain(|&(_, k)| k != key);
+                Ev::OffAt(Target { note_id: None, channel: None, key: Some(key) })
+            }
         };
         score.push((t, ev));
     }
@@ -308,11 +315,19 @@ impl Generator {
                 self.press(t, channel, key, score);
                 1
             }
-            // Release every held key.
+            // Release every held key, one by one or by a CLAP note-off or choke of every note.
             68..=71 => {
-                while !self.held.is_empty() {
-                    self.release(t, 0, score);
+                let every = Target { note_id: None, channel: None, key: None };
+                match self.rng.random_range(0..4) {
+                    0 => score.push((t, Ev::OffAt(every))),
+                    1 => score.push((t, Ev::Choke(every))),
+                    _ => {
+                        while !self.held.is_empty() {
+                            self.release(t, 0, score);
+                        }
+                    }
                 }
+                self.held.clear();
                 0
             }
             // Sustain pedal, or the sostenuto or soft pedal, or reset all controllers.

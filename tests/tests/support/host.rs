@@ -1,7 +1,8 @@
 //! The clack-host harness the real-host CLAP tests share (`host_clap.rs`, `host_fuzz.rs`): the
 //! release bundle's path, a host that loads, activates and processes the plugin on an audio
 //! thread, parameter ids by their documented string ids, and timed note, MIDI and parameter
-//! events, CLAP note expressions and polyphonic modulation; renders collect the note-end events
+//! events, CLAP note-offs and chokes with wildcards, note expressions and polyphonic modulation;
+//! renders collect the note-end events
 //! the plugin sends. The host renders offline (CLAP's render extension), as a DAW exporting does:
 //! the tests compare samples across buffer sizes and with the offline renderer, and the plugin's
 //! overload guard, which sheds voices when real-time processing cannot keep up, must not act on
@@ -25,8 +26,8 @@ use clack_extensions::render::{PluginRender, RenderMode};
 use clack_extensions::state::PluginState;
 use clack_host::events::Match;
 use clack_host::events::event_types::{
-    MidiEvent, NoteEndEvent, NoteExpressionEvent, NoteExpressionType, NoteOffEvent, NoteOnEvent, ParamModEvent,
-    ParamValueEvent,
+    MidiEvent, NoteChokeEvent, NoteEndEvent, NoteExpressionEvent, NoteExpressionType, NoteOffEvent, NoteOnEvent,
+    ParamModEvent, ParamValueEvent,
 };
 use clack_host::prelude::*;
 
@@ -105,6 +106,10 @@ pub enum Ev {
     /// CLAP polyphonic modulation: parameter (CLAP id), the note id it modulates, amount (in CLAP
     /// value units, like `Param`).
     Mod(u32, u32, f64),
+    /// CLAP note-off for the notes `target` addresses (wildcards allowed).
+    OffAt(Target),
+    /// CLAP note choke for the notes `target` addresses (wildcards allowed).
+    Choke(Target),
 }
 
 /// The CLAP note expressions the tests send.
@@ -385,6 +390,8 @@ pub fn push_event(buffer: &mut EventBuffer, time: u32, ev: Ev) {
         Ev::Mod(param, id, amount) => {
             buffer.push(&ParamModEvent::new(time, ClapId::new(param), Target::id(id).pckn(), amount))
         }
+        Ev::OffAt(target) => buffer.push(&NoteOffEvent::new(time, target.pckn(), 0.0)),
+        Ev::Choke(target) => buffer.push(&NoteChokeEvent::new(time, target.pckn())),
     }
 }
 
