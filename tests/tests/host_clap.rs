@@ -1022,6 +1022,7 @@ fn clap_note_ends_are_reported() {
     let score = vec![
         (0, on_id(0, 50, 5)),
         (2_400, on_id(0, 55, 6)),
+        (3_600, Ev::Off(0, 50)),
         (4_800, Ev::Off(0, 55)),
         (4_800, Ev::Midi([0x91, 62, 90])),
     ];

@@ -836,6 +836,66 @@ fn slide_position_bend_and_lift() {
     assert!((f / 110.0 - 1.0).abs() < 0.01, "lifted slide: open string {f} Hz");
 }
 
+/// [`slide_pitch`] over `range` of `out`.
+fn slide_pitch_in(out: &[f32], range: std::ops::Range<usize>, expected: f64) -> f64 {
+    let signal: Vec<f64> = out[range]
+        .iter()
+        .scan(0.0, |sum, &v| {
+            *sum += f64::from(v);
+            Some(*sum)
+        })
+        .collect();
+    fundamental(&signal, FS, 0.8 * expected, 1.2 * expected)
+}
+
+/// Following keys, a slide voice on one channel plays legato as a monophonic keyboard does: of
+/// A2, D3 and E3 pressed in turn and held, letting go of E3 glides back to D3, the latest key
+/// still held (not the lowest), and letting go of D3 to A2, each without a pluck, the note sounding
+/// on at the held key's pitch (within 1 %, as [`slide_follows_the_played_key`]); letting go of A2,
+/// the last, mutes the string as a note-off does.
+#[test]
+fn letting_go_of_a_legato_key_glides_back_to_the_latest_key_still_held() {
+    let score: Score = vec![
+        (0, on(45, 0.8)),
+        (7_200, on(50, 0.8)),
+        (14_400, on(52, 0.8)),
+        (28_800, off(52)),
+        (43_200, off(50)),
+        (57_600, off(45)),
+    ];
+    let out = play(&mut slide(Settings::default()), &score, 72_000, || 64);
+    let length = qsa_dsp::preset::slide_guitar().string.length;
+    let pitch = |key: u8| {
+        let x_o = (length * (1.0 - key_frequency(45) / key_frequency(key))).max(0.005);
+        key_frequency(45) * length / (length - x_o)
+    };
+    // From 0.15 s after each key takes over to the next event.
+    for (window, key) in [(21_600..28_800, 52u8), (36_000..43_200, 50), (50_400..57_600, 45)] {
+        let (f, expected) = (slide_pitch_in(&out, window.clone(), pitch(key)), pitch(key));
+        println!("{window:?}: {f:.2} Hz, key {key} at {expected:.2} Hz, rms {:.2e}", rms(&out[window.clone()]));
+        assert!((f / expected - 1.0).abs() < 0.01, "{window:?}: {f:.2} Hz, not key {key}'s {expected:.2} Hz");
+    }
+    // Sounding on after each glide back, and muted after the last key is let go.
+    let (held, muted) = (rms(&out[50_400..57_600]), rms(&out[64_800..72_000]));
+    println!("rms with A2 held {held:.2e}, after it is let go {muted:.2e}");
+    assert!(held > 1e-3 && muted < 1e-2 * held, "held {held:.2e}, muted {muted:.2e}");
+}
+
+/// Following keys, the key a slide voice plays, struck again while held (a second note-on
+/// without a note-off), plucks again, as a new note: over the 50 ms after it the string sounds
+/// within 3 dB of a fresh pluck over its first 50 ms (the finger stops part of the old motion as
+/// it throws the string anew), where the string held on is 4.4 dB below it.
+#[test]
+fn a_slide_key_struck_again_while_held_plucks_again() {
+    let held = play(&mut slide(Settings::default()), &vec![(0, on(50, 0.8))], 16_800, || 64);
+    let again = play(&mut slide(Settings::default()), &vec![(0, on(50, 0.8)), (14_400, on(50, 0.8))], 16_800, || 64);
+    let fresh = rms(&held[..2_400]);
+    let db = |x: &[f32]| 20.0 * (rms(x) / fresh).log10();
+    let (plucked, ringing) = (db(&again[14_400..16_800]), db(&held[14_400..16_800]));
+    println!("after the second note-on {plucked:.1} dB from a fresh pluck; held on, {ringing:.1} dB");
+    assert!(plucked.abs() < 3.0, "the second note-on sounds {plucked:.1} dB from a fresh pluck");
+}
+
 /// MPE: two notes on their own channels bend independently. Each voice follows its own
 /// channel's bend (alone, each sounds at its pitch), and together they are exactly the two voices
 /// added (to f32 rounding): one channel's bend does not touch the other note.

@@ -242,12 +242,18 @@ fn per_note_events_are_buffer_invariant() {
 }
 
 /// Every note's end is reported once, with its voice id, channel and key: a released slide note
-/// when its string falls silent, a note whose voice a legato glide takes over at once, and a piano
+/// when its string falls silent (its key let go after the key it glided from), a note whose voice
+/// a legato glide takes over at once, and a piano
 /// note struck again on its string at the new strike.
 #[test]
 fn ended_notes_are_reported_once() {
     let mut s = slide(Settings::default());
-    let score: Score = vec![(0, on(0, 50, 1)), (4_800, on(0, 55, 2)), (9_000, Event::NoteOff { channel: 0, key: 55 })];
+    let score: Score = vec![
+        (0, on(0, 50, 1)),
+        (4_800, on(0, 55, 2)),
+        (8_000, Event::NoteOff { channel: 0, key: 50 }),
+        (9_000, Event::NoteOff { channel: 0, key: 55 }),
+    ];
     let _ = play(&mut s, &score, 9_600, 256);
     let legato: Vec<_> = s.drain_ended().collect();
     assert_eq!(legato.len(), 1, "{legato:?}");

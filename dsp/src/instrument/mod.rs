@@ -27,7 +27,9 @@
 //! # Slide mode
 //!
 //! Each note plucks a slide-guitar string ([`SlideVoice`]): the slide position follows the played
-//! key (legato notes glide) or the `slide_position` setting, plus pitch bend; the hand height comes
+//! key (legato notes glide, and letting go of the key played glides back to the latest key still
+//! held on its channel; the key played, struck again, plucks again) or the `slide_position`
+//! setting, plus pitch bend; the hand height comes
 //! from the setting or from the mod wheel, channel pressure or poly pressure. Bend and pressure
 //! are kept per channel, so with MPE (a channel per note) every voice glides on its own.
 //!
@@ -325,6 +327,11 @@ pub struct Instrument {
     /// The keys held down on each channel, one bit per MIDI key: their dampers are off their
     /// strings, so they ring as partners of the keys struck meanwhile (docs/physics.md §14).
     keys_down: [u128; 16],
+    /// When each key was last pressed, per channel, in presses counted from the start: a slide
+    /// following keys returns to the latest key still held when the key it plays is let go.
+    pressed: Vec<[u64; 128]>,
+    /// Presses since the start.
+    presses: u64,
     /// Samples rendered since the start.
     now: u64,
     /// Samples into the current control block.
@@ -384,6 +391,8 @@ impl Instrument {
             sostenuto: [false; 16],
             caught: [0; 16],
             keys_down: [0; 16],
+            pressed: vec![[0; 128]; 16],
+            presses: 0,
             now: 0,
             in_block: 0,
             scratch: vec![0.0; MAX_BLOCK],
@@ -542,6 +551,8 @@ impl Instrument {
     pub fn reset(&mut self) {
         self.handle_event(Event::AllSoundOff);
         self.channels = [ChannelState::default(); 16];
+        self.pressed.iter_mut().for_each(|keys| keys.fill(0));
+        self.presses = 0;
         self.now = 0;
         self.in_block = 0;
         self.notes.end_all(0);
@@ -639,6 +650,8 @@ impl Instrument {
         let shifted = for_channel(&self.soft, channel, |a, b| a | b);
         let strike = Strike { channel, key: key & 127, velocity: f64::from(velocity.min(1.0)), shifted };
         self.keys_down[usize::from(strike.channel)] |= 1 << strike.key;
+        self.presses += 1;
+        self.pressed[usize::from(strike.channel)][usize::from(strike.key)] = self.presses;
         let note = Note { voice, channel: strike.channel, key: strike.key };
         let index = match self.settings.mode {
             Mode::Piano => self.note_on(strike),
@@ -650,7 +663,8 @@ impl Instrument {
     }
 
     /// Release `keys` (one bit per MIDI key, a word per channel), as their note-offs do: their
-    /// dampers fall unless a pedal holds them, and their slides let go.
+    /// dampers fall unless a pedal holds them, and their slides let go, or, following keys,
+    /// glide back to the latest key still held on their channel.
     fn keys_up(&mut self, keys: &[u128; 16]) {
         let released = |channel: u8, key: u8| keys[usize::from(channel & 15)] >> (key & 127) & 1 == 1;
         for (down, up) in self.keys_down.iter_mut().zip(keys) {
@@ -659,8 +673,15 @@ impl Instrument {
         for v in &mut self.voices {
             v.keys_up(released);
         }
+        let follow = self.settings.follow_key;
         for v in self.slides.iter_mut().filter(|v| released(v.strike.channel, v.strike.key)) {
-            v.key_up();
+            let c = usize::from(v.strike.channel);
+            let (down, pressed) = (self.keys_down[c], &self.pressed[c]);
+            let latest = (0..128u8).filter(|&k| down >> k & 1 == 1).max_by_key(|&k| pressed[usize::from(k)]);
+            match latest {
+                Some(key) if follow && v.key_down => v.return_to(key),
+                _ => v.key_up(),
+            }
         }
     }
 
@@ -824,7 +845,9 @@ impl Instrument {
             && let Some(i) =
                 self.slides.iter().position(|v| v.sounding && v.key_down && v.strike.channel == strike.channel)
         {
-            self.slides[i].play(strike, &settings, true, now);
+            // The key it plays, struck again, plucks again.
+            let legato = self.slides[i].strike.key != strike.key;
+            self.slides[i].play(strike, &settings, legato, now);
             return Some(i);
         }
         // A free voice, else the oldest not being shed: its string keeps its motion, so reuse does

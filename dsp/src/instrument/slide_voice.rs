@@ -430,6 +430,12 @@ impl SlideVoice {
         }
     }
 
+    /// Glide to `key`, still held down, as the key this voice plays is let go (following keys):
+    /// legato, without a pluck, the note's expression kept.
+    pub fn return_to(&mut self, key: u8) {
+        self.strike.key = key;
+    }
+
     /// Release the key.
     pub fn key_up(&mut self) {
         self.key_down = false;
