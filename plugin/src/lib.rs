@@ -13,8 +13,9 @@
 //!   CLAP note-offs and chokes may address every note of a key, a channel or all of them.
 //! - MIDI: notes; CC64 sustain (continuous: half-pedalling), CC66 sostenuto, CC67 soft pedal
 //!   (una corda), CC1 mod wheel, CC120 all sound off, CC121 reset all controllers, CC123 all
-//!   notes off; pitch bend moves the slide; channel and poly pressure can press it (per channel,
-//!   so MPE works).
+//!   notes off; pitch bend moves the slide, as far as the channel's pitch-bend sensitivity (RPN 0)
+//!   or MPE zone (RPN 6) says; channel and poly pressure can press it (per channel, so MPE
+//!   works).
 //! - `reset` (each activation and start of processing) returns the engine to how it was made
 //!   ([`Instrument::reset`]): what follows is a new instance's output, to the bit.
 //! - Per note (slide mode): CLAP and VST3 tuning expressions move the note's slide, CLAP pressure
@@ -128,6 +129,11 @@ fn engine_event<S>(event: &NoteEvent<S>) -> Option<Event> {
         NoteEvent::MidiPitchBend { channel, value, .. } => Event::PitchBend { channel, value: 2.0 * value - 1.0 },
         NoteEvent::MidiCC { channel, cc, value, .. } => match cc {
             1 => Event::ModWheel { channel, value },
+            6 | 38 | 100 | 101 => Event::RegisteredParameter {
+                channel,
+                controller: cc,
+                value: (value * 127.0).round().clamp(0.0, 127.0) as u8,
+            },
             64 => Event::Sustain { channel, depth: value },
             66 => Event::Sostenuto { channel, down: value >= 0.5 },
             67 => Event::SoftPedal { channel, down: value >= 0.5 },
@@ -327,6 +333,10 @@ mod tests {
                 (67, 64),
                 (120, 0),
                 (123, 5),
+                (6, 48),
+                (38, 50),
+                (100, 6),
+                (101, 127),
             ] {
                 let via_host = NoteEvent::<()>::from_midi(0, &[status, d1, d2]).ok().and_then(|e| engine_event(&e));
                 let offline = qsa_dsp::instrument::event_from_midi(status, d1, d2);

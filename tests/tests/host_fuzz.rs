@@ -15,9 +15,10 @@
 //!   and 48 kHz (it starts at 48 kHz).
 //! - Meanwhile notes (CLAP note events and MIDI note messages: single keys, repeated keys,
 //!   chords, releases, CLAP chokes and note-offs of a key on every channel or of every note),
-//!   the sustain, sostenuto and soft pedals (CC64, CC66, CC67), pitch bend,
-//!   channel and poly pressure, the mod wheel (CC1), reset-all-controllers (CC121) and
-//!   all-notes-off (CC123) play on every channel.
+//!   the sustain, sostenuto and soft pedals (CC64, CC66, CC67), pitch bend and the registered
+//!   parameters' controllers (CC101, CC100, CC6: pitch-bend sensitivity, MPE zones), channel and
+//!   poly pressure, the mod wheel (CC1), reset-all-controllers (CC121) and all-notes-off (CC123)
+//!   play on every channel.
 //!
 //! The default run is 2,000 permutations with a fixed seed; `QSA_FUZZ_PERMUTATIONS=20000` runs
 //! longer and `QSA_FUZZ_SEED=n` picks another seed. A failure names the seed, the permutation,
@@ -330,10 +331,11 @@ impl Generator {
                 self.held.clear();
                 0
             }
-            // Sustain pedal, or the sostenuto or soft pedal, or reset all controllers.
+            // Sustain pedal, or the sostenuto or soft pedal, or reset all controllers, or a
+            // registered parameter's selection or value (pitch-bend sensitivity, MPE zones).
             72..=78 => {
                 let value = [0, 127, self.value7()][self.rng.random_range(0..3)];
-                let pedal = [64, 64, 66, 67, 121][self.rng.random_range(0..5)];
+                let pedal = [64, 64, 66, 67, 121, 101, 100, 6][self.rng.random_range(0..8)];
                 score.push((t, Ev::Midi([0xB0 | channel, pedal, value])));
                 0
             }

@@ -987,6 +987,76 @@ fn a_slide_key_struck_again_while_held_plucks_again() {
     assert!(plucked.abs() < 3.0, "the second note-on sounds {plucked:.1} dB from a fresh pluck");
 }
 
+/// The registered-parameter controllers that select `parameter` (MSB, LSB) on `channel` and set
+/// its value to `coarse` and, if given, `fine` (CC101, CC100, CC6, CC38), at sample 0.
+fn rpn(channel: u8, parameter: (u8, u8), coarse: u8, fine: Option<u8>) -> Score {
+    let cc = |controller, value| (0, Event::RegisteredParameter { channel, controller, value });
+    let mut score = vec![cc(101, parameter.0), cc(100, parameter.1), cc(6, coarse)];
+    score.extend(fine.map(|value| cc(38, value)));
+    score
+}
+
+/// A channel's pitch-bend sensitivity (RPN 0: CC101 = 0, CC100 = 0, CC6 semitones, CC38 cents)
+/// sets how far a full bend moves the slide there, exactly as the `bend_range` setting does: a
+/// note bent half-way on a channel set to 7 semitones 50 cents is, to the bit, the same note under
+/// a setting of 7.5 (reset-all-controllers after the sensitivity keeps it, as MIDI RP-015 asks),
+/// and the note sounds at its key plus 3.75 semitones within 1 %. A note on another channel
+/// still follows the setting (2 semitones: bent half-way, one semitone up).
+#[test]
+fn pitch_bend_sensitivity_sets_how_far_a_channel_bends_the_slide() {
+    let bent = |channel| -> Score {
+        vec![(0, Event::PitchBend { channel, value: 0.5 }), (0, Event::NoteOn { channel, key: 50, velocity: 0.8 })]
+    };
+    let mut score = rpn(1, (0, 0), 7, Some(50));
+    score.push((0, Event::ResetControllers { channel: 1 }));
+    score.extend(bent(1));
+    let heard = play(&mut slide(Settings::default()), &score, 24_000, || 64);
+    let reference = play(&mut slide(Settings { bend_range: 7.5, ..Default::default() }), &bent(1), 24_000, || 64);
+    let first = heard.iter().zip(&reference).position(|(a, b)| a.to_bits() != b.to_bits());
+    assert_eq!(first, None, "differs from the setting of 7.5 semitones from this sample on");
+    let expected = key_frequency(50) * 2f64.powf(3.75 / 12.0);
+    let f = slide_pitch(&heard, expected);
+    println!("channel 1 at 7.5 semitones, bent half-way: {f:.2} Hz (expected {expected:.2})");
+    assert!((f / expected - 1.0).abs() < 0.01, "{f:.2} Hz, not {expected:.2} Hz");
+    let mut other = rpn(1, (0, 0), 7, Some(50));
+    other.extend(bent(2));
+    let expected = key_frequency(51);
+    let f = slide_pitch(&play(&mut slide(Settings::default()), &other, 24_000, || 64), expected);
+    println!("channel 2, the setting's 2 semitones, bent half-way: {f:.2} Hz (expected {expected:.2})");
+    assert!((f / expected - 1.0).abs() < 0.01, "{f:.2} Hz, not {expected:.2} Hz");
+}
+
+/// An MPE configuration message (RPN 6 on MIDI channel 1, three member channels) sets the zone
+/// up as the MPE specification asks: a member channel's full bend moves the slide 48 semitones
+/// (a note bent a quarter is, to the bit, the same note bent half-way under a `bend_range` of
+/// 24), and the
+/// master channel's bend (±2 semitones) moves every note of the zone on top of its own: bent
+/// half-way, a member's note sounds a semitone up (within 1 %), while a note on a channel
+/// outside the zone does not move.
+#[test]
+fn an_mpe_zone_bends_its_members_48_semitones_and_its_master_bends_them_all() {
+    let zone = rpn(0, (0, 6), 3, None);
+    let note = |channel| (0, Event::NoteOn { channel, key: 50, velocity: 0.8 });
+    let quarter = |channel| (0, Event::PitchBend { channel, value: 0.25 });
+    let mut score = zone.clone();
+    score.extend([quarter(2), note(2)]);
+    let heard = play(&mut slide(Settings::default()), &score, 24_000, || 64);
+    // The setting's range stops at 24: half of it is the same 12 semitones.
+    let half = (0, Event::PitchBend { channel: 2, value: 0.5 });
+    let reference =
+        play(&mut slide(Settings { bend_range: 24.0, ..Default::default() }), &vec![half, note(2)], 24_000, || 64);
+    let first = heard.iter().zip(&reference).position(|(a, b)| a.to_bits() != b.to_bits());
+    assert_eq!(first, None, "a member bent a quarter differs from half of 24 from this sample on");
+    for (channel, semitones) in [(3u8, 1.0), (5, 0.0)] {
+        let mut score = zone.clone();
+        score.extend([(0, Event::PitchBend { channel: 0, value: 0.5 }), note(channel)]);
+        let expected = key_frequency(50) * 2f64.powf(semitones / 12.0);
+        let f = slide_pitch(&play(&mut slide(Settings::default()), &score, 24_000, || 64), expected);
+        println!("channel {channel}, the master bent half-way: {f:.2} Hz (expected {expected:.2})");
+        assert!((f / expected - 1.0).abs() < 0.01, "channel {channel}: {f:.2} Hz, not {expected:.2} Hz");
+    }
+}
+
 /// MPE: two notes on their own channels bend independently. Each voice follows its own
 /// channel's bend (alone, each sounds at its pitch), and together they are exactly the two voices
 /// added (to f32 rounding): one channel's bend does not touch the other note.
@@ -1112,8 +1182,8 @@ fn the_click_detector_finds_a_small_step_and_passes_a_clean_render() {
 }
 
 /// A busy session on every channel: a chord under the sustain and soft pedals, a key caught by
-/// the sostenuto, re-strikes, pitch bends, pressures and the mod wheel, MPE notes with their own
-/// tuning, with notes still held at its end.
+/// the sostenuto, re-strikes, pitch bends, a pitch-bend sensitivity, pressures and the mod wheel,
+/// MPE notes with their own tuning, with notes still held at its end.
 fn busy_session() -> Score {
     let mut score: Score =
         vec![(0, Event::Sustain { channel: 0, depth: 0.6 }), (0, Event::SoftPedal { channel: 1, down: true })];
@@ -1125,6 +1195,9 @@ fn busy_session() -> Score {
         (900, Event::PitchBend { channel: 1, value: -0.7 }),
         (1_300, Event::ChannelPressure { channel: 2, value: 0.8 }),
         (1_700, Event::ModWheel { channel: 0, value: 0.5 }),
+        (1_800, Event::RegisteredParameter { channel: 0, controller: 101, value: 0 }),
+        (1_800, Event::RegisteredParameter { channel: 0, controller: 100, value: 0 }),
+        (1_800, Event::RegisteredParameter { channel: 0, controller: 6, value: 12 }),
         (2_100, Event::NoteOnWithId { channel: 3, key: 60, velocity: 0.9, voice: 7 }),
         (2_200, Event::NoteTuning { note: NoteTarget::voice(7), semitones: 1.5 }),
         (2_500, on(57, 1.0)),

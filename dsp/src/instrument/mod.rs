@@ -77,6 +77,7 @@
 //! block boundary, blocks being counted from the first sample. Nothing depends on how the host
 //! splits its buffers: rendering in calls of any size gives the same samples.
 
+mod bend;
 mod memo;
 mod midi;
 mod monitor;
@@ -91,6 +92,7 @@ mod slide_voice;
 mod solvers;
 mod voicing;
 
+pub use bend::{MPE_MASTER_RANGE, MPE_MEMBER_RANGE};
 pub use midi::event_from_midi;
 pub use monitor::{Monitor, SHAPE_POINTS};
 pub use notes::{EndedNote, MAX_TUNING, Note, NoteParam, NoteTarget};
@@ -122,6 +124,7 @@ use crate::body::{Body, BodyParams};
 use crate::pickup::PickupCircuit;
 use crate::scene::{MAX_PARTNERS, Shared, Watch};
 use crate::string::ModalString;
+use bend::Bends;
 use notes::NoteBook;
 use std::ops::Range;
 
@@ -226,6 +229,18 @@ pub enum Event {
         /// The notes: a key held down counts when the target names no voice id.
         note: NoteTarget,
     },
+    /// A controller of MIDI's registered-parameter protocol on a channel: CC101 and CC100 select
+    /// a parameter, CC6 and CC38 set its value. The engine takes pitch-bend sensitivity (RPN 0),
+    /// how far a full bend moves the slide on that channel, and the MPE configuration (RPN 6),
+    /// which sets up a zone whose master channel bends every note of the zone.
+    RegisteredParameter {
+        /// MIDI channel, 0..=15.
+        channel: u8,
+        /// The controller: 6, 38, 100 or 101 (others are ignored).
+        controller: u8,
+        /// Its value, 0..=127.
+        value: u8,
+    },
     /// Release every key and pedal (CC123), letting the notes ring out under their dampers.
     AllNotesOff,
     /// Silence everything at once (CC120).
@@ -316,6 +331,8 @@ pub struct Instrument {
     slides: Vec<SlideVoice>,
     /// Controllers per channel (MPE gives each note its own channel).
     channels: [ChannelState; 16],
+    /// Each channel's pitch-bend sensitivity and the MPE zones.
+    bends: Bends,
     /// Pickup position the slide voices were last set to.
     pickup: f64,
     /// Sustain pedal per channel: how far it is down, 0..=1.
@@ -386,6 +403,7 @@ impl Instrument {
             voices: (0..count).map(|_| PianoVoice::new(modes, sample_rate)).collect(),
             slides: (0..count).map(|_| SlideVoice::new(sample_rate, &settings)).collect(),
             channels: [ChannelState::default(); 16],
+            bends: Bends::default(),
             pickup: settings.pickup_position,
             sustain: [0.0; 16],
             soft: [false; 16],
@@ -552,6 +570,7 @@ impl Instrument {
     pub fn reset(&mut self) {
         self.handle_event(Event::AllSoundOff);
         self.channels = [ChannelState::default(); 16];
+        self.bends = Bends::default();
         self.pressed.iter_mut().for_each(|keys| keys.fill(0));
         self.presses = 0;
         self.now = 0;
@@ -616,10 +635,14 @@ impl Instrument {
                 let channel = channel & 15;
                 let c = usize::from(channel);
                 self.channels[c] = ChannelState::default();
+                self.bends.reset_controllers(channel);
                 self.sustain[c] = 0.0;
                 self.soft[c] = false;
                 self.sostenuto(channel, false);
                 self.slides.iter_mut().filter(|v| v.strike.channel == channel).for_each(|v| v.poly_pressure = 0.0);
+            }
+            Event::RegisteredParameter { channel, controller, value } => {
+                self.bends.controller(channel, controller, value)
             }
             Event::AllNotesOff => {
                 self.sustain = [0.0; 16];
@@ -990,6 +1013,7 @@ impl Instrument {
         let pickup = self.pickup + (self.settings.pickup_position - self.pickup).clamp(-reach, reach);
         let move_pickup = self.pickup != pickup;
         self.pickup = pickup;
+        let channels: [ChannelState; 16] = std::array::from_fn(|c| self.channel_state(c as u8));
         for i in self.notes.live_in(slides) {
             let v = &mut self.slides[i];
             if v.sounding {
@@ -998,10 +1022,20 @@ impl Instrument {
                 if move_pickup {
                     v.set_pickup(pickup, len);
                 }
-                v.begin_block(&self.settings, &self.channels[usize::from(v.strike.channel)], len);
+                v.begin_block(&self.settings, &channels[usize::from(v.strike.channel)], len);
             }
         }
         self.check_ended();
+    }
+}
+
+impl Instrument {
+    /// What a slide voice reads from `channel`: its controllers, its pitch-bend sensitivity and
+    /// the bend of its MPE zone's master channel (semitones).
+    fn channel_state(&self, channel: u8) -> ChannelState {
+        let range = |c: u8| self.bends.range(c).unwrap_or(self.settings.bend_range);
+        let zone_bend = self.bends.master(channel).map_or(0.0, |m| self.channels[usize::from(m)].bend * range(m));
+        ChannelState { bend_range: self.bends.range(channel), zone_bend, ..self.channels[usize::from(channel & 15)] }
     }
 }
 

@@ -201,6 +201,11 @@ pub struct ChannelState {
     pub pressure: f64,
     /// Mod wheel, 0..=1.
     pub mod_wheel: f64,
+    /// Semitones of slide travel of a full bend, if the channel's pitch-bend sensitivity was set
+    /// (RPN 0, or an MPE zone); else the `bend_range` setting.
+    pub bend_range: Option<f64>,
+    /// Semitones the channel's MPE zone's master channel bends every note of the zone.
+    pub zone_bend: f64,
 }
 
 /// One slide voice.
@@ -503,10 +508,11 @@ impl SlideVoice {
     }
 
     /// The part of the slide position (semitones) that keys and bends ask for: the played key's
-    /// distance from the open string when following keys, plus the bend.
+    /// distance from the open string when following keys, plus the bends of its channel and of
+    /// its MPE zone's master channel.
     fn keys_and_bends(&self, settings: &Settings, channel: &ChannelState) -> f64 {
         let key = if settings.follow_key { f64::from(self.strike.key) - f64::from(OPEN_KEY) } else { 0.0 };
-        key + channel.bend * settings.bend_range
+        key + channel.bend * channel.bend_range.unwrap_or(settings.bend_range) + channel.zone_bend
     }
 
     /// The slide position (semitones above the open string): the glided keys and bends, plus the

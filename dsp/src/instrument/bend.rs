@@ -1,0 +1,166 @@
+//! How far a channel's pitch bend moves a slide: the registered parameters a controller sets
+//! (MIDI 1.0's RPN protocol) and the zones of MPE.
+//!
+//! - **Pitch-bend sensitivity** (RPN 0): CC101 = 0 and CC100 = 0 select it, CC6 sets its
+//!   semitones and CC38 its cents. A full bend on that channel then moves the slide that far;
+//!   a channel never told follows the `Bend range` setting.
+//! - **MPE configuration** (RPN 6, sent on MIDI channel 1 or 16, the zone's master channel): CC6
+//!   gives the number of member channels of the lower zone (channels 2 up) or of the upper zone
+//!   (channels 15 down), 0 ending the zone. As the MPE specification asks, configuring a zone sets
+//!   its master's sensitivity to ±2 semitones and its members' to ±48; the master's bend then
+//!   moves every note of the zone, on top of the note's own channel's bend.
+//! - Any other parameter, or none selected (the null parameter, 127/127), takes no data.
+//!   Reset-all-controllers (CC121) deselects the parameter and keeps the values (MIDI RP-015).
+
+/// The null parameter number (MSB, LSB): no parameter selected.
+const NULL: (u8, u8) = (127, 127);
+
+/// Pitch-bend sensitivity's parameter number.
+const SENSITIVITY: (u8, u8) = (0, 0);
+
+/// The MPE configuration message's parameter number.
+const MPE_CONFIGURATION: (u8, u8) = (0, 6);
+
+/// Sensitivity of an MPE zone's master channel and member channels once configured (semitones).
+pub const MPE_MASTER_RANGE: f64 = 2.0;
+/// See [`MPE_MASTER_RANGE`].
+pub const MPE_MEMBER_RANGE: f64 = 48.0;
+
+/// Each channel's selected parameter and bend range, and the MPE zones.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Bends {
+    /// The parameter number each channel's data entry sets.
+    selected: [(u8, u8); 16],
+    /// Semitones of a full bend on each channel; `None` follows the setting.
+    ranges: [Option<f64>; 16],
+    /// Member channels of the lower zone (master MIDI channel 1) and the upper (master 16).
+    members: [u8; 2],
+}
+
+impl Default for Bends {
+    fn default() -> Self {
+        Self { selected: [NULL; 16], ranges: [None; 16], members: [0; 2] }
+    }
+}
+
+impl Bends {
+    /// Controller `controller` of the RPN protocol (CC6, 38, 100 or 101) at `value` (0..=127) on
+    /// `channel` (0..=15). Other controllers are ignored.
+    pub(crate) fn controller(&mut self, channel: u8, controller: u8, value: u8) {
+        let c = usize::from(channel & 15);
+        let value = value & 127;
+        match (controller, self.selected[c]) {
+            (101, (_, lsb)) => self.selected[c] = (value, lsb),
+            (100, (msb, _)) => self.selected[c] = (msb, value),
+            (6, SENSITIVITY) => self.ranges[c] = Some(f64::from(value)),
+            (38, SENSITIVITY) => {
+                let semitones = self.ranges[c].map_or(0.0, f64::trunc);
+                self.ranges[c] = Some(semitones + f64::from(value) / 100.0);
+            }
+            (6, MPE_CONFIGURATION) if c == 0 || c == 15 => self.configure_zone(c, value.min(15)),
+            _ => {}
+        }
+    }
+
+    /// Reset-all-controllers on `channel`: no parameter selected; the values stay.
+    pub(crate) fn reset_controllers(&mut self, channel: u8) {
+        self.selected[usize::from(channel & 15)] = NULL;
+    }
+
+    /// The zone mastered by channel `master` (0 or 15) takes `count` member channels (0 ends it).
+    fn configure_zone(&mut self, master: usize, count: u8) {
+        let zone = usize::from(master == 15);
+        for c in Self::members_of(master, self.members[zone]) {
+            self.ranges[c] = None;
+        }
+        self.members[zone] = count;
+        self.ranges[master] = (count > 0).then_some(MPE_MASTER_RANGE);
+        for c in Self::members_of(master, count) {
+            self.ranges[c] = Some(MPE_MEMBER_RANGE);
+        }
+    }
+
+    /// The member channels of the zone mastered by `master` (0 or 15) with `count` members.
+    fn members_of(master: usize, count: u8) -> impl Iterator<Item = usize> {
+        (1..=usize::from(count)).map(move |i| if master == 0 { i } else { 15 - i })
+    }
+
+    /// Semitones of a full bend on `channel`, if a controller set it.
+    pub(crate) fn range(&self, channel: u8) -> Option<f64> {
+        self.ranges[usize::from(channel & 15)]
+    }
+
+    /// The master channel of the MPE zone `channel` is a member of, if any.
+    pub(crate) fn master(&self, channel: u8) -> Option<u8> {
+        let c = usize::from(channel & 15);
+        [0usize, 15]
+            .into_iter()
+            .find(|&m| Self::members_of(m, self.members[usize::from(m == 15)]).any(|i| i == c))
+            .map(|m| m as u8)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn send(bends: &mut Bends, channel: u8, messages: &[(u8, u8)]) {
+        for &(cc, value) in messages {
+            bends.controller(channel, cc, value);
+        }
+    }
+
+    #[test]
+    fn sensitivity_is_set_in_semitones_and_cents_on_its_channel_only() {
+        let mut b = Bends::default();
+        send(&mut b, 3, &[(101, 0), (100, 0), (6, 7), (38, 50)]);
+        assert_eq!(b.range(3), Some(7.5));
+        assert_eq!(b.range(2), None);
+        send(&mut b, 3, &[(6, 12)]);
+        assert_eq!(b.range(3), Some(12.0), "a new coarse value starts with no cents");
+    }
+
+    #[test]
+    fn data_without_the_sensitivity_selected_is_ignored() {
+        let mut b = Bends::default();
+        send(&mut b, 0, &[(6, 24)]);
+        assert_eq!(b.range(0), None, "nothing selected at first");
+        send(&mut b, 0, &[(101, 0), (100, 1), (6, 24)]);
+        assert_eq!(b.range(0), None, "fine tuning is another parameter");
+        send(&mut b, 0, &[(100, 0), (101, 127), (100, 127), (6, 24)]);
+        assert_eq!(b.range(0), None, "the null parameter takes no data");
+        send(&mut b, 0, &[(101, 0), (100, 0)]);
+        b.reset_controllers(0);
+        send(&mut b, 0, &[(6, 24)]);
+        assert_eq!(b.range(0), None, "reset-all-controllers deselects");
+    }
+
+    #[test]
+    fn reset_all_controllers_keeps_the_sensitivity() {
+        let mut b = Bends::default();
+        send(&mut b, 5, &[(101, 0), (100, 0), (6, 5)]);
+        b.reset_controllers(5);
+        assert_eq!(b.range(5), Some(5.0));
+    }
+
+    #[test]
+    fn an_mpe_configuration_sets_its_zones_ranges_and_members() {
+        let mut b = Bends::default();
+        send(&mut b, 0, &[(101, 0), (100, 6), (6, 3)]);
+        assert_eq!(b.range(0), Some(MPE_MASTER_RANGE));
+        assert_eq!((1..=3).map(|c| b.range(c)).collect::<Vec<_>>(), [Some(MPE_MEMBER_RANGE); 3]);
+        assert_eq!(b.range(4), None);
+        assert_eq!((b.master(2), b.master(4), b.master(0)), (Some(0), None, None));
+        send(&mut b, 15, &[(101, 0), (100, 6), (6, 2)]);
+        assert_eq!((b.master(14), b.master(13), b.master(12)), (Some(15), Some(15), None));
+        assert_eq!(b.range(13), Some(MPE_MEMBER_RANGE));
+        // Fewer members: the ones left out follow the setting again; 0 ends the zone.
+        send(&mut b, 0, &[(6, 1)]);
+        assert_eq!((b.range(1), b.range(2), b.master(2)), (Some(MPE_MEMBER_RANGE), None, None));
+        send(&mut b, 0, &[(6, 0)]);
+        assert_eq!((b.range(0), b.range(1), b.master(1)), (None, None, None));
+        // Only on a master channel.
+        send(&mut b, 4, &[(101, 0), (100, 6), (6, 3)]);
+        assert_eq!((b.range(5), b.master(5)), (None, None));
+    }
+}
