@@ -29,9 +29,10 @@
 //! Each note plucks a slide-guitar string ([`SlideVoice`]): the slide position follows the played
 //! key (legato notes glide, and letting go of the key played glides back to the latest key still
 //! held on its channel; the key played, struck again, plucks again) or the `slide_position`
-//! setting, plus pitch bend; the hand height comes
-//! from the setting or from the mod wheel, channel pressure or poly pressure. Bend and pressure
-//! are kept per channel, so with MPE (a channel per note) every voice glides on its own.
+//! setting, plus pitch bend (as far as the channel's pitch-bend sensitivity or MPE zone says,
+//! `bend`); the hand height comes from the setting or from the mod wheel, channel pressure or
+//! poly pressure. Bend and pressure are kept per channel, so with MPE (a channel per note) every
+//! voice glides on its own.
 //!
 //! # Per-note expression
 //!
@@ -1027,9 +1028,7 @@ impl Instrument {
         }
         self.check_ended();
     }
-}
 
-impl Instrument {
     /// What a slide voice reads from `channel`: its controllers, its pitch-bend sensitivity and
     /// the bend of its MPE zone's master channel (semitones).
     fn channel_state(&self, channel: u8) -> ChannelState {
