@@ -878,7 +878,12 @@ fn slide(settings: Settings) -> Instrument {
 /// the upper partials by their number; the period is measured on its running sum, the
 /// displacement, whose first partial leads as the string's does.
 fn slide_pitch(out: &[f32], expected: f64) -> f64 {
-    let signal: Vec<f64> = out[7_200..]
+    slide_pitch_in(out, 7_200..out.len(), expected)
+}
+
+/// [`slide_pitch`] over `range` of `out`.
+fn slide_pitch_in(out: &[f32], range: std::ops::Range<usize>, expected: f64) -> f64 {
+    let signal: Vec<f64> = out[range]
         .iter()
         .scan(0.0, |sum, &v| {
             *sum += f64::from(v);
@@ -888,17 +893,23 @@ fn slide_pitch(out: &[f32], expected: f64) -> f64 {
     fundamental(&signal, FS, 0.8 * expected, 1.2 * expected)
 }
 
+/// The pitch of slide key `key` following keys: that of its speaking length `L − x_o`, the key's
+/// pitch but for the open string's key, where the slide stays 5 mm from the nut.
+fn slide_key_pitch(key: u8) -> f64 {
+    let length = qsa_dsp::preset::slide_guitar().string.length;
+    let x_o = (length * (1.0 - key_frequency(45) / key_frequency(key))).max(0.005);
+    key_frequency(45) * length / (length - x_o)
+}
+
 /// Slide mode: the slide stops the string where the key says, so the note sounds at the pitch of
 /// its speaking length `L − x_o` within 1 % (the scene test measured +0.3 %): the key's pitch,
 /// except for the open string's key, where the slide stays 5 mm from the nut (+0.8 %).
 #[test]
 fn slide_follows_the_played_key() {
-    let length = qsa_dsp::preset::slide_guitar().string.length;
     for key in [45u8, 50, 52, 57, 64] {
         let mut s = slide(Settings::default());
         let out = play(&mut s, &vec![(0, on(key, 0.8))], 24_000, || 256);
-        let x_o = (length * (1.0 - key_frequency(45) / key_frequency(key))).max(0.005);
-        let expected = key_frequency(45) * length / (length - x_o);
+        let expected = slide_key_pitch(key);
         let f = slide_pitch(&out, expected);
         println!("slide key {key}: {f:.2} Hz (expected {expected:.2})");
         assert!((f / expected - 1.0).abs() < 0.01, "key {key}: {f} Hz vs {expected} Hz");
@@ -927,18 +938,6 @@ fn slide_position_bend_and_lift() {
     assert!((f / 110.0 - 1.0).abs() < 0.01, "lifted slide: open string {f} Hz");
 }
 
-/// [`slide_pitch`] over `range` of `out`.
-fn slide_pitch_in(out: &[f32], range: std::ops::Range<usize>, expected: f64) -> f64 {
-    let signal: Vec<f64> = out[range]
-        .iter()
-        .scan(0.0, |sum, &v| {
-            *sum += f64::from(v);
-            Some(*sum)
-        })
-        .collect();
-    fundamental(&signal, FS, 0.8 * expected, 1.2 * expected)
-}
-
 /// Following keys, a slide voice on one channel plays legato as a monophonic keyboard does: of
 /// A2, D3 and E3 pressed in turn and held, letting go of E3 glides back to D3, the latest key
 /// still held (not the lowest), and letting go of D3 to A2, each without a pluck, the note sounding
@@ -955,14 +954,10 @@ fn letting_go_of_a_legato_key_glides_back_to_the_latest_key_still_held() {
         (57_600, off(45)),
     ];
     let out = play(&mut slide(Settings::default()), &score, 72_000, || 64);
-    let length = qsa_dsp::preset::slide_guitar().string.length;
-    let pitch = |key: u8| {
-        let x_o = (length * (1.0 - key_frequency(45) / key_frequency(key))).max(0.005);
-        key_frequency(45) * length / (length - x_o)
-    };
     // From 0.15 s after each key takes over to the next event.
     for (window, key) in [(21_600..28_800, 52u8), (36_000..43_200, 50), (50_400..57_600, 45)] {
-        let (f, expected) = (slide_pitch_in(&out, window.clone(), pitch(key)), pitch(key));
+        let expected = slide_key_pitch(key);
+        let f = slide_pitch_in(&out, window.clone(), expected);
         println!("{window:?}: {f:.2} Hz, key {key} at {expected:.2} Hz, rms {:.2e}", rms(&out[window.clone()]));
         assert!((f / expected - 1.0).abs() < 0.01, "{window:?}: {f:.2} Hz, not key {key}'s {expected:.2} Hz");
     }
