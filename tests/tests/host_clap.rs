@@ -166,9 +166,8 @@ fn core_notes(bundle: &Path) {
 
 /// 10,000 random MIDI and note events in one 8192-sample block (every status byte, data bytes
 /// beyond 127, all channels, keys 0..=127, velocity 0, stray note-offs, CLAP note-offs and chokes
-/// with wildcards, pedals, all-notes-off),
-/// in both modes: every sample finite, and CC120 (all sound off) afterwards gives exact silence,
-/// so the instrument is still under control.
+/// with wildcards, pedals, all-notes-off), in both modes: every sample finite, and CC120 (all
+/// sound off) afterwards gives exact silence, so the instrument is still under control.
 fn core_random_events(bundle: &Path) {
     for (mode, seed) in [(0.0, 11u64), (1.0, 12)] {
         let mut p = Plugin::at_48k(bundle, &[param("mode", mode)]);
@@ -1102,7 +1101,8 @@ fn a_clap_choke_ends_its_notes_under_the_pedal_and_reports_their_ends() {
     let choked = render(&score);
     println!("note ends: {:?}", choked.note_ends);
     assert_eq!(choked.note_ends.len(), 3, "{:?}", choked.note_ends);
-    // The fade (240 samples at 48 kHz) in whole blocks from the next block, and the block that finds it over.
+    // The fade (240 samples at 48 kHz) in whole blocks from the next block, and the block that
+    // finds it over.
     let fade = (qsa_dsp::instrument::STEAL_TIME * 48_000.0).ceil() as usize;
     for (&(t, _, (id, channel, key)), &(at, end_id, end_channel, end_key)) in chokes.iter().zip(&choked.note_ends) {
         let by = t.div_ceil(64) * 64 + fade.div_ceil(64) * 64 + 64;

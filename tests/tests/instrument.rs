@@ -775,8 +775,9 @@ fn output_does_not_depend_on_host_buffers() {
 }
 
 /// Garbage in one block: 10,000 random events (any channel, keys 0 and 127, velocity 0, NaN,
-/// note-offs without note-ons, releases and chokes of any notes, the three pedals), NaN and infinite settings: no panic, finite output, and
-/// no allocation in `handle`, `set_settings` or `process`.
+/// note-offs without note-ons, releases and chokes of any notes, the three pedals), NaN and
+/// infinite settings: no panic, finite output, and no allocation in `handle`, `set_settings` or
+/// `process`.
 #[test]
 fn garbage_input_is_safe_and_allocation_free() {
     let mut p = piano(16);

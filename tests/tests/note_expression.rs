@@ -243,8 +243,8 @@ fn per_note_events_are_buffer_invariant() {
 
 /// Every note's end is reported once, with its voice id, channel and key: a released slide note
 /// when its string falls silent (its key let go after the key it glided from), a note whose voice
-/// a legato glide takes over at once, and a piano
-/// note struck again on its string at the new strike.
+/// a legato glide takes over at once, and a piano note struck again on its string at the new
+/// strike.
 #[test]
 fn ended_notes_are_reported_once() {
     let mut s = slide(Settings::default());

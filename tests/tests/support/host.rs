@@ -2,11 +2,10 @@
 //! release bundle's path, a host that loads, activates and processes the plugin on an audio
 //! thread, parameter ids by their documented string ids, and timed note, MIDI and parameter
 //! events, CLAP note-offs and chokes with wildcards, note expressions and polyphonic modulation;
-//! renders collect the note-end events
-//! the plugin sends. The host renders offline (CLAP's render extension), as a DAW exporting does:
-//! the tests compare samples across buffer sizes and with the offline renderer, and the plugin's
-//! overload guard, which sheds voices when real-time processing cannot keep up, must not act on
-//! how fast the test machine is.
+//! renders collect the note-end events the plugin sends. The host renders offline (CLAP's render
+//! extension), as a DAW exporting does: the tests compare samples across buffer sizes and with the
+//! offline renderer, and the plugin's overload guard, which sheds voices when real-time processing
+//! cannot keep up, must not act on how fast the test machine is.
 //!
 //! Used as `#[path = "support/host.rs"] mod host;` next to `#[path = "support/bundle.rs"] mod
 //! bundle;` (this module finds the bundle through `crate::bundle`).
