@@ -92,11 +92,14 @@ impl Bends {
 
     /// The master channel of the MPE zone `channel` is a member of, if any.
     pub(crate) fn master(&self, channel: u8) -> Option<u8> {
-        let c = usize::from(channel & 15);
-        [0usize, 15]
-            .into_iter()
-            .find(|&m| Self::members_of(m, self.members[usize::from(m == 15)]).any(|i| i == c))
-            .map(|m| m as u8)
+        let (c, [lower, upper]) = (channel & 15, self.members);
+        if (1..=lower).contains(&c) {
+            Some(0)
+        } else if (15 - upper..15).contains(&c) {
+            Some(15)
+        } else {
+            None
+        }
     }
 }
 

@@ -1014,17 +1014,18 @@ impl Instrument {
         let pickup = self.pickup + (self.settings.pickup_position - self.pickup).clamp(-reach, reach);
         let move_pickup = self.pickup != pickup;
         self.pickup = pickup;
-        let channels: [ChannelState; 16] = std::array::from_fn(|c| self.channel_state(c as u8));
         for i in self.notes.live_in(slides) {
-            let v = &mut self.slides[i];
-            if v.sounding {
-                // Only the voices sounding follow the pickup; a silent one takes its place when
-                // plucked (`slide_on`), so that the idle voices cost nothing while it moves.
-                if move_pickup {
-                    v.set_pickup(pickup, len);
-                }
-                v.begin_block(&self.settings, &channels[usize::from(v.strike.channel)], len);
+            if !self.slides[i].sounding {
+                continue;
             }
+            let channel = self.channel_state(self.slides[i].strike.channel);
+            let v = &mut self.slides[i];
+            // Only the voices sounding follow the pickup; a silent one takes its place when
+            // plucked (`slide_on`), so that the idle voices cost nothing while it moves.
+            if move_pickup {
+                v.set_pickup(pickup, len);
+            }
+            v.begin_block(&self.settings, &channel, len);
         }
         self.check_ended();
     }
