@@ -722,11 +722,8 @@ impl Instrument {
                 }
             }
         }
-        let (_, slides) = self.pools();
-        for note in self.notes.live_in(0..slides.end).filter_map(|i| self.notes.get(i)) {
-            if target.matches(&note) {
-                keys[usize::from(note.channel)] |= 1 << note.key;
-            }
+        for (_, note) in self.notes.addressed(target) {
+            keys[usize::from(note.channel)] |= 1 << note.key;
         }
         keys
     }
@@ -734,16 +731,12 @@ impl Instrument {
     /// Fade out the voices of the notes `target` addresses and let them fall silent
     /// ([`Event::Choke`]).
     fn choke(&mut self, target: NoteTarget) {
-        let fs = self.sample_rate;
-        let (pianos, slides) = self.pools();
-        for i in self.notes.live_in(0..slides.end) {
-            if !self.notes.get(i).is_some_and(|note| target.matches(&note)) {
-                continue;
-            }
+        let (fs, pianos) = (self.sample_rate, self.voices.len());
+        for (i, _) in self.notes.addressed(target) {
             match self.voices.get_mut(i) {
                 Some(voice) => voice.choke(fs),
                 None => {
-                    self.slides[i - pianos.end].shed(fs);
+                    self.slides[i - pianos].shed(fs);
                 }
             }
         }
@@ -752,8 +745,8 @@ impl Instrument {
     /// Apply `f` (with the settings in force) to the slide voices playing the addressed notes.
     fn each_slide(&mut self, target: NoteTarget, mut f: impl FnMut(&mut SlideVoice, &Settings)) {
         let offset = self.voices.len();
-        for (i, v) in self.slides.iter_mut().enumerate() {
-            if self.notes.get(offset + i).is_some_and(|n| target.matches(&n)) {
+        for (i, _) in self.notes.addressed(target) {
+            if let Some(v) = i.checked_sub(offset).and_then(|j| self.slides.get_mut(j)) {
                 f(v, &self.settings);
             }
         }

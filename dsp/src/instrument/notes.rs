@@ -182,6 +182,11 @@ impl NoteBook {
             .map(move |index| index - start)
     }
 
+    /// The voices (flat indices, in order) whose live notes `target` addresses, with their notes.
+    pub(crate) fn addressed(&self, target: NoteTarget) -> impl Iterator<Item = (usize, Note)> + '_ {
+        self.live_in(0..self.live.len()).filter_map(move |i| self.get(i).filter(|n| target.matches(n)).map(|n| (i, n)))
+    }
+
     /// Queue an ended note, unless the queue is full. Never allocates.
     fn push(&mut self, note: Note, at: u64) {
         if self.ended.len() < self.ended.capacity() {
