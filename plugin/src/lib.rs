@@ -46,7 +46,7 @@ use std::time::Instant;
 use nice_plug::midi::{Channel, Key, VoiceID};
 use nice_plug::prelude::*;
 use nice_plug_egui::{EguiEditor, EguiEditorState};
-use qsa_dsp::instrument::{Event, Instrument, Note, NoteTarget};
+use qsa_dsp::instrument::{Event, Instrument, Note, NoteTarget, bend_from_normalised};
 
 use meter::{Shared, Tap};
 use overload::OverloadGuard;
@@ -126,7 +126,9 @@ fn engine_event<S>(event: &NoteEvent<S>) -> Option<Event> {
             Event::NoteModulation { note: NoteTarget::voice(voice_id), param, offset }
         }
         NoteEvent::MidiChannelPressure { channel, pressure, .. } => Event::ChannelPressure { channel, value: pressure },
-        NoteEvent::MidiPitchBend { channel, value, .. } => Event::PitchBend { channel, value: 2.0 * value - 1.0 },
+        NoteEvent::MidiPitchBend { channel, value, .. } => {
+            Event::PitchBend { channel, value: bend_from_normalised(value) }
+        }
         NoteEvent::MidiCC { channel, cc, value, .. } => match cc {
             1 => Event::ModWheel { channel, value },
             6 | 38 | 100 | 101 => Event::RegisteredParameter {
@@ -337,6 +339,8 @@ mod tests {
                 (38, 50),
                 (100, 6),
                 (101, 127),
+                (0, 64),
+                (127, 63),
             ] {
                 let via_host = NoteEvent::<()>::from_midi(0, &[status, d1, d2]).ok().and_then(|e| engine_event(&e));
                 let offline = qsa_dsp::instrument::event_from_midi(status, d1, d2);

@@ -5,6 +5,23 @@
 
 use crate::instrument::Event;
 
+/// The pitch wheel's largest 14-bit value.
+const BEND_MAX: f32 = 16383.0;
+/// The pitch wheel at rest: 0x2000.
+const BEND_CENTRE: f32 = 8192.0;
+
+/// The engine's bend (−1..=1) for a pitch-wheel value as the framework hands it on, `raw / 16383`.
+///
+/// The wheel at rest (8192) is exactly no bend, and either end is the whole bend range: the lower
+/// half is scaled by 8192 steps, the upper by the 8191 it has (the min–centre–max scaling by which
+/// MIDI 2.0 widens a MIDI 1.0 value). A straight line through 0..=16383 would put the wheel at
+/// rest 6.1e-5 of the range sharp: 0.3 cents on an MPE member's ±48 semitones. Not a number passes
+/// on as it is, for the engine to treat as any other bad value.
+pub fn bend_from_normalised(normalised: f32) -> f32 {
+    let steps = (normalised * BEND_MAX).round() - BEND_CENTRE;
+    steps / if steps < 0.0 { BEND_CENTRE } else { BEND_MAX - BEND_CENTRE }
+}
+
 /// The engine event for a channel message `status, data1, data2`, if the engine plays it
 /// (notes, poly and channel pressure, pitch bend, CC1, the registered-parameter controllers CC6,
 /// CC38, CC100 and CC101, CC64, CC66, CC67, CC120, CC121, CC123).
@@ -19,8 +36,8 @@ pub fn event_from_midi(status: u8, data1: u8, data2: u8) -> Option<Event> {
         0xa0 => Event::PolyPressure { channel, key, value: unit(value) },
         0xd0 => Event::ChannelPressure { channel, value: unit(key) },
         0xe0 => {
-            let normalised = (u16::from(key) + (u16::from(value) << 7)) as f32 / ((1 << 14) - 1) as f32;
-            Event::PitchBend { channel, value: 2.0 * normalised - 1.0 }
+            let normalised = (u16::from(key) + (u16::from(value) << 7)) as f32 / BEND_MAX;
+            Event::PitchBend { channel, value: bend_from_normalised(normalised) }
         }
         0xb0 => match key {
             1 => Event::ModWheel { channel, value: unit(value) },
@@ -35,4 +52,38 @@ pub fn event_from_midi(status: u8, data1: u8, data2: u8) -> Option<Event> {
         },
         _ => return None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bend(raw: u16) -> f32 {
+        match event_from_midi(0xe0, (raw & 0x7f) as u8, (raw >> 7) as u8) {
+            Some(Event::PitchBend { value, .. }) => value,
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn the_pitch_wheel_at_rest_bends_nothing_and_its_ends_bend_the_whole_range() {
+        assert_eq!(bend(8192), 0.0);
+        assert_eq!(bend(0), -1.0);
+        assert_eq!(bend(16383), 1.0);
+        assert_eq!(bend(4096), -0.5);
+        // One step either side of rest is one step of its half.
+        assert_eq!(bend(8193), 1.0 / 8191.0);
+        assert_eq!(bend(8191), -1.0 / 8192.0);
+    }
+
+    #[test]
+    fn the_pitch_wheel_bends_further_at_every_step() {
+        let mut last = bend(0);
+        for raw in 1..=16383 {
+            let now = bend(raw);
+            assert!(now > last, "{raw}: {now} after {last}");
+            last = now;
+        }
+        assert!(bend_from_normalised(f32::NAN).is_nan());
+    }
 }

@@ -94,7 +94,7 @@ mod solvers;
 mod voicing;
 
 pub use bend::{MPE_MASTER_RANGE, MPE_MEMBER_RANGE};
-pub use midi::event_from_midi;
+pub use midi::{bend_from_normalised, event_from_midi};
 pub use monitor::{Monitor, SHAPE_POINTS};
 pub use notes::{EndedNote, MAX_TUNING, Note, NoteParam, NoteTarget};
 pub use output::{CEILING, LOOKAHEAD, OutputStage, RELEASE, lookahead_samples};
