@@ -48,8 +48,9 @@
 //!
 //! The pool is sized once ([`Instrument::new`]); nothing allocates after that. A note takes a free
 //! voice or, when none is free, steals the least audible one (the quietest output over its latest
-//! block): that voice fades out over 5 ms at a decay rate of 2000/s before its new note starts, so
-//! stealing does not click. When every voice fades already, the piano voice whose waiting note
+//! window of 20 ms, a note not heard over a whole window yet counting as the loudest): that voice
+//! fades out over 5 ms at a decay rate of 2000/s before its new note starts, so stealing does not
+//! click. When every voice fades already, the piano voice whose waiting note
 //! came first gives it up to the new note, the newest notes winning. A piano voice is released
 //! when its string's energy falls 140 dB below its strike's. A host's choke ([`Event::Choke`])
 //! fades the notes it addresses out the same way, whatever the pedals, and ends them.
@@ -828,12 +829,13 @@ impl Instrument {
             self.voices[i].play_with(strike, &self.settings, now, Some((self.partners.ready(), dampers)));
             return Some(i);
         }
-        // Steal the least audible voice: the quietest output over its latest block. When every
-        // voice is fading already, the one whose next note came first (or that has none) gives
-        // it up to this note, the newest: that note ends unheard.
+        // Steal the least audible voice: the quietest over its latest window, the notes not
+        // heard yet last and the oldest of them first. When every voice is fading already, the
+        // one whose next note came first (or that has none) gives it up to this note, the newest:
+        // that note ends unheard.
         let victim = (self.voices.iter().enumerate())
             .filter(|(_, v)| !v.fading())
-            .min_by(|(_, a), (_, b)| a.loudness().total_cmp(&b.loudness()))
+            .min_by(|(_, a), (_, b)| a.loudness().total_cmp(&b.loudness()).then(a.started.cmp(&b.started)))
             .or_else(|| self.voices.iter().enumerate().min_by_key(|(_, v)| v.started))
             .map(|(i, _)| i);
         if let Some(i) = victim {

@@ -51,7 +51,11 @@
 //!   rates, so a damper landing would make it jump although the string has not moved. It is
 //!   weighed every control block, or every [`ENERGY_INTERVAL`] samples when the blocks are shorter.
 //! - **Stealing.** With every voice busy, a new note takes the least audible voice, judged by the
-//!   mean square of its output over its latest block ([`PianoVoice::loudness`]). The stolen voice
+//!   mean square of its output over its latest window of at least [`LOUDNESS_WINDOW`], closed at a
+//!   control block's start so that it does not depend on how the host cuts its buffers
+//!   ([`PianoVoice::loudness`]). A note struck since its voice's latest window closed has not been
+//!   heard yet and counts as the loudest: the notes of a chord never take one another's voices
+//!   while older notes sound, nor does a note struck just after another. The stolen voice
 //!   fades at [`STEAL_RATE`] (a decay rate added to every mode, again without touching the state)
 //!   for [`STEAL_TIME`], then its new note starts on a fresh string.
 //! - **Shedding.** When the host's audio thread cannot keep up, the plugin has the least audible
@@ -135,6 +139,51 @@ pub const STEAL_RATE: f64 = 2000.0;
 
 /// How long a stolen voice fades before its new note starts (s).
 pub const STEAL_TIME: f64 = 0.005;
+
+/// The shortest window over which a voice's loudness is measured (s): longer than the hammer's
+/// contact on every key (about 4 ms in the bass, Askenfelt & Jansson, JASA 88(1) 52–63, 1990; at
+/// most 5.8 ms here, at C1: docs/physics.md §8.4), so that a note is heard past its strike before
+/// it can be stolen, and than a period of the fundamental of every key from G1 (49 Hz) up, so
+/// that a low note is not judged by where in its period a window falls.
+pub const LOUDNESS_WINDOW: f64 = 0.020;
+
+/// How loud a voice is, for stealing and shedding: the mean square of its output (bridge force,
+/// N²) over its latest window of at least [`LOUDNESS_WINDOW`]. Windows close at control blocks'
+/// starts, which are fixed in time, and a note is struck at its event's sample: the measure does
+/// not depend on how the host cuts its buffers.
+#[derive(Debug, Clone, Copy)]
+struct Heard {
+    /// Sum of the squared output since the window opened (N²).
+    sum: f64,
+    /// Samples since the window opened.
+    samples: usize,
+    /// Mean square over the latest closed window (N²); infinite while the note struck latest
+    /// has not been heard over a whole window.
+    loudness: f64,
+}
+
+impl Heard {
+    const SILENT: Self = Self { sum: 0.0, samples: 0, loudness: 0.0 };
+
+    /// A note is struck: it is not heard yet.
+    fn struck(&mut self) {
+        *self = Self { loudness: f64::INFINITY, ..Self::SILENT };
+    }
+
+    fn add(&mut self, out: &[f64]) {
+        self.sum += out.iter().map(|x| x * x).sum::<f64>();
+        self.samples += out.len();
+    }
+
+    /// At a control block's start: close the window if it spans `window` samples.
+    fn close(&mut self, window: usize) {
+        if self.samples >= window {
+            self.loudness = self.sum / self.samples as f64;
+            self.sum = 0.0;
+            self.samples = 0;
+        }
+    }
+}
 
 /// Length of a damper's felt pad along the string (m), from the strike point towards the bridge.
 pub const DAMPER_WIDTH: f64 = 0.025;
@@ -431,8 +480,8 @@ pub struct PianoVoice {
     pending_released: bool,
     /// Fading out with no note to follow (shed to lighten the load).
     shedding: bool,
-    /// Mean square of the output over the latest rendered block (N²).
-    loudness: f64,
+    /// How loud it has been lately.
+    heard: Heard,
     /// The guard's fade-out, once the voice has been caught over its bound.
     guard_fade: GuardFade,
     /// How many times the guard has silenced this voice.
@@ -483,7 +532,7 @@ impl PianoVoice {
             pending: None,
             pending_released: false,
             shedding: false,
-            loudness: 0.0,
+            heard: Heard::SILENT,
             guard_fade: GuardFade::default(),
             trips: 0,
         }
@@ -537,7 +586,6 @@ impl PianoVoice {
             if !self.tune(strike.key, settings, position, partners) {
                 return;
             }
-            self.loudness = 0.0;
         }
         let fs = self.core.string().sample_rate();
         let velocity = hammer_speed(strike.velocity);
@@ -568,6 +616,7 @@ impl PianoVoice {
         self.sounding = true;
         self.key_down = true;
         self.started = now;
+        self.heard.struck();
     }
 
     /// Tune the strings to `key` under `settings`, struck at `position` (fraction of the length),
@@ -807,7 +856,7 @@ impl PianoVoice {
         self.shedding = false;
         self.fade_left = 0;
         self.damper = 0.0;
-        self.loudness = 0.0;
+        self.heard = Heard::SILENT;
     }
 
     /// Whether the hammer touches the string (or is about to) in a sounding voice.
@@ -825,10 +874,11 @@ impl PianoVoice {
         self.core.energy()
     }
 
-    /// How loud the voice is now: the mean square of its output (bridge force, N²) over its latest
-    /// rendered block; what stealing ranks voices by.
+    /// How loud the voice is now, what stealing and shedding rank voices by: the mean square of
+    /// its output (bridge force, N²) over its latest window (see [`LOUDNESS_WINDOW`]); infinite
+    /// for a note struck since that window closed, not heard yet.
     pub fn loudness(&self) -> f64 {
-        self.loudness
+        self.heard.loudness
     }
 
     /// Work at a control-block boundary: start a pending note, bring in the partners whose
@@ -853,6 +903,7 @@ impl PianoVoice {
             return;
         }
         let fs = self.core.string().sample_rate();
+        self.heard.close((LOUDNESS_WINDOW * fs).ceil() as usize);
         if self.shedding && self.fade_left == 0 {
             self.silence();
             return;
@@ -1021,10 +1072,8 @@ impl PianoVoice {
             Method::Imp => self.core.process_shared(&mut s.imp, out, shared),
             Method::Exp => self.core.process_shared(&mut s.exp, out, shared),
         }
-        if !out.is_empty() {
-            self.loudness = out.iter().map(|x| x * x).sum::<f64>() / out.len() as f64;
-        }
-        if !self.loudness.is_finite() {
+        self.heard.add(out);
+        if !self.heard.sum.is_finite() {
             out.fill(0.0);
             self.trip();
         } else {
