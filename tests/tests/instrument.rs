@@ -831,6 +831,49 @@ fn which_voice_a_note_steals_does_not_depend_on_host_buffers() {
     }
 }
 
+/// A note struck at the sample a setting changes takes the new value, wherever the control blocks
+/// fall: the mode switched from slide to piano, the hammer's hardness, the solver, and in slide
+/// mode the slide's mass and the guitar, each changed with a note struck 1,000 samples in (blocks
+/// of 64 and 100, so mid-block), render to the bit as with the new value from the start. With the
+/// block's value instead, every case differs from it (checked below), the mode switch by
+/// striking a slide note where a piano note was asked for.
+#[test]
+fn a_note_struck_at_the_sample_a_setting_changes_takes_the_new_value() {
+    let slide = Settings { mode: Mode::Slide, ..Default::default() };
+    let cases = [
+        ("mode", slide, Settings::default()),
+        ("hardness", Settings::default(), Settings { hardness: 2.5, ..Default::default() }),
+        ("solver", Settings::default(), Settings { method: Method::Exp, ..Default::default() }),
+        ("slide mass", slide, Settings { slide_mass: slide.slide_mass * 4.0, ..slide }),
+        ("guitar", slide, Settings { slide_body: SlideBody::Acoustic, ..slide }),
+    ];
+    let (at, samples) = (1_000, 9_600);
+    let render = |before: Settings, after: Settings, block: usize| {
+        let mut p = Instrument::new(FS, 4, Settings { block, ..before });
+        let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
+        p.process(&mut left[..at], &mut right[..at]);
+        p.set_settings(&Settings { block, ..after });
+        p.handle(on(50, 0.8));
+        p.process(&mut left[at..], &mut right[at..]);
+        left.into_iter().chain(right).collect::<Vec<f32>>()
+    };
+    for (what, before, after) in cases {
+        for block in [64, 100] {
+            let reference = render(after, after, block);
+            let changed = render(before, after, block);
+            assert!(rms(&reference) > 1e-4, "{what}: the note sounds");
+            assert!(
+                changed.iter().zip(&reference).all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{what}, blocks of {block}"
+            );
+            let old = render(before, before, block);
+            let differs = old.iter().zip(&reference).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+            println!("{what}, blocks of {block}: the old value's note differs by {differs:.2e}");
+            assert!(differs > 1e-5, "{what}: the old value's note is another note");
+        }
+    }
+}
+
 /// Garbage in one block: 10,000 random events (any channel, keys 0 and 127, velocity 0, NaN,
 /// note-offs without note-ons, releases and chokes of any notes, the three pedals), NaN and
 /// infinite settings: no panic, finite output, and no allocation in `handle`, `set_settings` or

@@ -544,8 +544,9 @@ impl Instrument {
             + self.slides.iter().filter(|v| v.sounding && v.in_contact()).count()
     }
 
-    /// Set what the host controls; takes effect at the next control block. Values out of range
-    /// are clamped and NaN replaced by the default.
+    /// Set what the host controls; takes effect at the next control block, and at once for the
+    /// notes struck from now on (the mode, and what a note keeps from its strike). Values out of
+    /// range are clamped and NaN replaced by the default.
     pub fn set_settings(&mut self, settings: &Settings) {
         self.requested = settings.sanitized();
     }
@@ -679,7 +680,10 @@ impl Instrument {
         self.presses += 1;
         self.pressed[usize::from(strike.channel)][usize::from(strike.key)] = self.presses;
         let note = Note { voice, channel: strike.channel, key: strike.key };
-        let index = match self.settings.mode {
+        // A note takes the settings of its own sample, the latest the host set, though the
+        // controls they steer go on at the control block's: a mode, a hardness or a slide's mass
+        // automated to change with a note is that note's, wherever the blocks fall.
+        let index = match self.requested.mode {
             Mode::Piano => self.note_on(strike),
             Mode::Slide => self.slide_on(strike).map(|i| self.voices.len() + i),
         };
@@ -801,17 +805,25 @@ impl Instrument {
         self.keys_down.iter().fold(0, |held, keys| held | keys)
     }
 
-    /// Strike `strike` on a piano voice; the index of the voice that took it.
+    /// The settings a note takes at its own sample: the latest the host set, in the control block
+    /// under way.
+    fn note_settings(&self) -> Settings {
+        Settings { block: self.settings.block, ..self.requested }
+    }
+
+    /// Strike `strike` on a piano voice under the latest settings; the index of the voice that
+    /// took it.
     fn note_on(&mut self, strike: Strike) -> Option<usize> {
-        let now = self.now;
+        let (now, settings) = (self.now, self.note_settings());
         let dampers = self.dampers(strike.channel);
+        self.partners.request(&settings);
         // The same key again: strike the same string.
         if let Some(i) = self.voices.iter().position(|v| v.upcoming_key() == Some(strike.key)) {
             if self.voices[i].fading() {
                 self.voices[i].steal(strike, self.sample_rate, now);
             } else {
-                Self::meet_elsewhere(&mut self.voices, i, strike.key, &self.settings);
-                self.voices[i].play_with(strike, &self.settings, now, Some((self.partners.ready(), dampers)));
+                Self::meet_elsewhere(&mut self.voices, i, strike.key, &settings);
+                self.voices[i].play_with(strike, &settings, now, Some((self.partners.ready(), dampers)));
             }
             return Some(i);
         }
@@ -825,8 +837,8 @@ impl Instrument {
             Some(i)
         };
         if let Some(i) = last_played.or_else(oldest) {
-            Self::meet_elsewhere(&mut self.voices, i, strike.key, &self.settings);
-            self.voices[i].play_with(strike, &self.settings, now, Some((self.partners.ready(), dampers)));
+            Self::meet_elsewhere(&mut self.voices, i, strike.key, &settings);
+            self.voices[i].play_with(strike, &settings, now, Some((self.partners.ready(), dampers)));
             return Some(i);
         }
         // Steal the least audible voice: the quietest over its latest window, the notes not
@@ -856,10 +868,10 @@ impl Instrument {
         voices[index].meet(elsewhere);
     }
 
-    /// Pluck `strike` on a slide voice; the index of the voice that took it.
+    /// Pluck `strike` on a slide voice under the latest settings; the index of the voice that
+    /// took it.
     fn slide_on(&mut self, strike: Strike) -> Option<usize> {
-        let now = self.now;
-        let settings = self.settings;
+        let (now, settings) = (self.now, self.note_settings());
         // Following keys, a new key while another is held on the channel glides there (legato).
         if settings.follow_key
             && let Some(i) =
