@@ -441,6 +441,26 @@ fn host_block_sizes_give_identical_samples() {
     assert_eq!(bit_identical(&audio, &reference), None, "random blocks: first differing sample");
 }
 
+/// A note struck in the sample its automation changes takes the new value through the plugin:
+/// the mode switched to slide, and in piano mode the hardness raised, each in the sample of a note
+/// at 1,000 (within a control block), render to the bit as with the new value set at sample 0,
+/// and not as the old value does.
+#[test]
+fn a_note_struck_with_an_automation_step_takes_the_new_value() {
+    let bundle = release_bundle();
+    let samples = 9_600;
+    for (id, old, new) in [("mode", 0.0, 1.0), ("hard", 0.3, 0.9)] {
+        let render = |at: usize, value: f64| {
+            let score = vec![(0, param(id, old)), (at, param(id, value)), (1_000, Ev::On(0, 50, 0.8))];
+            Plugin::at_48k(&bundle, &[]).render_blocks(&score, samples, 512)
+        };
+        let reference = render(0, new);
+        assert!(reference.peak() > AUDIBLE, "{id}: the note sounds");
+        assert_eq!(bit_identical(&render(1_000, new), &reference), None, "{id}: first differing sample");
+        assert!(bit_identical(&render(1_000, old), &reference).is_some(), "{id}: the old value gives another note");
+    }
+}
+
 /// Blocks of every size from 1 to 8192 samples (a sequence mixing 1, primes, powers of two and
 /// the maximum) give the same samples as 8192-sample blocks.
 #[test]
