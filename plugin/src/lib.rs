@@ -64,7 +64,7 @@ pub struct QsaStrings {
     tap: Tap,
     /// Sheds voices when the audio thread cannot keep up ([`overload`]).
     guard: OverloadGuard,
-    /// Whether the host processes in real time (the guard acts only then).
+    /// Whether the host waits for each buffer (the guard acts only then; [`keeps_time`]).
     realtime: bool,
 }
 
@@ -213,7 +213,7 @@ impl Plugin for QsaStrings {
             context.set_latency_samples(engine.latency() as u32);
         }
         self.tap.set_sample_rate(fs);
-        self.realtime = buffer_config.process_mode == ProcessMode::Realtime;
+        self.realtime = keeps_time(buffer_config.process_mode);
         self.guard.reset();
         true
     }
@@ -312,9 +312,24 @@ impl Vst3Plugin for QsaStrings {
 nice_export_clap!(QsaStrings);
 nice_export_vst3!(QsaStrings);
 
+/// Whether the host waits for each buffer in `mode`, so that a call running late costs it audio
+/// and the overload guard may shed voices: in real time, and when it processes ahead of time
+/// (VST3's prefetch, Cubase's ASIO-Guard), which buys slack but underruns all the same when the
+/// load stays above a buffer's duration. Only offline rendering waits as long as it takes.
+fn keeps_time(mode: ProcessMode) -> bool {
+    mode != ProcessMode::Offline
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_guard_watches_real_time_and_prefetch_processing_and_never_offline_rendering() {
+        assert!(keeps_time(ProcessMode::Realtime));
+        assert!(keeps_time(ProcessMode::Buffered));
+        assert!(!keeps_time(ProcessMode::Offline));
+    }
 
     /// Every channel message becomes the same engine event through the framework's parser and
     /// this plugin's mapping as through the offline renderer's `event_from_midi`.
