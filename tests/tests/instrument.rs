@@ -10,7 +10,9 @@ use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use qsa_dsp::contact::Method;
-use qsa_dsp::instrument::{Event, Instrument, Mode, NoteParam, NoteTarget, STEAL_TIME, Settings, SlideBody};
+use qsa_dsp::instrument::{
+    Event, HandSource, Instrument, Mode, NoteParam, NoteTarget, STEAL_TIME, Settings, SlideBody,
+};
 use qsa_dsp::preset::key_frequency;
 use qsa_tests::{CLICK_DB, click_strength, fundamental, seeded_rng, spectral_peak};
 use rand::RngExt;
@@ -420,9 +422,10 @@ fn a_note_struck_while_every_voice_fades_takes_the_voice_whose_next_note_came_fi
 /// while fading already; note-offs, chokes and releases by key, channel and id; the three
 /// pedals; reset-all-controllers, all-notes-off and all-sound-off), in both modes and in
 /// random buffers, every note-on's id comes back from [`Instrument::drain_ended`] exactly once
-/// by the time every voice has fallen silent after the keys and pedals are let go, and no other.
-/// A CLAP host frees each note's per-voice modulators on that report; a note never reported would
-/// leak them.
+/// by the time every voice has fallen silent after the keys and pedals are let go, and no other
+/// id (a slide voice gliding back to a held key, whose own note ended, plays a note without an
+/// id; the piano never does). A CLAP host frees each note's per-voice modulators on that report;
+/// a note never reported would leak them.
 #[test]
 fn every_note_ends_exactly_once() {
     for mode in [Mode::Piano, Mode::Slide] {
@@ -430,11 +433,13 @@ fn every_note_ends_exactly_once() {
             let what = format!("{mode:?} on {voices} voices");
             let mut rng = seeded_rng(voices as u64 + 10 * mode as u64);
             let mut p = Instrument::new(FS, voices, Settings { mode, ..Default::default() });
-            let mut ends = vec![0u32; 1_001];
+            let (mut ends, mut returns) = (vec![0u32; 1_001], 0);
             let mut count = |p: &mut Instrument| {
                 for e in p.drain_ended() {
-                    let id = e.note.voice.expect("every note has an id");
-                    ends[id as usize] += 1;
+                    match e.note.voice {
+                        Some(id) => ends[id as usize] += 1,
+                        None => returns += 1,
+                    }
                 }
             };
             let (mut left, mut right) = (vec![0.0f32; 2_000], vec![0.0f32; 2_000]);
@@ -473,7 +478,10 @@ fn every_note_ends_exactly_once() {
                 count(&mut p);
                 seconds += 2_000.0 / FS;
             }
-            println!("{what}: {id} notes, silent {seconds:.1} s after the last release");
+            println!("{what}: {id} notes, silent {seconds:.1} s after the last release, {returns} returns");
+            if mode == Mode::Piano {
+                assert_eq!(returns, 0, "{what}: only a slide's return plays a note without an id");
+            }
             assert_eq!(p.sounding(), 0, "{what}: still sounding after 60 s");
             let wrong: Vec<(usize, u32)> = ends
                 .iter()
@@ -1065,6 +1073,48 @@ fn letting_go_of_a_legato_key_glides_back_to_the_latest_key_still_held() {
     // Sounding on after each glide back, and muted after the last key is let go.
     let (held, muted) = (rms(&out[50_400..57_600]), rms(&out[64_800..72_000]));
     println!("rms with A2 held {held:.2e}, after it is let go {muted:.2e}");
+    assert!(held > 1e-3 && muted < 1e-2 * held, "held {held:.2e}, muted {muted:.2e}");
+}
+
+/// Following keys, a slide voice that glides back to a held key plays that key's note: D3 (note
+/// id 1) pressed, G3 (id 2) legato, tuned 2 semitones up by its own expression, then let go. The
+/// hand is pressed by poly pressure: D3's (0.8, sent while G3 sounds) is the voice's from the
+/// return on, and G3's (0.9) and tuning go with G3. G3's note ends at its release; the voice then
+/// sounds D3's pitch (within 1 %, where G3's tuning kept would put it 12 % sharp) with the slide
+/// pressed (lifted, the open string would ring a fourth below). A note-off by D3's id alone, whose
+/// note ended when G3 took the voice, lets D3 go: the string is muted and the voice's note ends.
+/// Before, the voice kept G3's note: D3's pressure never reached it, G3's tuning stayed, and the
+/// note-off by id left D3 held and the note sounding on.
+#[test]
+fn a_slide_voice_gliding_back_to_a_held_key_plays_that_keys_note() {
+    let settings = Settings { hand_source: HandSource::PolyPressure, ..Default::default() };
+    let with_id = |key, voice| Event::NoteOnWithId { channel: 0, key, velocity: 0.8, voice };
+    let pressure = |key, value| Event::PolyPressure { channel: 0, key, value };
+    let score: Score = vec![
+        (0, with_id(50, 1)),
+        (0, pressure(50, 0.9)),
+        (7_200, with_id(55, 2)),
+        (7_200, pressure(55, 0.9)),
+        (8_000, Event::NoteTuning { note: NoteTarget::voice(2), semitones: 2.0 }),
+        (9_000, pressure(50, 0.8)),
+        (14_400, off(55)),
+        (28_800, Event::Release { note: NoteTarget::voice(1) }),
+    ];
+    let mut p = slide(settings);
+    let out = play(&mut p, &score, 480_000, || 256);
+    let ended: Vec<(Option<i32>, u8, u64)> = p.drain_ended().map(|e| (e.note.voice, e.note.key, e.at)).collect();
+    println!("ended {ended:?}");
+    assert_eq!(ended.len(), 3, "three notes end");
+    assert_eq!(ended[..2], [(Some(1), 50, 7_200), (Some(2), 55, 14_400)], "D3's note, then G3's at its release");
+    assert!(
+        ended[2].0.is_none() && ended[2].1 == 50 && ended[2].2 > 28_800,
+        "the held key's note ends after D3's note-off"
+    );
+    let expected = slide_key_pitch(50);
+    let f = slide_pitch_in(&out, 21_600..28_800, expected);
+    let (held, muted) = (rms(&out[21_600..28_800]), rms(&out[33_600..38_400]));
+    println!("after the return {f:.2} Hz (D3 {expected:.2} Hz), rms {held:.2e}; after D3's note-off {muted:.2e}");
+    assert!((f / expected - 1.0).abs() < 0.01, "{f:.2} Hz, not D3's {expected:.2} Hz");
     assert!(held > 1e-3 && muted < 1e-2 * held, "held {held:.2e}, muted {muted:.2e}");
 }
 

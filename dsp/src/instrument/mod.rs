@@ -350,6 +350,12 @@ pub struct Instrument {
     /// When each key was last pressed, per channel, in presses counted from the start: a slide
     /// following keys returns to the latest key still held when the key it plays is let go.
     pressed: Vec<[u64; 128]>,
+    /// The host's note id of each key's latest press, per channel: a note-off or choke by id
+    /// alone finds its key held down though the note ended early (its voice taken by another).
+    press_ids: Vec<[Option<i32>; 128]>,
+    /// The latest poly pressure of each key since its press, per channel (0..=1): a slide voice
+    /// that returns to a held key takes it.
+    key_pressures: Vec<[f64; 128]>,
     /// Presses since the start.
     presses: u64,
     /// Samples rendered since the start.
@@ -413,6 +419,8 @@ impl Instrument {
             caught: [0; 16],
             keys_down: [0; 16],
             pressed: vec![[0; 128]; 16],
+            press_ids: vec![[None; 128]; 16],
+            key_pressures: vec![[0.0; 128]; 16],
             presses: 0,
             now: 0,
             in_block: 0,
@@ -575,6 +583,8 @@ impl Instrument {
         self.channels = [ChannelState::default(); 16];
         self.bends = Bends::default();
         self.pressed.iter_mut().for_each(|keys| keys.fill(0));
+        self.press_ids.iter_mut().for_each(|ids| ids.fill(None));
+        self.key_pressures.iter_mut().for_each(|keys| keys.fill(0.0));
         self.presses = 0;
         self.now = 0;
         self.in_block = 0;
@@ -617,6 +627,7 @@ impl Instrument {
             Event::ModWheel { channel, value } => self.channels[usize::from(channel & 15)].mod_wheel = unit(value, 0.0),
             Event::PolyPressure { channel, key, value } => {
                 let value = unit(value, 0.0);
+                self.key_pressures[usize::from(channel & 15)][usize::from(key & 127)] = value;
                 self.each_slide(NoteTarget::key(channel, key), |v, _| v.poly_pressure = value);
             }
             Event::NotePressure { note, value } => {
@@ -643,6 +654,7 @@ impl Instrument {
                 self.soft[c] = false;
                 self.sostenuto(channel, false);
                 self.slides.iter_mut().filter(|v| v.strike.channel == channel).for_each(|v| v.poly_pressure = 0.0);
+                self.key_pressures[c].fill(0.0);
             }
             Event::RegisteredParameter { channel, controller, value } => {
                 self.bends.controller(channel, controller, value)
@@ -679,6 +691,8 @@ impl Instrument {
         self.keys_down[usize::from(strike.channel)] |= 1 << strike.key;
         self.presses += 1;
         self.pressed[usize::from(strike.channel)][usize::from(strike.key)] = self.presses;
+        self.press_ids[usize::from(strike.channel)][usize::from(strike.key)] = voice;
+        self.key_pressures[usize::from(strike.channel)][usize::from(strike.key)] = 0.0;
         let note = Note { voice, channel: strike.channel, key: strike.key };
         // A note takes the settings of its own sample, the latest the host set, though the
         // controls they steer go on at the control block's: a mode, a hardness or a slide's mass
@@ -703,29 +717,40 @@ impl Instrument {
         for v in &mut self.voices {
             v.keys_up(released);
         }
-        let follow = self.settings.follow_key;
-        for v in self.slides.iter_mut().filter(|v| released(v.strike.channel, v.strike.key)) {
+        let (follow, offset) = (self.settings.follow_key, self.voices.len());
+        for (j, v) in self.slides.iter_mut().enumerate().filter(|(_, v)| released(v.strike.channel, v.strike.key)) {
             let c = usize::from(v.strike.channel);
-            let (down, pressed) = (self.keys_down[c], &self.pressed[c]);
+            let (down, pressed, pressures) = (self.keys_down[c], &self.pressed[c], &self.key_pressures[c]);
             let latest = (0..128u8).filter(|&k| down >> k & 1 == 1).max_by_key(|&k| pressed[usize::from(k)]);
             match latest {
-                Some(key) if follow && v.key_down => v.return_to(key),
+                Some(key) if follow && v.key_down => {
+                    // The released note ends; the voice plays the held key's, whose own note
+                    // ended when this one took its voice: a note without an id, which events
+                    // for the key reach.
+                    v.return_to(key, pressures[usize::from(key)]);
+                    self.notes.start(offset + j, Note { voice: None, channel: v.strike.channel, key }, self.now);
+                }
                 _ => v.key_up(),
             }
         }
     }
 
     /// The keys `target` addresses, a word of bits per channel: those of the sounding notes it
-    /// matches and, when it names no voice id, the keys held down on its channels.
+    /// matches and the keys held down on its channels (those pressed with its voice id, when it
+    /// names one).
     fn addressed_keys(&self, target: NoteTarget) -> [u128; 16] {
         let mut keys = [0; 16];
-        if target.voice.is_none() {
-            let on_key = target.key.map_or(u128::MAX, |k| 1 << (k & 127));
-            for (c, (keys, down)) in keys.iter_mut().zip(self.keys_down).enumerate() {
-                if target.channel.is_none_or(|channel| usize::from(channel & 15) == c) {
-                    *keys = down & on_key;
-                }
+        let on_key = target.key.map_or(u128::MAX, |k| 1 << (k & 127));
+        for (c, (keys, down)) in keys.iter_mut().zip(self.keys_down).enumerate() {
+            if target.channel.is_some_and(|channel| usize::from(channel & 15) != c) {
+                continue;
             }
+            *keys = match target.voice {
+                None => down & on_key,
+                Some(id) => {
+                    (0..128).filter(|&k| self.press_ids[c][k] == Some(id)).fold(0, |m, k| m | 1 << k) & down & on_key
+                }
+            };
         }
         for (_, note) in self.notes.addressed(target) {
             keys[usize::from(note.channel)] |= 1 << note.key;

@@ -435,10 +435,13 @@ impl SlideVoice {
         }
     }
 
-    /// Glide to `key`, still held down, as the key this voice plays is let go (following keys):
-    /// legato, without a pluck, the note's expression kept.
-    pub fn return_to(&mut self, key: u8) {
+    /// Glide to `key`, still held down at poly pressure `pressure`, as the key this voice plays is
+    /// let go (following keys): legato, without a pluck. The note played is the held key's now:
+    /// the released note's tuning and offsets go with it, and the held key's pressure is the
+    /// voice's.
+    pub fn return_to(&mut self, key: u8, pressure: f64) {
         self.strike.key = key;
+        (self.poly_pressure, self.tuning, self.slide_offset, self.hand_offset) = (pressure, 0.0, 0.0, 0.0);
     }
 
     /// Release the key.
