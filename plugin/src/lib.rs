@@ -131,7 +131,7 @@ fn engine_event<S>(event: &NoteEvent<S>) -> Option<Event> {
         }
         NoteEvent::MidiCC { channel, cc, value, .. } => match cc {
             1 => Event::ModWheel { channel, value },
-            6 | 38 | 100 | 101 => Event::RegisteredParameter {
+            6 | 38 | 98..=101 => Event::RegisteredParameter {
                 channel,
                 controller: cc,
                 value: (value * 127.0).round().clamp(0.0, 127.0) as u8,
@@ -354,6 +354,8 @@ mod tests {
                 (38, 50),
                 (100, 6),
                 (101, 127),
+                (99, 1),
+                (98, 8),
                 (0, 64),
                 (127, 63),
             ] {

@@ -8,8 +8,12 @@
 //!   gives the number of member channels of the lower zone (channels 2 up) or of the upper zone
 //!   (channels 15 down), 0 ending the zone. As the MPE specification asks, configuring a zone sets
 //!   its master's sensitivity to ±2 semitones and its members' to ±48; the master's bend then
-//!   moves every note of the zone, on top of the note's own channel's bend.
-//! - Any other parameter, or none selected (the null parameter, 127/127), takes no data.
+//!   moves every note of the zone, on top of the note's own channel's bend. The zones never
+//!   overlap: the zone configured last keeps its channels and the other shrinks to those left
+//!   (of 16, each zone takes its master and members), or ends; ending a zone that is not there
+//!   changes nothing.
+//! - Any other parameter, or none selected (the null parameter, 127/127), takes no data; nor does
+//!   a non-registered parameter (CC99 and CC98 select one, deselecting the registered one).
 //!   Reset-all-controllers (CC121) deselects the parameter and keeps the values (MIDI RP-015).
 
 /// The null parameter number (MSB, LSB): no parameter selected.
@@ -44,12 +48,14 @@ impl Default for Bends {
 }
 
 impl Bends {
-    /// Controller `controller` of the RPN protocol (CC6, 38, 100 or 101) at `value` (0..=127) on
-    /// `channel` (0..=15). Other controllers are ignored.
+    /// Controller `controller` of the RPN protocol (CC6, 38, 100 or 101, and CC98 and 99, which
+    /// select a non-registered parameter) at `value` (0..=127) on `channel` (0..=15). Other
+    /// controllers are ignored.
     pub(crate) fn controller(&mut self, channel: u8, controller: u8, value: u8) {
         let c = usize::from(channel & 15);
         let value = value & 127;
         match (controller, self.selected[c]) {
+            (98 | 99, _) => self.selected[c] = NULL,
             (101, (_, lsb)) => self.selected[c] = (value, lsb),
             (100, (msb, _)) => self.selected[c] = (msb, value),
             (6, SENSITIVITY) => self.ranges[c] = Some(f64::from(value)),
@@ -67,16 +73,45 @@ impl Bends {
         self.selected[usize::from(channel & 15)] = NULL;
     }
 
-    /// The zone mastered by channel `master` (0 or 15) takes `count` member channels (0 ends it).
+    /// The zone mastered by channel `master` (0 or 15) takes `count` member channels (0 ends it);
+    /// the other zone shrinks to the channels left, if it must.
     fn configure_zone(&mut self, master: usize, count: u8) {
         let zone = usize::from(master == 15);
-        for c in Self::members_of(master, self.members[zone]) {
-            self.ranges[c] = None;
+        self.end_zone(zone);
+        if count == 0 {
+            return;
         }
+        let other = 1 - zone;
+        // Of 16 channels, the two masters and the members: 14 members at most between them.
+        let left = 14u8.saturating_sub(count);
+        if self.members[other] > left {
+            self.end_zone(other);
+            self.start_zone(other, left);
+        }
+        self.start_zone(zone, count);
+    }
+
+    /// The channels of zone `zone` (0 lower, 1 upper), if it is there, follow the setting again.
+    fn end_zone(&mut self, zone: usize) {
+        let master = 15 * zone;
+        if self.members[zone] > 0 {
+            self.ranges[master] = None;
+            for c in Self::members_of(master, self.members[zone]) {
+                self.ranges[c] = None;
+            }
+        }
+        self.members[zone] = 0;
+    }
+
+    /// Zone `zone` (0 lower, 1 upper), ended before, takes `count` member channels (0: none).
+    fn start_zone(&mut self, zone: usize, count: u8) {
+        let master = 15 * zone;
         self.members[zone] = count;
-        self.ranges[master] = (count > 0).then_some(MPE_MASTER_RANGE);
-        for c in Self::members_of(master, count) {
-            self.ranges[c] = Some(MPE_MEMBER_RANGE);
+        if count > 0 {
+            self.ranges[master] = Some(MPE_MASTER_RANGE);
+            for c in Self::members_of(master, count) {
+                self.ranges[c] = Some(MPE_MEMBER_RANGE);
+            }
         }
     }
 
@@ -165,5 +200,53 @@ mod tests {
         // Only on a master channel.
         send(&mut b, 4, &[(101, 0), (100, 6), (6, 3)]);
         assert_eq!((b.range(5), b.master(5)), (None, None));
+    }
+
+    /// The zones never overlap: a lower zone of 10 members over an upper zone of 10 leaves it
+    /// the 4 channels left, which it keeps when the lower zone ends; a lower zone of 15 (channels
+    /// 2–16) ends the upper zone, its master now a member; ending the upper zone then, which is
+    /// not there, changes nothing.
+    #[test]
+    fn the_zone_configured_last_keeps_its_channels_and_the_other_shrinks() {
+        let mut b = Bends::default();
+        let zone = |b: &mut Bends, master: u8, members: u8| send(b, master, &[(101, 0), (100, 6), (6, members)]);
+        let masters = |b: &Bends| (0..16).map(|c| b.master(c)).collect::<Vec<_>>();
+        let layout = |lower: usize, upper: usize| {
+            let member = |c: usize, m| if c == 0 || c == 15 { None } else { m };
+            (0..16)
+                .map(|c| {
+                    if c <= lower {
+                        member(c, Some(0))
+                    } else if c >= 15 - upper {
+                        member(c, Some(15))
+                    } else {
+                        None
+                    }
+                })
+                .collect::<Vec<_>>()
+        };
+        zone(&mut b, 15, 10);
+        zone(&mut b, 0, 10);
+        assert_eq!(masters(&b), layout(10, 4));
+        assert_eq!((b.range(0), b.range(15), b.range(10), b.range(11)), (Some(2.0), Some(2.0), Some(48.0), Some(48.0)));
+        zone(&mut b, 0, 0);
+        assert_eq!(masters(&b), layout(0, 4), "the upper zone kept 4 members");
+        assert_eq!((b.range(10), b.range(11)), (None, Some(48.0)));
+        zone(&mut b, 0, 15);
+        let members = |b: &Bends| (1..16).all(|c| b.master(c) == Some(0) && b.range(c) == Some(48.0));
+        assert!(members(&b), "channels 2–16 are members of the lower zone");
+        zone(&mut b, 15, 0);
+        assert!(members(&b), "ending no zone changes nothing");
+    }
+
+    /// A non-registered parameter (CC99, CC98) deselects the registered one: its data (a GS
+    /// vibrato rate, say) does not set the bend range.
+    #[test]
+    fn a_non_registered_parameters_data_leaves_the_sensitivity_alone() {
+        let mut b = Bends::default();
+        send(&mut b, 0, &[(101, 0), (100, 0), (6, 12), (99, 1), (98, 8), (6, 64)]);
+        assert_eq!(b.range(0), Some(12.0));
+        send(&mut b, 0, &[(101, 0), (100, 0), (6, 7)]);
+        assert_eq!(b.range(0), Some(7.0), "selecting it again");
     }
 }

@@ -23,8 +23,8 @@ pub fn bend_from_normalised(normalised: f32) -> f32 {
 }
 
 /// The engine event for a channel message `status, data1, data2`, if the engine plays it
-/// (notes, poly and channel pressure, pitch bend, CC1, the registered-parameter controllers CC6,
-/// CC38, CC100 and CC101, CC64, CC66, CC67, CC120, CC121, CC123).
+/// (notes, poly and channel pressure, pitch bend, CC1, the parameter-number controllers CC6,
+/// CC38 and CC98–101, CC64, CC66, CC67, CC120, CC121, CC123).
 pub fn event_from_midi(status: u8, data1: u8, data2: u8) -> Option<Event> {
     let channel = status & 0x0f;
     let (key, value) = (data1 & 0x7f, data2 & 0x7f);
@@ -41,7 +41,7 @@ pub fn event_from_midi(status: u8, data1: u8, data2: u8) -> Option<Event> {
         }
         0xb0 => match key {
             1 => Event::ModWheel { channel, value: unit(value) },
-            6 | 38 | 100 | 101 => Event::RegisteredParameter { channel, controller: key, value },
+            6 | 38 | 98..=101 => Event::RegisteredParameter { channel, controller: key, value },
             64 => Event::Sustain { channel, depth: unit(value) },
             66 => Event::Sostenuto { channel, down: unit(value) >= 0.5 },
             67 => Event::SoftPedal { channel, down: unit(value) >= 0.5 },

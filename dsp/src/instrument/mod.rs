@@ -232,13 +232,14 @@ pub enum Event {
         note: NoteTarget,
     },
     /// A controller of MIDI's registered-parameter protocol on a channel: CC101 and CC100 select
-    /// a parameter, CC6 and CC38 set its value. The engine takes pitch-bend sensitivity (RPN 0),
-    /// how far a full bend moves the slide on that channel, and the MPE configuration (RPN 6),
-    /// which sets up a zone whose master channel bends every note of the zone.
+    /// a parameter (CC99 and CC98 a non-registered one), CC6 and CC38 set its value. The engine
+    /// takes pitch-bend sensitivity (RPN 0), how far a full bend moves the slide on that
+    /// channel, and the MPE configuration (RPN 6), which sets up a zone whose master channel
+    /// bends every note of the zone.
     RegisteredParameter {
         /// MIDI channel, 0..=15.
         channel: u8,
-        /// The controller: 6, 38, 100 or 101 (others are ignored).
+        /// The controller: 6, 38 or 98 to 101 (others are ignored).
         controller: u8,
         /// Its value, 0..=127.
         value: u8,
