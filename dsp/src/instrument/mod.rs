@@ -279,7 +279,7 @@ pub enum Event {
         value: f32,
     },
     /// Key pressed, with the host's voice (note) id, which per-note events can address. Velocity
-    /// 0 is a note-off.
+    /// 0 is a note-off, and the note ends at once, never played.
     NoteOnWithId {
         /// MIDI channel, 0..=15.
         channel: u8,
@@ -609,12 +609,10 @@ impl Instrument {
             Event::NoteOnWithId { channel, key, velocity, voice } if velocity > 0.0 => {
                 self.play(channel, key, velocity, Some(voice))
             }
-            Event::NoteOn { channel, key, .. }
-            | Event::NoteOnWithId { channel, key, .. }
-            | Event::NoteOff { channel, key } => {
-                let mut keys = [0; 16];
-                keys[usize::from(channel & 15)] = 1 << (key & 127);
-                self.keys_up(&keys);
+            Event::NoteOn { channel, key, .. } | Event::NoteOff { channel, key } => self.key_up(channel, key),
+            Event::NoteOnWithId { channel, key, voice, .. } => {
+                self.key_up(channel, key);
+                self.notes.end_unplayed(Note { voice: Some(voice), channel: channel & 15, key: key & 127 }, self.now);
             }
             Event::Release { note } => self.keys_up(&self.addressed_keys(note)),
             Event::Choke { note } => {
@@ -705,6 +703,13 @@ impl Instrument {
         if let Some(i) = index {
             self.notes.start(i, note, self.now);
         }
+    }
+
+    /// Release `key` on `channel`: its note-off.
+    fn key_up(&mut self, channel: u8, key: u8) {
+        let mut keys = [0; 16];
+        keys[usize::from(channel & 15)] = 1 << (key & 127);
+        self.keys_up(&keys);
     }
 
     /// Release `keys` (one bit per MIDI key, a word per channel), as their note-offs do: their

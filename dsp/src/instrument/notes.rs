@@ -144,6 +144,12 @@ impl NoteBook {
         }
     }
 
+    /// `note`, which no voice plays, ends at sample `at` (a note-on the engine takes for a
+    /// note-off: the host still hears of its end).
+    pub(crate) fn end_unplayed(&mut self, note: Note, at: u64) {
+        self.push(note, at);
+    }
+
     /// Every live note ends at sample `at`, in the order of its voice's index.
     pub(crate) fn end_all(&mut self, at: u64) {
         self.check_live(at, |_| false);
