@@ -1359,8 +1359,9 @@ fn busy_session() -> Score {
 
 /// `Instrument::reset` (what a host's reset calls) leaves the instrument as it was made: after a
 /// busy session cut off at a sample off the control blocks' grid, with notes, pedals and
-/// controllers still held, what follows is the same, to the bit, as on an instrument just made
-/// with the same settings. In both modes, at 44.1 and 48 kHz, with a control block of 64 samples
+/// controllers still held, and the pickup and its resonance gliding to where the settings last
+/// moved them, what follows is the same, to the bit, as on an instrument just made with the
+/// settings in force. In both modes, at 44.1 and 48 kHz, with a control block of 64 samples
 /// and of 37, and in random buffers. The notes that sounded end at sample 0, and the reset
 /// allocates nothing (a host resets on the audio thread).
 #[test]
@@ -1382,10 +1383,14 @@ fn a_reset_instrument_renders_as_one_just_made() {
                 let samples = (0.25 * fs) as usize;
                 let fresh = play(&mut Instrument::new(fs, 12, settings), &after, samples, || 256);
                 assert!(rms(&fresh) > 1e-4, "{what}: the notes after are silent");
-                let mut used = Instrument::new(fs, 12, settings);
+                let elsewhere = Settings { pickup_position: 0.6, pickup_resonance: 8_000.0, ..settings };
+                let mut used = Instrument::new(fs, 12, elsewhere);
                 let mut rng = seeded_rng(block as u64);
                 let session = play(&mut used, &busy_session(), 6_001, || rng.random_range(1..300));
                 assert!(rms(&session[4_000..]) > 1e-4, "{what}: the session is silent at its end");
+                used.set_settings(&settings);
+                let (mut l, mut r) = ([0.0f32; 300], [0.0f32; 300]);
+                used.process(&mut l, &mut r);
                 let _ = used.drain_ended().count();
                 assert_eq!(allocations_in(|| used.reset()), 0, "{what}: the reset allocates");
                 assert_eq!(used.now(), 0, "{what}: the clock");

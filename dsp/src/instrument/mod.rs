@@ -591,7 +591,13 @@ impl Instrument {
         self.in_block = 0;
         self.notes.end_all(0);
         self.voices.iter_mut().for_each(|v| v.started = 0);
-        let settings = self.settings;
+        // As made with the settings in force: the pickup and its resonance where they ask, not
+        // gliding there.
+        let settings = self.requested;
+        self.settings = settings;
+        self.pickup = settings.pickup_position;
+        self.resonance = settings.pickup_resonance;
+        self.circuit.tune(self.resonance, self.sample_rate);
         self.slides.iter_mut().for_each(|v| v.reset(&settings));
         self.sides.reset();
         self.output.reset();
