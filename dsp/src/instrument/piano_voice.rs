@@ -828,7 +828,6 @@ impl PianoVoice {
     /// Silence the voice at once, counted as a guard trip.
     fn trip(&mut self) {
         self.trips += 1;
-        self.guard_fade.clear();
         self.silence();
     }
 
@@ -847,8 +846,9 @@ impl PianoVoice {
         self.core.swing_at(pad_at(self.position, self.core.string().params().length))
     }
 
-    /// Stop at once: the string at rest, no pending note.
+    /// Stop at once: the string at rest, no pending note, no guard fade under way.
     pub fn silence(&mut self) {
+        self.guard_fade.clear();
         self.core.reset();
         self.sounding = false;
         self.key_down = false;
@@ -1132,6 +1132,30 @@ mod tests {
         assert!(!voice.sounding);
         assert_eq!(voice.guard_trips(), 1);
         assert_eq!(voice.core.own_energy(), 0.0);
+    }
+
+    /// A voice silenced (all sound off) while the guard fades it plays its next note in full: the
+    /// fade and the trip it leads to were the old note's.
+    #[test]
+    fn a_voice_silenced_during_a_guard_fade_plays_its_next_note() {
+        let (mut voice, settings) = struck(20);
+        voice.reference_energy *= 1e-6;
+        let mut out = [0.0; 64];
+        voice.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
+        voice.render(&mut out);
+        voice.silence();
+        let mut fresh = PianoVoice::new(200, FS);
+        let (mut heard, mut expected) = ([0.0; 64], [0.0; 64]);
+        for (v, out) in [(&mut voice, &mut heard), (&mut fresh, &mut expected)] {
+            v.play(Strike { channel: 0, key: 60, velocity: 0.7, shifted: false }, &settings, 0);
+            for _ in 0..4 {
+                v.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
+                v.render(out);
+            }
+        }
+        assert!(voice.sounding, "the new note sounds");
+        assert_eq!(voice.guard_trips(), 0);
+        assert_eq!(heard, expected, "as on a fresh voice");
     }
 
     /// `voice`'s output for `key` struck at velocity 0.7, held for 20 blocks of 64 samples and let

@@ -476,6 +476,7 @@ impl SlideVoice {
     /// fingers off, so that nothing of the note is heard in the next.
     pub fn silence(&mut self) {
         self.shed_fade.clear();
+        self.guard_fade.clear();
         self.sounding = false;
         self.key_down = false;
         self.pluck = None;
@@ -539,7 +540,6 @@ impl SlideVoice {
     /// it, the fingers off.
     fn trip(&mut self) {
         self.trips += 1;
-        self.guard_fade.clear();
         self.silence();
     }
 
@@ -859,6 +859,27 @@ mod tests {
         assert!(!voice.sounding);
         assert_eq!(voice.guard_trips(), 1);
         assert_eq!(voice.core.string().energy(), 0.0, "the string is at rest");
+    }
+
+    /// A voice silenced (all sound off) while the guard fades it plays its next note: the fade and
+    /// the trip it leads to were the old note's.
+    #[test]
+    fn a_voice_silenced_during_a_guard_fade_plays_its_next_note() {
+        let (mut voice, settings) = plucked(20);
+        over_its_bound(&mut voice);
+        let mut out = [0.0; 64];
+        voice.begin_block(&settings, &ChannelState::default(), 64);
+        voice.render(&mut out);
+        voice.silence();
+        voice.play(Strike { channel: 0, key: 50, velocity: 0.8, shifted: false }, &settings, false, 0);
+        let mut peak: f64 = 0.0;
+        for _ in 0..8 {
+            voice.begin_block(&settings, &ChannelState::default(), 64);
+            voice.render(&mut out);
+            peak = out.iter().fold(peak, |m, x| m.max(x.abs()));
+        }
+        assert!(voice.sounding && peak > 0.0, "the new note sounds (peak {peak:e})");
+        assert_eq!(voice.guard_trips(), 0);
     }
 
     /// With a control block of one sample the guard weighs the energy every [`ENERGY_INTERVAL`]
