@@ -201,12 +201,17 @@ impl FromSpec for FloatParam {
     }
 }
 
+/// The parameters that act only when the plugin is activated: hosts offer no automation of them,
+/// which would do nothing.
+const AT_ACTIVATION: [&str; 1] = ["voices"];
+
 impl FromSpec for IntParam {
     fn from_spec(spec: &ParamSpec) -> Self {
         let ParamKind::Int { min, max, default, unit } = spec.kind else {
             panic!("{} is not a whole-number parameter", spec.id)
         };
-        IntParam::new(spec.name, default, IntRange::Linear { min, max }).with_unit(unit)
+        let param = IntParam::new(spec.name, default, IntRange::Linear { min, max }).with_unit(unit);
+        if AT_ACTIVATION.contains(&spec.id) { param.non_automatable() } else { param }
     }
 
     fn plain(&self) -> f32 {
@@ -523,6 +528,17 @@ mod tests {
         for (id, group) in &groups {
             assert_eq!(group, expected(id), "group of {id}");
         }
+    }
+
+    /// `voices`, which acts only at activation, cannot be automated; the other whole-number
+    /// parameters, which act at once, can.
+    #[test]
+    fn the_voice_count_alone_of_the_whole_numbers_is_not_automatable() {
+        let params = QsaParams::default();
+        let automatable = |p: &IntParam| !p.flags().contains(ParamFlags::NON_AUTOMATABLE);
+        let engine = &params.engine;
+        assert!(!automatable(&engine.voices));
+        assert!(automatable(&engine.block) && automatable(&engine.segments));
     }
 
     /// `slide` and `hand` (and no other parameter) take polyphonic modulation, and the engine's
