@@ -1205,6 +1205,42 @@ fn an_mpe_zone_bends_its_members_48_semitones_and_its_master_bends_them_all() {
     }
 }
 
+/// An MPE zone's master channel speaks for its members: with the hand pressing the slide as the
+/// mod wheel (or channel pressure) says, the wheel moved on the master channel presses a member's
+/// note exactly as the same wheel on the member's own channel does, to the bit, and a member that
+/// sends its own value after the master's is heard with its own (the latest wins). The master's
+/// wheel presses the slide: the note sounds at D3 within 1 %. Without a zone, channel 1's wheel
+/// leaves a note on channel 3 alone, to the bit.
+#[test]
+fn an_mpe_zones_master_mod_wheel_and_pressure_reach_its_members_notes() {
+    let zone = rpn(0, (0, 6), 3, None);
+    let note = (0, Event::NoteOn { channel: 2, key: 50, velocity: 0.8 });
+    for source in [HandSource::ModWheel, HandSource::ChannelPressure] {
+        let settings = Settings { hand_source: source, ..Default::default() };
+        let control = |channel, value| match source {
+            HandSource::ModWheel => Event::ModWheel { channel, value },
+            _ => Event::ChannelPressure { channel, value },
+        };
+        let render = |zoned: bool, events: &[(usize, Event)]| {
+            let mut score = if zoned { zone.clone() } else { vec![] };
+            score.extend([note]);
+            score.extend(events.iter().copied());
+            play(&mut slide(settings), &score, 24_000, || 64)
+        };
+        let same = |a: &[f32], b: &[f32]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+        let own = render(true, &[(0, control(2, 0.9))]);
+        assert!(same(&render(true, &[(0, control(0, 0.9))]), &own), "{source:?}: the master's value");
+        let later = render(true, &[(0, control(2, 0.9)), (4_800, control(2, 0.2))]);
+        assert!(same(&render(true, &[(0, control(0, 0.9)), (4_800, control(2, 0.2))]), &later), "{source:?}");
+        let pressed = slide_pitch(&own, slide_key_pitch(50));
+        println!("{source:?}: pressed by the master {pressed:.2} Hz (D3 {:.2} Hz)", slide_key_pitch(50));
+        assert!((pressed / slide_key_pitch(50) - 1.0).abs() < 0.01, "{source:?}: {pressed:.2} Hz");
+        let unzoned = render(false, &[(0, control(0, 0.9))]);
+        assert!(same(&unzoned, &render(false, &[])), "{source:?}: without a zone, channel 1 speaks for itself");
+        assert!(!same(&unzoned, &own), "{source:?}: the wheel presses the slide");
+    }
+}
+
 /// MPE: two notes on their own channels bend independently. Each voice follows its own
 /// channel's bend (alone, each sounds at its pitch), and together they are exactly the two voices
 /// added (to f32 rounding): one channel's bend does not touch the other note.

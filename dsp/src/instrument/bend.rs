@@ -12,6 +12,8 @@
 //!   overlap: the zone configured last keeps its channels and the other shrinks to those left
 //!   (of 16, each zone takes its master and members), or ends; ending a zone that is not there
 //!   changes nothing.
+//! - A configured zone's master channel speaks for the zone: its mod wheel and channel pressure
+//!   are every member channel's too, until a member sends its own (the latest value wins).
 //! - Any other parameter, or none selected (the null parameter, 127/127), takes no data; nor does
 //!   a non-registered parameter (CC99 and CC98 select one, deselecting the registered one).
 //!   Reset-all-controllers (CC121) deselects the parameter and keeps the values (MIDI RP-015).
@@ -118,6 +120,19 @@ impl Bends {
     /// The member channels of the zone mastered by `master` (0 or 15) with `count` members.
     fn members_of(master: usize, count: u8) -> impl Iterator<Item = usize> {
         (1..=usize::from(count)).map(move |i| if master == 0 { i } else { 15 - i })
+    }
+
+    /// The channels a controller sent on `channel` speaks for: a configured zone's master channel
+    /// speaks for itself and every member of its zone; any other channel for itself.
+    pub(crate) fn spoken_for(&self, channel: u8) -> impl Iterator<Item = usize> {
+        let c = usize::from(channel & 15);
+        let zone = match c {
+            0 => Some(0),
+            15 => Some(1),
+            _ => None,
+        };
+        let members = zone.map_or(0, |z| self.members[z]);
+        std::iter::once(c).chain(Self::members_of(c, members))
     }
 
     /// Semitones of a full bend on `channel`, if a controller set it.
@@ -237,6 +252,18 @@ mod tests {
         assert!(members(&b), "channels 2–16 are members of the lower zone");
         zone(&mut b, 15, 0);
         assert!(members(&b), "ending no zone changes nothing");
+    }
+
+    /// A zone's master speaks for itself and its members; another channel, or a master without a
+    /// zone, for itself alone.
+    #[test]
+    fn a_zones_master_speaks_for_its_members() {
+        let mut b = Bends::default();
+        let spoken = |b: &Bends, c: u8| b.spoken_for(c).collect::<Vec<_>>();
+        assert_eq!((spoken(&b, 0), spoken(&b, 15), spoken(&b, 3)), (vec![0], vec![15], vec![3]));
+        send(&mut b, 0, &[(101, 0), (100, 6), (6, 3)]);
+        send(&mut b, 15, &[(101, 0), (100, 6), (6, 2)]);
+        assert_eq!((spoken(&b, 0), spoken(&b, 15), spoken(&b, 2)), (vec![0, 1, 2, 3], vec![15, 14, 13], vec![2]));
     }
 
     /// A non-registered parameter (CC99, CC98) deselects the registered one: its data (a GS

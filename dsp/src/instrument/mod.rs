@@ -627,9 +627,13 @@ impl Instrument {
             }
             Event::PitchBend { channel, value } => self.channels[usize::from(channel & 15)].bend = unit(value, -1.0),
             Event::ChannelPressure { channel, value } => {
-                self.channels[usize::from(channel & 15)].pressure = unit(value, 0.0)
+                let value = unit(value, 0.0);
+                self.bends.spoken_for(channel).for_each(|c| self.channels[c].pressure = value);
             }
-            Event::ModWheel { channel, value } => self.channels[usize::from(channel & 15)].mod_wheel = unit(value, 0.0),
+            Event::ModWheel { channel, value } => {
+                let value = unit(value, 0.0);
+                self.bends.spoken_for(channel).for_each(|c| self.channels[c].mod_wheel = value);
+            }
             Event::PolyPressure { channel, key, value } => {
                 let value = unit(value, 0.0);
                 self.key_pressures[usize::from(channel & 15)][usize::from(key & 127)] = value;

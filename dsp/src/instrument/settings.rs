@@ -24,9 +24,11 @@ pub enum HandSource {
     /// The `hand_height` setting.
     #[default]
     Parameter,
-    /// The mod wheel (CC1) of the note's channel: 0 lifts the slide, full presses it.
+    /// The mod wheel (CC1) of the note's channel (or of its MPE zone's master channel, the
+    /// latest of the two): 0 lifts the slide, full presses it.
     ModWheel,
-    /// Channel pressure of the note's channel (per note with MPE).
+    /// Channel pressure of the note's channel (per note with MPE; the master channel's, sent
+    /// later, reaches every note of its zone).
     ChannelPressure,
     /// Poly pressure of the note's key.
     PolyPressure,
