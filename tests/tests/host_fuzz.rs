@@ -14,9 +14,10 @@
 //!   the plugin, which it does every 500 permutations, each time at the next of 96, 44.1, 22.05
 //!   and 48 kHz (it starts at 48 kHz).
 //! - Meanwhile notes (CLAP note events and MIDI note messages: single keys, repeated keys,
-//!   chords, releases, CLAP chokes and note-offs of a key on every channel or of every note),
-//!   the sustain, sostenuto and soft pedals (CC64, CC66, CC67), pitch bend and the registered
-//!   parameters' controllers (CC101, CC100, CC6: pitch-bend sensitivity, MPE zones), channel and
+//!   chords, CLAP note-ons at velocity 0, releases, CLAP chokes and note-offs of a key on every
+//!   channel or of every note), the sustain, sostenuto and soft pedals (CC64, CC66, CC67), pitch
+//!   bend and the parameter-number controllers (CC101, CC100, CC99, CC98, CC6: pitch-bend
+//!   sensitivity, MPE zones, a non-registered parameter), channel and
 //!   poly pressure, the mod wheel (CC1), reset-all-controllers (CC121) and all-notes-off (CC123)
 //!   play on every channel.
 //!
@@ -243,9 +244,11 @@ impl Generator {
             let (c, k) = self.held.remove(0);
             score.push((t, Ev::Off(c, k)));
         }
-        let velocity = match self.rng.random_range(0..8) {
-            0 | 1 => 1.0,
-            2 => 1.0 / 127.0,
+        let velocity = match self.rng.random_range(0..16) {
+            0..=3 => 1.0,
+            4 | 5 => 1.0 / 127.0,
+            // A CLAP note-on at velocity 0 (a note-off); as MIDI, the softest note.
+            6 => 0.0,
             _ => self.rng.random_range(0.01..=1.0),
         };
         let ev = if self.rng.random_bool(0.5) {
@@ -332,10 +335,11 @@ impl Generator {
                 0
             }
             // Sustain pedal, or the sostenuto or soft pedal, or reset all controllers, or a
-            // registered parameter's selection or value (pitch-bend sensitivity, MPE zones).
+            // registered or non-registered parameter's selection or value (pitch-bend
+            // sensitivity, MPE zones).
             72..=78 => {
                 let value = [0, 127, self.value7()][self.rng.random_range(0..3)];
-                let pedal = [64, 64, 66, 67, 121, 101, 100, 6][self.rng.random_range(0..8)];
+                let pedal = [64, 64, 66, 67, 121, 101, 100, 6, 99, 98][self.rng.random_range(0..10)];
                 score.push((t, Ev::Midi([0xB0 | channel, pedal, value])));
                 0
             }
@@ -473,12 +477,12 @@ fn random_parameter_permutations_never_give_a_non_finite_or_loud_sample() {
         run.samples,
         run.samples as f64 / FS
     );
-    // When notes start: CLAP note-ons and MIDI note-ons with a non-zero velocity.
+    // When notes start: CLAP and MIDI note-ons with a non-zero velocity.
     let onsets: Vec<usize> = run
         .score
         .iter()
         .filter(|(_, ev)| match ev {
-            Ev::On(..) => true,
+            Ev::On(_, _, velocity) => *velocity > 0.0,
             Ev::Midi([status, _, velocity]) => status & 0xf0 == 0x90 && *velocity > 0,
             _ => false,
         })
