@@ -763,6 +763,47 @@ fn out_through_a_symlink_to_the_scene_file_is_refused() {
     assert_refused(&out, "scene file", dir.path(), &scene, BASE, &["case.toml", "link.wav"]);
 }
 
+/// `--out` through a symbolic link writes the file it names and keeps the link.
+#[cfg(unix)]
+#[test]
+fn out_through_a_symlink_writes_the_file_it_names_and_keeps_the_link() {
+    let dir = TempDir::new().unwrap();
+    let scene = write_scene(dir.path(), "case.toml", BASE);
+    let (real, link) = (dir.path().join("real.wav"), dir.path().join("link.wav"));
+    fs::write(&real, b"old").unwrap();
+    std::os::unix::fs::symlink(&real, &link).unwrap();
+    let out = render_to(&scene, &link, &[]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(fs::symlink_metadata(&link).unwrap().file_type().is_symlink(), "the link stays a link");
+    let (spec, samples) = read_wav(&real);
+    assert_eq!((spec.channels, samples.len()), (1, 88), "the file it names holds the render");
+}
+
+/// `--out` naming something other than a regular file (a named pipe here; `/dev/null` alike) is
+/// written into, not replaced by a regular file: a reader at the pipe's other end gets the WAV,
+/// and the pipe is still a pipe.
+#[cfg(unix)]
+#[test]
+fn out_naming_a_pipe_writes_into_it_and_leaves_it_a_pipe() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = TempDir::new().unwrap();
+    let scene = write_scene(dir.path(), "case.toml", BASE);
+    let pipe = dir.path().join("pipe.wav");
+    let made = std::process::Command::new("mkfifo").arg(&pipe).status().expect("mkfifo runs");
+    assert!(made.success());
+    let reader = {
+        let pipe = pipe.clone();
+        std::thread::spawn(move || fs::read(pipe).expect("the pipe reads"))
+    };
+    let out = render_to(&scene, &pipe, &[]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(fs::symlink_metadata(&pipe).unwrap().file_type().is_fifo(), "the pipe stays a pipe");
+    let bytes = reader.join().unwrap();
+    let file = dir.path().join("file.wav");
+    assert_eq!(render_to(&scene, &file, &[]).code, 0);
+    assert!(bytes == fs::read(&file).unwrap(), "the reader gets the WAV a file gets ({} bytes)", bytes.len());
+}
+
 #[test]
 fn default_output_that_would_be_the_scene_is_refused() {
     // A scene file named *.wav: the default WAV path is the scene itself.

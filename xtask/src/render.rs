@@ -249,9 +249,9 @@ fn run_scene(args: &RenderArgs, scene_path: &Path) -> Result<Summary, RenderErro
         Some(path) => Some((write_temp(path, |w| write_csv(w, &rendered, scene.common().sample_rate))?, path)),
         None => None,
     };
-    persist(wav, &wav_path)?;
-    if let Some((file, path)) = csv {
-        persist(file, path)?;
+    wav.persist()?;
+    if let Some((file, _)) = csv {
+        file.persist()?;
     }
     Ok(summary)
 }
@@ -284,28 +284,52 @@ fn parent_dir(path: &Path) -> &Path {
     }
 }
 
-/// Write an output into a temporary file beside `path`.
+/// An output written, waiting to take its place ([`Staged::persist`]).
+#[must_use = "an output takes its place only when persisted"]
+pub(crate) struct Staged {
+    /// The temporary file and the path it becomes; none when the output went straight into a
+    /// file that is not a regular one.
+    temp: Option<(NamedTempFile, PathBuf)>,
+}
+
+impl Staged {
+    /// Put the output in its place (a rename, so a failed render never leaves half a file).
+    pub(crate) fn persist(self) -> Result<(), RenderError> {
+        if let Some((file, path)) = self.temp {
+            file.persist(&path).map_err(|e| RenderError::Write { path, source: e.error })?;
+        }
+        Ok(())
+    }
+}
+
+/// Write an output for `path`: into a temporary file beside the file `path` names (through any
+/// symbolic links, which stay), renamed into place by [`Staged::persist`]; or, when `path` names
+/// something other than a regular file (`/dev/null`, a pipe, a terminal), straight into it,
+/// which is then never replaced.
 pub(crate) fn write_temp(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<&std::fs::File>) -> std::io::Result<()>,
-) -> Result<NamedTempFile, RenderError> {
+) -> Result<Staged, RenderError> {
     let err = |source| RenderError::Write { path: path.to_owned(), source };
+    let target = fs::canonicalize(path).unwrap_or_else(|_| path.to_owned());
+    if fs::metadata(&target).is_ok_and(|m| !m.is_file()) {
+        let file = fs::OpenOptions::new().write(true).open(&target).map_err(err)?;
+        let mut w = BufWriter::new(&file);
+        write(&mut w).map_err(err)?;
+        w.flush().map_err(err)?;
+        return Ok(Staged { temp: None });
+    }
     let mut builder = tempfile::Builder::new();
     // Outputs are ordinary files (the temporary default is owner-only).
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
-    let file = builder.tempfile_in(parent_dir(path)).map_err(err)?;
+    let file = builder.tempfile_in(parent_dir(&target)).map_err(err)?;
     let mut w = BufWriter::new(file.as_file());
     write(&mut w).map_err(err)?;
     w.flush().map_err(err)?;
     drop(w);
     file.as_file().sync_all().map_err(err)?;
-    Ok(file)
-}
-
-pub(crate) fn persist(file: NamedTempFile, path: &Path) -> Result<(), RenderError> {
-    file.persist(path).map_err(|e| RenderError::Write { path: path.to_owned(), source: e.error })?;
-    Ok(())
+    Ok(Staged { temp: Some((file, target)) })
 }
 
 fn write_wav(w: &mut impl Write, rendered: &Run, sample_rate: u32, normalize: bool, gain: f64) -> std::io::Result<()> {

@@ -230,7 +230,7 @@ pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSumma
         }
         std::io::Write::write_all(w, buffer.get_ref())
     })?;
-    super::persist(wav, &wav_path)?;
+    wav.persist()?;
     let settings = params.settings().sanitized();
     let samples = left.len();
     Ok(MidiSummary {
