@@ -804,6 +804,44 @@ fn out_naming_a_pipe_writes_into_it_and_leaves_it_a_pipe() {
     assert!(bytes == fs::read(&file).unwrap(), "the reader gets the WAV a file gets ({} bytes)", bytes.len());
 }
 
+/// A string with more modes below Nyquist than a string holds (4,096) at the scene's rate is an
+/// error naming its length, as at any other rate: the C4 string made 50 m long at 44.1 kHz (its
+/// parameters are valid; its mode count depends on the rate too).
+#[test]
+fn a_string_with_too_many_modes_at_the_scenes_rate_is_a_clear_error() {
+    let dir = TempDir::new().unwrap();
+    let soft = fs::read_to_string(fig4_path().with_file_name("hammer-c4-soft.toml")).unwrap();
+    let long = edit(&soft, "eta0 = 8.0 ", "length = 50.0\neta0 = 8.0 ");
+    let scene = write_scene(dir.path(), "case.toml", &long);
+    let result = render_to(&scene, &dir.path().join("out.wav"), &[]);
+    assert_eq!(result.code, 1, "{}", result.stderr);
+    assert!(result.stderr.contains("string.length") && result.stderr.contains("4096 modes"), "{}", result.stderr);
+    assert_eq!(listing(dir.path()), names(&["case.toml"]), "nothing written");
+}
+
+/// A render whose output is not finite writes nothing and says why: a string damped beyond
+/// what the scheme can step (`eta0` = 1e300 on the soft C4 scene) leaves the floats at once,
+/// and a gain of 1e300 on a finite output overflows 32-bit float. An existing output file is left
+/// as it was.
+#[test]
+fn a_render_that_is_not_finite_writes_nothing_and_says_why() {
+    let dir = TempDir::new().unwrap();
+    let out = dir.path().join("out.wav");
+    fs::write(&out, b"kept").unwrap();
+    let soft = fs::read_to_string(fig4_path().with_file_name("hammer-c4-soft.toml")).unwrap();
+    let damped = edit(&soft, "eta0 = 8.0 ", "eta0 = 1e300 ");
+    for (text, why) in [
+        (damped, "beyond what the scheme can simulate"),
+        (edit(BASE, "gain = 1.0", "gain = 1e300"), "exceeds 32-bit float"),
+    ] {
+        let scene = write_scene(dir.path(), "case.toml", &text);
+        let result = render_to(&scene, &out, &[]);
+        assert_ne!(result.code, 0, "{why}: refused");
+        assert!(result.stderr.contains("not finite") && result.stderr.contains(why), "{why}: {}", result.stderr);
+        assert_eq!(fs::read(&out).unwrap(), b"kept", "{why}: the existing output is untouched");
+    }
+}
+
 #[test]
 fn default_output_that_would_be_the_scene_is_refused() {
     // A scene file named *.wav: the default WAV path is the scene itself.

@@ -238,13 +238,24 @@ fn run_scene(args: &RenderArgs, scene_path: &Path) -> Result<Summary, RenderErro
     let (rendered, wall_seconds) =
         build(&scene, &common.solver, Sampling::NATIVE, TimedFrames { chunks: chunk_sizes(args.chunk) })
             .map_err(|source| RenderError::Scene { path: scene_path.to_owned(), source })?;
+    let options = scene.common().output;
+    let scale = wav_scale(&rendered, options.normalize, options.gain);
+    if let Some(n) = rendered.frames.iter().position(|f| !((f.output * scale) as f32).is_finite()) {
+        let why = if f64::is_finite(rendered.frames[n].output) {
+            format!("with [output] gain = {} the output exceeds 32-bit float", options.gain)
+        } else {
+            "the simulation left the numbers a float holds: a parameter is beyond what the scheme can simulate"
+                .to_owned()
+        };
+        return Err(RenderError::Output(format!(
+            "{}: not finite from sample {n} on ({why}); nothing was written",
+            scene_path.display()
+        )));
+    }
     let measured = Measurements::measure(&scene, &rendered);
     let duration = rendered.frames.len() as f64 * (1.0 / common.sample_rate as f64);
     let summary = Summary { measured, wall_seconds, rtf: wall_seconds / duration };
-    let options = common.output;
-    let wav = write_temp(&wav_path, |w| {
-        write_wav(w, &rendered, scene.common().sample_rate, options.normalize, options.gain)
-    })?;
+    let wav = write_temp(&wav_path, |w| write_wav(w, &rendered, scene.common().sample_rate, scale))?;
     let csv = match &csv_path {
         Some(path) => Some((write_temp(path, |w| write_csv(w, &rendered, scene.common().sample_rate))?, path)),
         None => None,
@@ -332,9 +343,13 @@ pub(crate) fn write_temp(
     Ok(Staged { temp: Some((file, target)) })
 }
 
-fn write_wav(w: &mut impl Write, rendered: &Run, sample_rate: u32, normalize: bool, gain: f64) -> std::io::Result<()> {
+/// The factor the WAV's samples are the output times: `gain`, over the peak when normalising.
+fn wav_scale(rendered: &Run, normalize: bool, gain: f64) -> f64 {
     let peak = rendered.frames.iter().fold(0.0_f64, |m, f| m.max(f.output.abs()));
-    let scale = if normalize && peak > 0.0 { gain / peak } else { gain };
+    if normalize && peak > 0.0 { gain / peak } else { gain }
+}
+
+fn write_wav(w: &mut impl Write, rendered: &Run, sample_rate: u32, scale: f64) -> std::io::Result<()> {
     let spec =
         hound::WavSpec { channels: 1, sample_rate, bits_per_sample: 32, sample_format: hound::SampleFormat::Float };
     // hound needs Seek to patch the header; write into memory and copy out.

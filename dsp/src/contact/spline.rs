@@ -53,25 +53,36 @@ impl QuadSpline {
 
     /// Fit N = `segments` quadratics over `[0, y_ref]` (m).
     pub fn new(law: PowerLaw, y_ref: f64, segments: usize) -> Result<Self, ContactError> {
-        let mut spline = Self::with_capacity(law, segments);
+        let mut spline = Self::unfitted(law, segments);
         spline.refit(law, y_ref, segments)?;
         Ok(spline)
     }
 
     /// A spline with room for `segments` segments, fitted with one segment over 1 mm until
     /// [`refit`](Self::refit) says otherwise.
+    ///
+    /// # Panics
+    ///
+    /// If `law` cannot be fitted so: its potential over 1 mm underflows to zero (an exponent of
+    /// about 100 and more, or a stiffness near the smallest floats). The instrument makes its
+    /// solvers with a law of ordinary numbers; [`new`](Self::new) reports any law that fails.
     pub fn with_capacity(law: PowerLaw, segments: usize) -> Self {
+        let mut spline = Self::unfitted(law, segments);
+        spline.refit(law, 1e-3, 1).expect("one segment over 1 mm fits a law of ordinary numbers");
+        spline
+    }
+
+    /// Room for `segments` segments, not fitted yet.
+    fn unfitted(law: PowerLaw, segments: usize) -> Self {
         let n = segments.max(1) + 1;
-        let mut spline = Self {
+        Self {
             law,
             dy: 1e-3,
             segments: 1,
             knot_potential: Vec::with_capacity(n),
             knot_slope: Vec::with_capacity(n),
             curvature: Vec::with_capacity(n),
-        };
-        spline.refit(law, 1e-3, 1).expect("one segment over 1 mm is always a valid fit");
-        spline
+        }
     }
 
     /// Refit in place: N = `segments` quadratics over `[0, y_ref]` (m) for `law`. Never allocates

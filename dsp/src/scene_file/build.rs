@@ -64,6 +64,17 @@ pub fn build<J: SceneJob>(
     let (law, k) = (common.law, sampling.oversampling.max(1));
     let fs = f64::from(common.sample_rate) * k as f64;
     let run = Build { fs, samples: common.samples * k, k, max_frequency: sampling.max_frequency, job };
+    // A string's parameters are checked with the scene; how many modes it has below the band
+    // depends on the rate too.
+    let string = match scene {
+        SceneDescription::MassBarrier(_) => None,
+        SceneDescription::HammerString(d) => Some(d.params.string),
+        SceneDescription::SlideString(d) => Some(d.params.string),
+    };
+    if let Some(params) = string {
+        ModalString::modes_below(params, fs, sampling.max_frequency)
+            .map_err(|e| SceneError::invalid(&format!("string.{}", e.key), e.reason))?;
+    }
     let built = match scene {
         SceneDescription::MassBarrier(d) => solver.build(law, d.default_v_ref(), Described { scene: d, run }),
         SceneDescription::HammerString(d) => solver.build(law, d.default_v_ref(), Described { scene: d, run }),
@@ -147,10 +158,11 @@ struct Build<J> {
 }
 
 impl<J> Build<J> {
-    /// A string prepared at the build's rate; its parameters were validated with the scene.
+    /// A string prepared at the build's rate; its parameters were validated with the scene, and
+    /// its modes counted at this rate by [`build`].
     fn string(&self, params: StringParams) -> ModalString {
         ModalString::band_limited(params, self.fs, self.max_frequency)
-            .expect("string parameters are validated when the scene is described")
+            .expect("string parameters are validated with the scene and at the build's rate")
     }
 }
 

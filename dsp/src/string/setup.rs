@@ -15,6 +15,15 @@ impl ModalString {
     /// `max_frequency` (Hz). With the same `max_frequency` at every sample rate (below the
     /// lowest Nyquist in use), the string has the same modes, and so the same sound, at all of them.
     pub fn band_limited(params: StringParams, sample_rate: f64, max_frequency: f64) -> Result<Self, StringError> {
+        let count = Self::modes_below(params, sample_rate, max_frequency)?;
+        let mut s = Self::with_capacity(count);
+        s.retune(params, sample_rate, max_frequency)?;
+        Ok(s)
+    }
+
+    /// How many modes [`band_limited`](Self::band_limited) would keep, or why it would fail:
+    /// invalid parameters or rates, or more than [`MAX_MODES`] modes.
+    pub fn modes_below(params: StringParams, sample_rate: f64, max_frequency: f64) -> Result<usize, StringError> {
         check_rates(sample_rate, max_frequency)?;
         params.validate()?;
         let count = ModeCounter::new(&params, sample_rate, max_frequency).count();
@@ -26,9 +35,7 @@ impl ModalString {
                 ),
             });
         }
-        let mut s = Self::with_capacity(count);
-        s.retune(params, sample_rate, max_frequency)?;
-        Ok(s)
+        Ok(count)
     }
 
     /// An empty string (no modes) with room for `modes` modes, so that later
