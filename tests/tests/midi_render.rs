@@ -59,14 +59,36 @@ fn slide_phrase_plays_in_slide_mode() {
     assert!((f / 164.81 - 1.0).abs() < 0.01, "E3 at {f} Hz");
 }
 
-/// Bad input is an error naming what is wrong, and writes nothing: not a MIDI file, an unknown
-/// parameter id, a value that is not a number.
+/// Bad input is an error naming what is wrong, and writes nothing: not a MIDI file, one cut short
+/// (a note's track ending before its header says) or with a corrupt event, a header of 0 ticks per
+/// quarter note, a tempo of 0, an unknown parameter id, a value that is not a number.
 #[test]
 fn bad_midi_input_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let junk = dir.path().join("junk.mid");
-    std::fs::write(&junk, b"this is not a MIDI file").unwrap();
+    let file = |name: &str, bytes: &[u8]| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        path
+    };
+    let junk = file("junk.mid", b"this is not a MIDI file");
+    let note = [0, 0x90, 60, 100, 0x60, 0x80, 60, 0, 0, 0xff, 0x2f, 0];
+    let whole = smf(&note);
+    let cut = file("cut.mid", &whole[..whole.len() - 4]);
+    let corrupt = file("corrupt.mid", &smf(&[0, 0x90, 0xc8, 100, 0x60, 0x80, 60, 0, 0, 0xff, 0x2f, 0]));
+    let mut untimed = whole.clone();
+    untimed[12..14].copy_from_slice(&[0, 0]);
+    let untimed = file("untimed.mid", &untimed);
+    let stopped = file("stopped.mid", &smf(&[0, 0xff, 0x51, 3, 0, 0, 0, 0, 0x90, 60, 100, 0, 0xff, 0x2f, 0]));
+    let midi = |path: &std::path::Path, out: &str| RenderArgs {
+        midi: Some(path.to_owned()),
+        out: Some(dir.path().join(out)),
+        ..RenderArgs::default()
+    };
     let cases = [
+        (midi(&cut, "cut.wav"), "malformed"),
+        (midi(&corrupt, "corrupt.wav"), "malformed"),
+        (midi(&untimed, "untimed.wav"), "0 ticks per quarter note"),
+        (midi(&stopped, "stopped.wav"), "tempo of 0"),
         (
             RenderArgs { midi: Some(junk.clone()), out: Some(dir.path().join("1.wav")), ..RenderArgs::default() },
             "not a MIDI file",

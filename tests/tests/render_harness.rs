@@ -804,6 +804,25 @@ fn out_naming_a_pipe_writes_into_it_and_leaves_it_a_pipe() {
     assert!(bytes == fs::read(&file).unwrap(), "the reader gets the WAV a file gets ({} bytes)", bytes.len());
 }
 
+/// The options that apply to `--midi` alone are refused with a scene file, naming the option,
+/// rather than ignored; nothing is written.
+#[test]
+fn midi_options_with_a_scene_file_are_refused() {
+    for extra in [
+        &["--preset", "concert-grand"][..],
+        &["--mode", "slide"],
+        &["--set", "hard=2"],
+        &["--rate", "96000"],
+        &["--tail", "5"],
+        &["--raw"],
+    ] {
+        let dir = TempDir::new().unwrap();
+        let scene = write_scene(dir.path(), "case.toml", BASE);
+        let out = render_to(&scene, &dir.path().join("out.wav"), extra);
+        assert_refused(&out, &format!("{} applies to --midi only", extra[0]), dir.path(), &scene, BASE, &["case.toml"]);
+    }
+}
+
 /// A string with more modes below Nyquist than a string holds (4,096) at the scene's rate is an
 /// error naming its length, as at any other rate: the C4 string made 50 m long at 44.1 kHz (its
 /// parameters are valid; its mode count depends on the rate too).

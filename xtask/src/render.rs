@@ -62,10 +62,10 @@ pub struct RenderArgs {
     #[arg(long = "set", value_name = "ID=VALUE", requires = "midi")]
     pub set: Vec<String>,
     /// Sample rate for --midi (Hz).
-    #[arg(long, default_value_t = 48_000, requires = "midi")]
+    #[arg(long, default_value_t = MIDI_RATE, requires = "midi")]
     pub rate: u32,
     /// Seconds rendered after the last MIDI event.
-    #[arg(long, default_value_t = 2.0, requires = "midi")]
+    #[arg(long, default_value_t = MIDI_TAIL, requires = "midi")]
     pub tail: f64,
     /// Output WAV path [default: the input path with extension .wav].
     #[arg(long, value_name = "PATH.wav")]
@@ -82,6 +82,11 @@ pub struct RenderArgs {
     #[arg(long, requires = "midi")]
     pub raw: bool,
 }
+
+/// `--rate`'s default (Hz).
+const MIDI_RATE: u32 = 48_000;
+/// `--tail`'s default (s).
+const MIDI_TAIL: f64 = 2.0;
 
 /// What `--mode` takes: the option ids of the `mode` parameter.
 fn mode_options() -> clap::builder::PossibleValuesParser {
@@ -100,8 +105,8 @@ impl Default for RenderArgs {
             preset: None,
             mode: None,
             set: Vec::new(),
-            rate: 48_000,
-            tail: 2.0,
+            rate: MIDI_RATE,
+            tail: MIDI_TAIL,
             out: None,
             csv: false,
             chunk: None,
@@ -211,7 +216,22 @@ pub fn chunk_sizes(chunk: Option<usize>) -> Box<dyn Iterator<Item = usize>> {
 pub fn run(args: &RenderArgs, stdout: &mut dyn Write) -> Result<Outcome, RenderError> {
     let summary = match (&args.scene, &args.midi) {
         (_, Some(midi_path)) => Outcome::Midi(midi::run(args, midi_path)?),
-        (Some(scene_path), None) => Outcome::Scene(run_scene(args, scene_path)?),
+        (Some(scene_path), None) => {
+            // The parser cannot say so itself: an argument that conflicts with another bypasses
+            // the `requires` of the others (clap issue 4520).
+            let midi_only = [
+                ("--preset", args.preset.is_some()),
+                ("--mode", args.mode.is_some()),
+                ("--set", !args.set.is_empty()),
+                ("--rate", args.rate != MIDI_RATE),
+                ("--tail", args.tail.to_bits() != MIDI_TAIL.to_bits()),
+                ("--raw", args.raw),
+            ];
+            if let Some((flag, _)) = midi_only.iter().find(|(_, given)| *given) {
+                return Err(RenderError::Output(format!("{flag} applies to --midi only, not to a scene file")));
+            }
+            Outcome::Scene(run_scene(args, scene_path)?)
+        }
         (None, None) => return Err(RenderError::Output("give a scene file or --midi FILE.mid".into())),
     };
     let line = serde_json::to_string(&summary).expect("a summary always serialises");

@@ -32,7 +32,13 @@ pub enum MidiError {
 /// The channel messages of `bytes` (a standard MIDI file) with their sample offsets at
 /// `sample_rate` (Hz): `(sample, [status, data1, data2])`, in time order (file order within a tick).
 pub fn timed_messages(bytes: &[u8], sample_rate: f64) -> Result<Vec<(u64, [u8; 3])>, MidiError> {
+    // Parsed strictly (midly's `strict`): a corrupt or cut file is refused, not played in part.
     let smf = Smf::parse(bytes).map_err(|e| MidiError::Parse(e.to_string()))?;
+    if let Timing::Metrical(tpb) = smf.header.timing
+        && tpb.as_int() == 0
+    {
+        return Err(MidiError::Parse("the header gives 0 ticks per quarter note".into()));
+    }
     // (tick, track, index in track, kind)
     let mut timeline = Vec::new();
     for (track, events) in smf.tracks.iter().enumerate() {
@@ -54,6 +60,9 @@ pub fn timed_messages(bytes: &[u8], sample_rate: f64) -> Result<Vec<(u64, [u8; 3
         seconds += (tick - last_tick) as f64 * seconds_per_tick_at(tempo);
         last_tick = tick;
         match kind {
+            TrackEventKind::Meta(MetaMessage::Tempo(t)) if t.as_int() == 0 => {
+                return Err(MidiError::Parse(format!("a tempo of 0 µs per quarter note at tick {tick}")));
+            }
             TrackEventKind::Meta(MetaMessage::Tempo(t)) => tempo = f64::from(t.as_int()),
             TrackEventKind::Midi { channel, message } => {
                 let (status, d1, d2) = match message {
