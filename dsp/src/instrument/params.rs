@@ -876,14 +876,19 @@ impl ParamValues {
     /// Set parameter `id` from text ([`ParamSpec::parse`]): numbers in the parameter's unit
     /// (`gain` in dB, like the plugin shows it), `on`/`off` for switches, option ids for the
     /// choices (`piano`/`slide`, `qsa`/`exp`/`imp`, `param`/`modwheel`/`chanpress`/`polypress`,
-    /// `electric`/`acoustic`).
+    /// `electric`/`acoustic`); a number outside the parameter's range is refused, naming it.
     pub fn set(&mut self, id: &str, value: &str) -> Result<(), ParamError> {
         let spec = param_spec(id).ok_or_else(|| ParamError::UnknownId(id.to_owned()))?;
-        let shown = spec.parse(value).map_err(|expected| ParamError::BadValue {
-            id: id.to_owned(),
-            value: value.to_owned(),
-            expected,
-        })?;
+        let bad = |expected| ParamError::BadValue { id: id.to_owned(), value: value.to_owned(), expected };
+        let shown = spec.parse(value).map_err(bad)?;
+        if !spec.contains(shown) {
+            let range = match spec.kind {
+                ParamKind::Float { min, max, unit, .. } => format!("from {min} to {max}{unit}"),
+                ParamKind::Int { min, max, .. } => format!("from {min} to {max}"),
+                _ => String::new(),
+            };
+            return Err(bad(format!("a value {range}")));
+        }
         (spec.put)(self, spec.to_plain(shown));
         Ok(())
     }
@@ -917,6 +922,24 @@ impl ParamValues {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A value outside a parameter's range is refused with the range, and the value kept; the
+    /// ends of the range are accepted.
+    #[test]
+    fn setting_a_value_outside_its_range_is_refused_with_the_range() {
+        let mut values = ParamValues::default();
+        for (id, value, range) in
+            [("gain", "100", "from -36 to 12 dB"), ("segs", "0", "from 1 to"), ("voices", "1000", "to 128")]
+        {
+            let before = values.plain(id);
+            let err = values.set(id, value).expect_err(id).to_string();
+            assert!(err.contains(range), "{id}={value}: {err}");
+            assert_eq!(values.plain(id), before, "{id} unchanged");
+        }
+        values.set("gain", "-36").unwrap();
+        values.set("gain", "12").unwrap();
+        values.set("voices", "128").unwrap();
+    }
 
     /// Ids are unique, every default is in its range, and `param_index` finds each.
     #[test]
@@ -1036,15 +1059,20 @@ mod tests {
     fn every_id_can_be_set_and_unknown_ones_are_refused() {
         let mut p = ParamValues::default();
         for id in PARAM_IDS {
-            let value = match id {
-                "mode" => "slide",
-                "solver" => "imp",
-                "handsrc" => "modwheel",
-                "sbody" => "acoustic",
-                "follow" | "limit" | "guard" => "off",
-                _ => "2",
+            // A number within each range: its upper end, or 2 where the range holds it.
+            let number =
+                |max: f32| if param_spec(id).unwrap().contains(2.0) { "2".to_owned() } else { max.to_string() };
+            let value = match (id, param_spec(id).unwrap().kind) {
+                ("mode", _) => "slide".to_owned(),
+                ("solver", _) => "imp".to_owned(),
+                ("handsrc", _) => "modwheel".to_owned(),
+                ("sbody", _) => "acoustic".to_owned(),
+                ("follow" | "limit" | "guard", _) => "off".to_owned(),
+                (_, ParamKind::Float { max, .. }) => number(max),
+                (_, ParamKind::Int { max, .. }) => number(max as f32),
+                _ => unreachable!("{id}: every switch and choice is named above"),
             };
-            p.set(id, value).unwrap_or_else(|e| panic!("{id}: {e}"));
+            p.set(id, &value).unwrap_or_else(|e| panic!("{id}: {e}"));
         }
         assert_eq!((p.mode, p.slide_body), (Mode::Slide, SlideBody::Acoustic));
         assert!((p.gain - 10f32.powf(0.1)).abs() < 1e-6, "gain is given in dB");
