@@ -109,15 +109,16 @@ pub fn render(
     tail: f64,
     chunk: usize,
 ) -> (Vec<f32>, Vec<f32>, f64) {
-    render_signals(score, params, sample_rate, (tail, chunk), false)
+    render_signals(score, params, sample_rate, (tail, &mut || chunk), false)
 }
 
-/// [`render`], with `raw` the dry signals ([`Instrument::set_raw_output`]).
+/// [`render`] in calls of the sizes `chunks` gives (split at every event), with `raw` the dry
+/// signals ([`Instrument::set_raw_output`]).
 pub fn render_signals(
     score: &Score,
     params: &ParamValues,
     sample_rate: f64,
-    (tail, chunk): (f64, usize),
+    (tail, chunks): (f64, &mut dyn FnMut() -> usize),
     raw: bool,
 ) -> (Vec<f32>, Vec<f32>, f64) {
     let end = score.events.last().map_or(0, |e| e.0) + (tail.max(0.0) * sample_rate).round() as u64;
@@ -134,7 +135,7 @@ pub fn render_signals(
             next += 1;
         }
         let until_event = score.events.get(next).map_or(samples, |e| (e.0 as usize).min(samples));
-        let n = chunk.max(1).min(until_event - t).min(samples - t).max(1);
+        let n = chunks().max(1).min(until_event - t).min(samples - t).max(1);
         engine.process(&mut left[t..t + n], &mut right[t..t + n]);
         t += n;
     }
@@ -219,8 +220,10 @@ pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSumma
     }
     let wav_path = args.out.clone().unwrap_or_else(|| path.with_extension("wav"));
     super::check_output_path(&wav_path, path)?;
+    // In calls of 512 samples unless `--chunk` says otherwise (0: seeded random sizes).
+    let mut sizes = super::chunk_sizes(Some(args.chunk.unwrap_or(512)));
     let (left, right, wall) =
-        render_signals(&score, &params, fs, (args.tail, args.chunk.unwrap_or(512).max(1)), args.raw);
+        render_signals(&score, &params, fs, (args.tail, &mut || sizes.next().unwrap_or(usize::MAX)), args.raw);
     let spec = hound::WavSpec {
         channels: 2,
         sample_rate: args.rate,
