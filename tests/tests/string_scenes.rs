@@ -428,8 +428,8 @@ fn slide_real_time_path_matches_the_harness() {
     }
 }
 
-/// Bad input names its key: positions outside (0, L), a negative mass, unknown automation
-/// targets, breakpoints not increasing in time.
+/// Bad input names its key: positions outside (0, L), a pickup position the bridge force would
+/// ignore, a negative mass, unknown automation targets, breakpoints not increasing in time.
 #[test]
 fn bad_string_scenes_are_errors_naming_the_key() {
     let slide = scene_file("slide-phrase.toml");
@@ -441,6 +441,8 @@ fn bad_string_scenes_are_errors_naming_the_key() {
         (hammer.replace("preset = \"c4\"", "preset = \"c4\"\ntension = -5.0"), "string.tension"),
         (hammer.replace("preset = \"c4\"", "preset = \"c5\""), "string.preset"),
         (hammer.replace("kind = \"bridge-force\"", "kind = \"bridge-force\"\nposition = 1.5"), "output.position"),
+        // A pickup position the bridge force would ignore.
+        (hammer.replace("kind = \"bridge-force\"", "kind = \"bridge-force\"\nposition = 0.3"), "output.position"),
         (
             slide.replace("finger.right.position = 0.58", "finger.right.position = 0.7"),
             "controls.finger.right.position",

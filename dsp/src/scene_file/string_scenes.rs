@@ -279,8 +279,16 @@ impl Default for StringOutputTable {
 
 impl StringOutputTable {
     fn pickup(&self, default_kind: OutputKind) -> Result<Pickup, SceneError> {
+        let kind = self.kind.unwrap_or(default_kind);
+        // The bridge force is taken at the bridge: a pickup position would be ignored.
+        if kind == OutputKind::BridgeForce && self.position.is_some() {
+            return Err(SceneError::invalid(
+                "output.position",
+                "the bridge force is taken at the bridge; a position applies to the displacement or velocity",
+            ));
+        }
         let position = fraction("output.position", self.position.unwrap_or(0.9))?;
-        Ok(Pickup::point(self.kind.unwrap_or(default_kind), position))
+        Ok(Pickup::point(kind, position))
     }
 
     fn options(&self) -> OutputTable {
