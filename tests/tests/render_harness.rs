@@ -823,19 +823,22 @@ fn midi_options_with_a_scene_file_are_refused() {
     }
 }
 
-/// A string with more modes below Nyquist than a string holds (4,096) at the scene's rate is an
-/// error naming its length, as at any other rate: the C4 string made 50 m long at 44.1 kHz (its
-/// parameters are valid; its mode count depends on the rate too).
+/// A string with more modes below Nyquist than a string holds (4,096) at the scene's rate, or
+/// with none, is an error naming its length: the C4 string made 50 m long at 44.1 kHz, and 1 cm
+/// long (its fundamental above Nyquist, so it would render silence). Its parameters are valid;
+/// its mode count depends on the rate too.
 #[test]
-fn a_string_with_too_many_modes_at_the_scenes_rate_is_a_clear_error() {
-    let dir = TempDir::new().unwrap();
+fn a_string_with_too_many_modes_or_none_at_the_scenes_rate_is_a_clear_error() {
     let soft = fs::read_to_string(fig4_path().with_file_name("hammer-c4-soft.toml")).unwrap();
-    let long = edit(&soft, "eta0 = 8.0 ", "length = 50.0\neta0 = 8.0 ");
-    let scene = write_scene(dir.path(), "case.toml", &long);
-    let result = render_to(&scene, &dir.path().join("out.wav"), &[]);
-    assert_eq!(result.code, 1, "{}", result.stderr);
-    assert!(result.stderr.contains("string.length") && result.stderr.contains("4096 modes"), "{}", result.stderr);
-    assert_eq!(listing(dir.path()), names(&["case.toml"]), "nothing written");
+    for (length, why) in [("50.0", "4096 modes"), ("0.01", "no mode")] {
+        let dir = TempDir::new().unwrap();
+        let text = edit(&soft, "eta0 = 8.0 ", &format!("length = {length}\neta0 = 8.0 "));
+        let scene = write_scene(dir.path(), "case.toml", &text);
+        let result = render_to(&scene, &dir.path().join("out.wav"), &[]);
+        assert_eq!(result.code, 1, "{}", result.stderr);
+        assert!(result.stderr.contains("string.length") && result.stderr.contains(why), "{}", result.stderr);
+        assert_eq!(listing(dir.path()), names(&["case.toml"]), "nothing written");
+    }
 }
 
 /// A render whose output is not finite writes nothing and says why: a string damped beyond

@@ -72,8 +72,14 @@ pub fn build<J: SceneJob>(
         SceneDescription::SlideString(d) => Some(d.params.string),
     };
     if let Some(params) = string {
-        ModalString::modes_below(params, fs, sampling.max_frequency)
+        let modes = ModalString::modes_below(params, fs, sampling.max_frequency)
             .map_err(|e| SceneError::invalid(&format!("string.{}", e.key), e.reason))?;
+        if modes == 0 {
+            return Err(SceneError::invalid(
+                "string.length",
+                "the string has no mode below Nyquist: it would be silent; lengthen it or lower the tension",
+            ));
+        }
     }
     let built = match scene {
         SceneDescription::MassBarrier(d) => solver.build(law, d.default_v_ref(), Described { scene: d, run }),
