@@ -64,7 +64,8 @@ fn slide_phrase_plays_in_slide_mode() {
 
 /// Bad input is an error naming what is wrong, and writes nothing: not a MIDI file, one cut short
 /// (a note's track ending before its header says) or with a corrupt event, a header of 0 ticks per
-/// quarter note, a tempo of 0, an unknown parameter id, a value that is not a number.
+/// quarter note, a tempo of 0, a render of more samples than the renderer holds (590 s at
+/// 768 kHz, 3.6 GB), an unknown parameter id, a value that is not a number.
 #[test]
 fn bad_midi_input_is_refused() {
     let dir = tempfile::tempdir().unwrap();
@@ -92,6 +93,7 @@ fn bad_midi_input_is_refused() {
         (midi(&corrupt, "corrupt.wav"), "malformed"),
         (midi(&untimed, "untimed.wav"), "0 ticks per quarter note"),
         (midi(&stopped, "stopped.wav"), "tempo of 0"),
+        (RenderArgs { rate: 768_000, tail: 590.0, ..midi(&file("whole.mid", &whole), "huge.wav") }, "at most 6e7"),
         (
             RenderArgs { midi: Some(junk.clone()), out: Some(dir.path().join("1.wav")), ..RenderArgs::default() },
             "not a MIDI file",

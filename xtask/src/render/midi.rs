@@ -21,6 +21,10 @@ pub struct Score {
     pub notes: usize,
 }
 
+/// Most samples a MIDI render may ask for: the render holds about 16 bytes a sample (both
+/// channels, and the WAV made from them), so this bounds its memory near 1 GB.
+pub const MAX_SAMPLES: usize = 60_000_000;
+
 /// Why a MIDI file cannot be rendered.
 #[derive(Debug, thiserror::Error)]
 pub enum MidiError {
@@ -217,6 +221,14 @@ pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSumma
     let seconds = (score.events.last().map_or(0, |e| e.0) as f64) / fs + args.tail;
     if seconds > 600.0 {
         return Err(RenderError::Midi(format!("{}: lasts {seconds:.0} s; at most 600 s", path.display())));
+    }
+    if seconds * fs > MAX_SAMPLES as f64 {
+        return Err(RenderError::Midi(format!(
+            "{}: {seconds:.0} s at {} Hz is {:.2e} samples; at most {MAX_SAMPLES:.0e} (600 s at 96 kHz)",
+            path.display(),
+            args.rate,
+            seconds * fs
+        )));
     }
     let wav_path = args.out.clone().unwrap_or_else(|| path.with_extension("wav"));
     super::check_output_path(&wav_path, path)?;
