@@ -819,6 +819,17 @@ pub enum ParamError {
     /// No parameter has that id.
     #[error("unknown parameter id \"{0}\" (one of: {ids})", ids = PARAM_IDS.join(", "))]
     UnknownId(String),
+    /// A value outside the parameter's range (the plugin would clamp it, so it would not sound as
+    /// written).
+    #[error("{id} = {value} is outside the parameter's range {range}")]
+    OutOfRange {
+        /// The parameter id.
+        id: String,
+        /// The text given.
+        value: String,
+        /// The range ([`ParamSpec::range_text`]).
+        range: String,
+    },
     /// The value does not parse for that parameter.
     #[error("{id}: cannot use \"{value}\" ({expected})")]
     BadValue {
@@ -879,15 +890,17 @@ impl ParamValues {
     /// `electric`/`acoustic`); a number outside the parameter's range is refused, naming it.
     pub fn set(&mut self, id: &str, value: &str) -> Result<(), ParamError> {
         let spec = param_spec(id).ok_or_else(|| ParamError::UnknownId(id.to_owned()))?;
-        let bad = |expected| ParamError::BadValue { id: id.to_owned(), value: value.to_owned(), expected };
-        let shown = spec.parse(value).map_err(bad)?;
+        let shown = spec.parse(value).map_err(|expected| ParamError::BadValue {
+            id: id.to_owned(),
+            value: value.to_owned(),
+            expected,
+        })?;
         if !spec.contains(shown) {
-            let range = match spec.kind {
-                ParamKind::Float { min, max, unit, .. } => format!("from {min} to {max}{unit}"),
-                ParamKind::Int { min, max, .. } => format!("from {min} to {max}"),
-                _ => String::new(),
-            };
-            return Err(bad(format!("a value {range}")));
+            return Err(ParamError::OutOfRange {
+                id: id.to_owned(),
+                value: value.to_owned(),
+                range: spec.range_text(),
+            });
         }
         (spec.put)(self, spec.to_plain(shown));
         Ok(())
@@ -928,9 +941,11 @@ mod tests {
     #[test]
     fn setting_a_value_outside_its_range_is_refused_with_the_range() {
         let mut values = ParamValues::default();
-        for (id, value, range) in
-            [("gain", "100", "from -36 to 12 dB"), ("segs", "0", "from 1 to"), ("voices", "1000", "to 128")]
-        {
+        for (id, value, range) in [
+            ("gain", "100", "gain = 100 is outside the parameter's range -36..=12 dB"),
+            ("segs", "0", "1..=64"),
+            ("voices", "1000", "1..=128"),
+        ] {
             let before = values.plain(id);
             let err = values.set(id, value).expect_err(id).to_string();
             assert!(err.contains(range), "{id}={value}: {err}");

@@ -23,7 +23,7 @@
 
 use std::sync::OnceLock;
 
-use crate::instrument::params::{PLAYER_SETTINGS, ParamError, ParamValues, param_spec};
+use crate::instrument::params::{PLAYER_SETTINGS, ParamError, ParamValues};
 
 /// Preset categories, in the order the editor lists them.
 pub const CATEGORIES: [&str; 4] = ["Paper", "Piano", "Slide", "Contact"];
@@ -131,26 +131,13 @@ pub enum PresetError {
         /// The category given.
         category: String,
     },
-    /// An unknown parameter id or a value that does not parse for it.
+    /// An unknown parameter id, a value that does not parse for it or one outside its range.
     #[error("preset {id}: [params] {source}")]
     Param {
         /// The preset id.
         id: String,
         /// What the parameter said.
         source: ParamError,
-    },
-    /// A value outside the parameter's range (the plugin would clamp it, so the preset would not
-    /// sound as written).
-    #[error("preset {id}: [params] {key} = {value} is outside the parameter's range{range}")]
-    OutOfRange {
-        /// The preset id.
-        id: String,
-        /// The parameter id.
-        key: String,
-        /// The value as written.
-        value: String,
-        /// The range, with a leading space.
-        range: String,
     },
 }
 
@@ -202,25 +189,8 @@ pub fn parse_preset(id: &str, text: &str) -> Result<Preset, PresetError> {
             }
         };
         values.set(key, &text).map_err(|source| PresetError::Param { id: id.to_owned(), source })?;
-        check_range(key, &text).map_err(|range| PresetError::OutOfRange {
-            id: id.to_owned(),
-            key: key.clone(),
-            value: text.clone(),
-            range,
-        })?;
     }
     Ok(Preset { id: id.to_owned(), name, category, description, values, player_settings })
-}
-
-/// Whether `text`, just accepted for parameter `key`, is in the parameter's range, in the unit the
-/// preset writes (gain in dB; [`ParamSpec::contains`](crate::instrument::ParamSpec::contains)).
-/// `Err` holds the range to quote, with a leading space.
-fn check_range(key: &str, text: &str) -> Result<(), String> {
-    let Some(spec) = param_spec(key) else { return Ok(()) };
-    match spec.parse(text) {
-        Ok(shown) if !spec.contains(shown) => Err(format!(" {}", spec.range_text())),
-        _ => Ok(()),
-    }
 }
 
 /// Every factory preset, parsed, or the first error.
@@ -370,7 +340,7 @@ solver = "imp"
             let table: toml::Table = text.parse().unwrap();
             let params = table.get("params").and_then(toml::Value::as_table).cloned().unwrap_or_default();
             for key in params.keys() {
-                assert!(param_spec(key).is_some(), "{id}: {key} is not a parameter id");
+                assert!(crate::instrument::params::param_spec(key).is_some(), "{id}: {key} is not a parameter id");
             }
         }
     }
