@@ -322,6 +322,19 @@ fn unit(value: f32, lo: f64) -> f64 {
     if value.is_nan() { 0.0 } else { f64::from(value).clamp(lo, 1.0) }
 }
 
+/// A key's latest press on its channel.
+#[derive(Debug, Clone, Copy, Default)]
+struct Press {
+    /// When, in presses counted from the start: a slide following keys returns to the latest key
+    /// still held when the key it plays is let go.
+    order: u64,
+    /// The host's note id: a note-off or choke by id alone finds its key held down though the
+    /// note ended early (its voice taken by another).
+    id: Option<i32>,
+    /// The latest poly pressure since, 0..=1: a slide voice that returns to the key takes it.
+    pressure: f64,
+}
+
 /// The instrument engine.
 #[derive(Debug, Clone)]
 pub struct Instrument {
@@ -348,15 +361,8 @@ pub struct Instrument {
     /// The keys held down on each channel, one bit per MIDI key: their dampers are off their
     /// strings, so they ring as partners of the keys struck meanwhile (docs/physics.md §14).
     keys_down: [u128; 16],
-    /// When each key was last pressed, per channel, in presses counted from the start: a slide
-    /// following keys returns to the latest key still held when the key it plays is let go.
-    pressed: Vec<[u64; 128]>,
-    /// The host's note id of each key's latest press, per channel: a note-off or choke by id
-    /// alone finds its key held down though the note ended early (its voice taken by another).
-    press_ids: Vec<[Option<i32>; 128]>,
-    /// The latest poly pressure of each key since its press, per channel (0..=1): a slide voice
-    /// that returns to a held key takes it.
-    key_pressures: Vec<[f64; 128]>,
+    /// Each key's latest press, per channel.
+    pressed: Vec<[Press; 128]>,
     /// Presses since the start.
     presses: u64,
     /// Samples rendered since the start.
@@ -419,9 +425,7 @@ impl Instrument {
             sostenuto: [false; 16],
             caught: [0; 16],
             keys_down: [0; 16],
-            pressed: vec![[0; 128]; 16],
-            press_ids: vec![[None; 128]; 16],
-            key_pressures: vec![[0.0; 128]; 16],
+            pressed: vec![[Press::default(); 128]; 16],
             presses: 0,
             now: 0,
             in_block: 0,
@@ -583,9 +587,7 @@ impl Instrument {
         self.handle_event(Event::AllSoundOff);
         self.channels = [ChannelState::default(); 16];
         self.bends = Bends::default();
-        self.pressed.iter_mut().for_each(|keys| keys.fill(0));
-        self.press_ids.iter_mut().for_each(|ids| ids.fill(None));
-        self.key_pressures.iter_mut().for_each(|keys| keys.fill(0.0));
+        self.pressed.iter_mut().for_each(|keys| keys.fill(Press::default()));
         self.presses = 0;
         self.now = 0;
         self.in_block = 0;
@@ -636,7 +638,7 @@ impl Instrument {
             }
             Event::PolyPressure { channel, key, value } => {
                 let value = unit(value, 0.0);
-                self.key_pressures[usize::from(channel & 15)][usize::from(key & 127)] = value;
+                self.pressed[usize::from(channel & 15)][usize::from(key & 127)].pressure = value;
                 self.each_slide(NoteTarget::key(channel, key), |v, _| v.poly_pressure = value);
             }
             Event::NotePressure { note, value } => {
@@ -663,7 +665,7 @@ impl Instrument {
                 self.soft[c] = false;
                 self.sostenuto(channel, false);
                 self.slides.iter_mut().filter(|v| v.strike.channel == channel).for_each(|v| v.poly_pressure = 0.0);
-                self.key_pressures[c].fill(0.0);
+                self.pressed[c].iter_mut().for_each(|press| press.pressure = 0.0);
             }
             Event::RegisteredParameter { channel, controller, value } => {
                 self.bends.controller(channel, controller, value)
@@ -699,9 +701,8 @@ impl Instrument {
         let strike = Strike { channel, key: key & 127, velocity: f64::from(velocity.min(1.0)), shifted };
         self.keys_down[usize::from(strike.channel)] |= 1 << strike.key;
         self.presses += 1;
-        self.pressed[usize::from(strike.channel)][usize::from(strike.key)] = self.presses;
-        self.press_ids[usize::from(strike.channel)][usize::from(strike.key)] = voice;
-        self.key_pressures[usize::from(strike.channel)][usize::from(strike.key)] = 0.0;
+        self.pressed[usize::from(strike.channel)][usize::from(strike.key)] =
+            Press { order: self.presses, id: voice, pressure: 0.0 };
         let note = Note { voice, channel: strike.channel, key: strike.key };
         // A note takes the settings of its own sample, the latest the host set, though the
         // controls they steer go on at the control block's: a mode, a hardness or a slide's mass
@@ -736,14 +737,14 @@ impl Instrument {
         let (follow, offset) = (self.settings.follow_key, self.voices.len());
         for (j, v) in self.slides.iter_mut().enumerate().filter(|(_, v)| released(v.strike.channel, v.strike.key)) {
             let c = usize::from(v.strike.channel);
-            let (down, pressed, pressures) = (self.keys_down[c], &self.pressed[c], &self.key_pressures[c]);
-            let latest = (0..128u8).filter(|&k| down >> k & 1 == 1).max_by_key(|&k| pressed[usize::from(k)]);
+            let (down, pressed) = (self.keys_down[c], &self.pressed[c]);
+            let latest = (0..128u8).filter(|&k| down >> k & 1 == 1).max_by_key(|&k| pressed[usize::from(k)].order);
             match latest {
                 Some(key) if follow && v.key_down => {
                     // The released note ends; the voice plays the held key's, whose own note
                     // ended when this one took its voice: a note without an id, which events
                     // for the key reach.
-                    v.return_to(key, pressures[usize::from(key)]);
+                    v.return_to(key, pressed[usize::from(key)].pressure);
                     self.notes.start(offset + j, Note { voice: None, channel: v.strike.channel, key }, self.now);
                 }
                 _ => v.key_up(),
@@ -764,7 +765,7 @@ impl Instrument {
             *keys = match target.voice {
                 None => down & on_key,
                 Some(id) => {
-                    (0..128).filter(|&k| self.press_ids[c][k] == Some(id)).fold(0, |m, k| m | 1 << k) & down & on_key
+                    (0..128).filter(|&k| self.pressed[c][k].id == Some(id)).fold(0, |m, k| m | 1 << k) & down & on_key
                 }
             };
         }
