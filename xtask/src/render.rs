@@ -258,7 +258,7 @@ fn run_scene(args: &RenderArgs, scene_path: &Path) -> Result<Summary, RenderErro
     let (rendered, wall_seconds) =
         build(&scene, &common.solver, Sampling::NATIVE, TimedFrames { chunks: chunk_sizes(args.chunk) })
             .map_err(|source| RenderError::Scene { path: scene_path.to_owned(), source })?;
-    let options = scene.common().output;
+    let options = common.output;
     let scale = wav_scale(&rendered, options.normalize, options.gain);
     if let Some(n) = rendered.frames.iter().position(|f| !((f.output * scale) as f32).is_finite()) {
         let why = if f64::is_finite(rendered.frames[n].output) {
@@ -275,9 +275,9 @@ fn run_scene(args: &RenderArgs, scene_path: &Path) -> Result<Summary, RenderErro
     let measured = Measurements::measure(&scene, &rendered);
     let duration = rendered.frames.len() as f64 * (1.0 / common.sample_rate as f64);
     let summary = Summary { measured, wall_seconds, rtf: wall_seconds / duration };
-    let wav = write_temp(&wav_path, |w| write_wav(w, &rendered, scene.common().sample_rate, scale))?;
+    let wav = write_temp(&wav_path, |w| write_wav(w, &rendered, common.sample_rate, scale))?;
     let csv = match &csv_path {
-        Some(path) => Some((write_temp(path, |w| write_csv(w, &rendered, scene.common().sample_rate))?, path)),
+        Some(path) => Some((write_temp(path, |w| write_csv(w, &rendered, common.sample_rate))?, path)),
         None => None,
     };
     wav.persist()?;

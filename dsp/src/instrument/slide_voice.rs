@@ -369,7 +369,7 @@ impl SlideVoice {
         self.key_down = true;
         // A voice taken while it was being shed sounds again.
         self.shed_fade.clear();
-        (self.poly_pressure, self.tuning, self.slide_offset, self.hand_offset) = (0.0, 0.0, 0.0, 0.0);
+        self.start_expression(0.0);
         if legato && self.sounding {
             return;
         }
@@ -441,6 +441,11 @@ impl SlideVoice {
     /// voice's.
     pub fn return_to(&mut self, key: u8, pressure: f64) {
         self.strike.key = key;
+        self.start_expression(pressure);
+    }
+
+    /// A new note's expression: poly pressure `pressure`, no tuning, no offsets.
+    fn start_expression(&mut self, pressure: f64) {
         (self.poly_pressure, self.tuning, self.slide_offset, self.hand_offset) = (pressure, 0.0, 0.0, 0.0);
     }
 
