@@ -429,7 +429,8 @@ fn slide_real_time_path_matches_the_harness() {
 }
 
 /// Bad input names its key: positions outside (0, L), a pickup position the bridge force would
-/// ignore, a negative mass, unknown automation targets, breakpoints not increasing in time.
+/// ignore, a negative mass, unknown automation targets, breakpoints not increasing in time or not
+/// of two numbers.
 #[test]
 fn bad_string_scenes_are_errors_naming_the_key() {
     let slide = scene_file("slide-phrase.toml");
@@ -450,6 +451,9 @@ fn bad_string_scenes_are_errors_naming_the_key() {
         (slide.replace("target = \"hand.height\"", "target = \"hand.heigth\""), "automation[2].target"),
         (slide.replace("[[0.0, 3e-3], [0.15, 3e-3]", "[[0.0, 3e-3], [0.0, 3e-3]"), "automation[2].points"),
         (slide.replace("[[0.0, 3e-3], [0.15, 3e-3]", "[[0.2, 3e-3], [0.15, 3e-3]"), "automation[2].points"),
+        // A point of three numbers or of one: not silently cut or padded.
+        (slide.replace("[[0.0, 3e-3], [0.15, 3e-3]", "[[0.0, 3e-3, 7.0], [0.15, 3e-3]"), "automation[2].points"),
+        (slide.replace("[[0.0, 3e-3], [0.15, 3e-3]", "[[0.0], [0.15, 3e-3]"), "automation[2].points"),
         (slide.replace("block = 64", "block = 0"), "control.block"),
         (
             slide.replace("preset = \"slide-guitar\"", "preset = \"slide-guitar\"\n\n[slide]\nmass = -0.03"),

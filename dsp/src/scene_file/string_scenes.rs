@@ -449,7 +449,9 @@ struct FingerControl {
 #[serde(deny_unknown_fields)]
 struct AutomationEntry {
     target: String,
-    points: Vec<(f64, f64)>,
+    /// `[time (s), value]` pairs; read as lists so that a point of other than two numbers is
+    /// refused (a tuple would take the first two and drop the rest).
+    points: Vec<Vec<f64>>,
 }
 
 impl ControlsTable {
@@ -541,12 +543,19 @@ impl SlideStringFile {
                     format!("\"{}\" is automated and also given in [controls]; give one of them", entry.target),
                 ));
             }
-            let lane = Breakpoints::new(entry.points.clone()).map_err(|e| {
-                SceneError::invalid(
-                    &format!("automation[{i}].points"),
-                    format!("{} ({}): {e}", entry.target, "time s, value"),
-                )
-            })?;
+            let points_key = format!("automation[{i}].points");
+            let mut points = Vec::with_capacity(entry.points.len());
+            for (j, point) in entry.points.iter().enumerate() {
+                let &[t, v] = point.as_slice() else {
+                    return Err(SceneError::invalid(
+                        &points_key,
+                        format!("point {j} has {} numbers; a point is [time s, value]", point.len()),
+                    ));
+                };
+                points.push((t, v));
+            }
+            let lane = Breakpoints::new(points)
+                .map_err(|e| SceneError::invalid(&points_key, format!("{} (time s, value): {e}", entry.target)))?;
             lanes[index] = Some(lane);
         }
         let mut out = Vec::with_capacity(6);
