@@ -594,6 +594,8 @@ fn bad_scenes() -> Vec<Bad> {
         bad("inf sample rate", e("sample_rate = 44100", "sample_rate = inf"), &["sample_rate", "finite"]),
         bad("inf duration", e("duration = 0.002", "duration = inf"), &["duration", "finite"]),
         bad("nan v_ref", e("segments = 5", "segments = 5\nv_ref = nan"), &["solver.v_ref", "finite"]),
+        // A speed whose energy ½ m v0² leaves the floats: the default V_ref is named as a default.
+        bad("v0 beyond the floats", e("v0 = 2.0", "v0 = 1e160"), &["solver.v_ref", "not given", "speeds"]),
         bad("inf gain", e("gain = 1.0", "gain = inf"), &["output.gain", "finite"]),
         // Wrong types.
         bad(

@@ -17,7 +17,7 @@ use super::mass_barrier::MassBarrierDescription;
 use super::parse::SceneDescription;
 use super::string_scenes::{HammerStringDescription, SlideStringDescription};
 use crate::body::BodyParams;
-use crate::contact::{ContactSolver, SolverSettings, WithSolver};
+use crate::contact::{ContactSolver, Method, SolverSettings, WithSolver};
 use crate::control::{ControlSource, Fixed};
 use crate::scene::{Frame, HammerString, MassBarrier, Scene, SlideControls, SlideString, SlideStringParams};
 use crate::string::{ModalString, StringParams};
@@ -81,10 +81,26 @@ pub fn build<J: SceneJob>(
             ));
         }
     }
+    let default_v_ref = match scene {
+        SceneDescription::MassBarrier(d) => d.default_v_ref(),
+        SceneDescription::HammerString(d) => d.default_v_ref(),
+        SceneDescription::SlideString(d) => d.default_v_ref(),
+    };
+    // The default is the scene's own energy: when it leaves the floats, the fault is in the
+    // values it comes from, not in a key the file does not have.
+    if solver.method == Method::Qsa && solver.v_ref.is_none() && !(default_v_ref.is_finite() && default_v_ref > 0.0) {
+        return Err(SceneError::invalid(
+            "solver.v_ref",
+            format!(
+                "not given, and its default, the largest energy the scene can put into the contact, is \
+                 {default_v_ref:e} J: the scene's masses, speeds or pushes leave the range a float holds"
+            ),
+        ));
+    }
     let built = match scene {
-        SceneDescription::MassBarrier(d) => solver.build(law, d.default_v_ref(), Described { scene: d, run }),
-        SceneDescription::HammerString(d) => solver.build(law, d.default_v_ref(), Described { scene: d, run }),
-        SceneDescription::SlideString(d) => solver.build(law, d.default_v_ref(), Described { scene: d, run }),
+        SceneDescription::MassBarrier(d) => solver.build(law, default_v_ref, Described { scene: d, run }),
+        SceneDescription::HammerString(d) => solver.build(law, default_v_ref, Described { scene: d, run }),
+        SceneDescription::SlideString(d) => solver.build(law, default_v_ref, Described { scene: d, run }),
     };
     built.map_err(|e| SceneError::contact("contact", e))
 }

@@ -12,7 +12,7 @@
 //!
 //! [solver]
 //! method = "qsa"              # "qsa" | "imp" | "exp"
-//! segments = 5                # QSA N (default 5)
+//! segments = 5                # QSA N (default 5); IMP and EXP do not read it
 //! # v_ref = 0.02              # J; default: the largest energy the scene can put into the contact
 //!
 //! [contact]                   # the power law F = -kappa [y]+^alpha
