@@ -1124,6 +1124,107 @@ fn a_slide_voice_gliding_back_to_a_held_key_plays_that_keys_note() {
 /// without a note-off), plucks again, as a new note: over the 50 ms after it the string sounds
 /// within 3 dB of a fresh pluck over its first 50 ms (the finger stops part of the old motion as
 /// it throws the string anew), where the string held on is 4.4 dB below it.
+/// The first sample of `out` from `from` on whose magnitude reaches `level` (full scale 1).
+fn onset(out: &[f32], from: usize, level: f32) -> usize {
+    from + out[from..].iter().position(|v| v.abs() >= level).expect("the note sounds")
+}
+
+/// Render `instrument` until a note it plays has ended (its end reported), at most `limit`
+/// samples; the samples rendered.
+fn until_ended(instrument: &mut Instrument, limit: usize) -> usize {
+    let (mut l, mut r) = ([0.0f32; 64], [0.0f32; 64]);
+    let mut t = 0;
+    while instrument.drain_ended().count() == 0 {
+        assert!(t < limit, "no note ended within {limit} samples");
+        instrument.process(&mut l, &mut r);
+        t += 64;
+    }
+    t
+}
+
+/// A slide note sounds from its own sample: A2 plucked at every offset into a control block of
+/// 1, 64 or 256 samples, on a voice never played and on one whose A4 has ended, first reaches
+/// 1e-6 of full scale (-120 dBFS) the same number of samples after its note-on in every case
+/// (the limiter's look-ahead and the pluck's first steps). When a voice's control blocks ran from its first
+/// pluck and on only while it sounded, a note waited up to a block for its voice's next one:
+/// 64 samples late at N_b = 64, 256 at N_b = 256, and more or less by the voice's history.
+#[test]
+fn a_slide_note_sounds_from_its_own_sample_whatever_the_block_and_the_voice_before() {
+    let mut delays = Vec::new();
+    for block in [1usize, 64, 256] {
+        for offset in [0usize, 1, 37, 63, 100, 255] {
+            let settings = Settings { block, ..Settings::default() };
+            // A voice never played.
+            let mut fresh = slide(settings);
+            let at = 2_560 + offset;
+            let out = play(&mut fresh, &vec![(at, on(45, 0.8))], at + 4_800, || 128);
+            let first = onset(&out, at, 1e-6) - at;
+            // A voice whose note has ended: the next note at the same offset into a block.
+            let mut used = Instrument::new(FS, 1, Settings { mode: Mode::Slide, ..settings });
+            let score = vec![(0, on(69, 0.8)), (4_800, off(69))];
+            play(&mut used, &score, 9_600, || 128);
+            let t = 9_600 + until_ended(&mut used, 20 * 48_000);
+            let lead = 2_560 - t % 2_560 + offset;
+            let out = play(&mut used, &vec![(lead, on(45, 0.8))], lead + 4_800, || 128);
+            let again = onset(&out, lead, 1e-6) - lead;
+            println!(
+                "N_b = {block:3}, offset {offset:3}: {first} samples (fresh voice), {again} (a voice played before)"
+            );
+            delays.push((block, offset, first, again));
+        }
+    }
+    let reference = delays[0].2;
+    assert!(reference < Instrument::new(FS, 1, Settings::default()).latency() + 8, "{reference} samples");
+    for (block, offset, first, again) in delays {
+        assert!(first == reference && again == reference, "N_b = {block}, offset {offset}: {first}, {again} samples");
+    }
+}
+
+/// A slide note on a voice whose note has ended sounds as on a voice never played: A5, let go,
+/// ends; A2 on the same voice then renders as A2 on a fresh instrument at the same offset into a
+/// control block, their difference 100 dB below it (it is 300 dB below: what is left of the first
+/// note's tail in the output stage, some 1e-15). When a voice that
+/// fell silent by itself kept its slide pressed where its note left it, the next note dragged the
+/// pressed slide 0.52 m across the string in one control block and struck 12.7 dB louder.
+#[test]
+fn a_slide_note_on_a_voice_whose_note_ended_sounds_as_on_a_fresh_voice() {
+    for (before, key) in [(81u8, 45u8), (45, 81), (57, 60)] {
+        let mut fresh = Instrument::new(FS, 1, Settings { mode: Mode::Slide, ..Settings::default() });
+        let expected = play(&mut fresh, &vec![(100, on(key, 0.8))], 24_100, || 128);
+        let mut used = Instrument::new(FS, 1, Settings { mode: Mode::Slide, ..Settings::default() });
+        play(&mut used, &vec![(0, on(before, 0.8)), (14_400, off(before))], 14_464, || 128);
+        let t = 14_464 + until_ended(&mut used, 20 * 48_000);
+        let lead = 64 - t % 64 + 100;
+        let out = play(&mut used, &vec![(lead, on(key, 0.8))], lead + 24_000, || 128);
+        let (out, expected) = (&out[lead - 100..], &expected[..]);
+        let peak = |x: &[f32]| x.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        let ratio_db = 20.0 * f64::from(peak(out) / peak(expected)).log10();
+        let diff: Vec<f32> = out.iter().zip(expected).map(|(a, b)| a - b).collect();
+        let diff_db = 20.0 * (rms(&diff) / rms(expected)).log10();
+        println!("{before} then {key}: peak {ratio_db:+.3} dB against a fresh voice, difference {diff_db:.1} dB");
+        assert!(ratio_db.abs() < 1e-3, "{before} then {key}: peak {ratio_db:+.3} dB");
+        assert!(diff_db < -100.0, "{before} then {key}: difference {diff_db:.1} dB");
+    }
+}
+
+/// A slide note on busy voices takes the one whose string moves least: A3 held on one channel,
+/// A2 played and let go on another, then A4 on a third with two voices. A4 takes A2's voice,
+/// fallen quiet, and A3 sounds on. Stealing the oldest voice ended the held A3.
+#[test]
+fn a_slide_note_on_busy_voices_takes_the_quietest_not_the_oldest() {
+    let mut p = Instrument::new(FS, 2, Settings { mode: Mode::Slide, ..Settings::default() });
+    let score = vec![
+        (0, Event::NoteOn { channel: 0, key: 57, velocity: 0.8 }),
+        (14_400, Event::NoteOn { channel: 1, key: 45, velocity: 0.8 }),
+        (24_000, Event::NoteOff { channel: 1, key: 45 }),
+        (72_000, Event::NoteOn { channel: 2, key: 69, velocity: 0.8 }),
+    ];
+    play(&mut p, &score, 76_800, || 128);
+    let ended: Vec<u8> = p.drain_ended().map(|e| e.note.key).collect();
+    println!("ended {ended:?}");
+    assert_eq!(ended, [45], "the quiet, released A2 gives way; the held A3 sounds on");
+}
+
 #[test]
 fn a_slide_key_struck_again_while_held_plucks_again() {
     let held = play(&mut slide(Settings::default()), &vec![(0, on(50, 0.8))], 16_800, || 64);

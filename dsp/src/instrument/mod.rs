@@ -924,13 +924,16 @@ impl Instrument {
             self.slides[i].play(strike, &settings, legato, now);
             return Some(i);
         }
-        // A free voice, else the oldest not being shed: its string keeps its motion, so reuse does
-        // not click.
-        let oldest = |shedding: bool| {
+        // A free voice, else the one whose string moves least (the oldest among equals), not being
+        // shed: its string keeps its motion, so reuse does not click. The motion is weighed at
+        // control blocks, so the choice does not depend on the host's buffers.
+        let quietest = |shedding: bool| {
             let candidates = self.slides.iter().enumerate().filter(|(_, v)| shedding || !v.shedding());
-            candidates.min_by_key(|(_, v)| v.started).map(|(i, _)| i)
+            candidates.min_by(|(_, a), (_, b)| a.motion().total_cmp(&b.motion()).then(a.started.cmp(&b.started)))
         };
-        let index = self.slides.iter().position(|v| !v.sounding).or_else(|| oldest(false)).or_else(|| oldest(true));
+        let index = (self.slides.iter().position(|v| !v.sounding))
+            .or_else(|| quietest(false).map(|(i, _)| i))
+            .or_else(|| quietest(true).map(|(i, _)| i));
         if let Some(i) = index {
             let voice = &mut self.slides[i];
             // A silent voice's pickup stayed where the voice last sounded (see `begin_block`).
@@ -953,6 +956,7 @@ impl Instrument {
             if self.in_block == 0 {
                 self.begin_block();
             }
+            self.begin_first_slide_blocks();
             let len = (self.settings.block - self.in_block).min(n - done);
             let scratch = &mut self.scratch[..len];
             let [bus_l, bus_r, bus_s, bus_a] = &mut self.buses;
@@ -1077,6 +1081,20 @@ impl Instrument {
             v.begin_block(&self.settings, &channel, len);
         }
         self.check_ended();
+    }
+
+    /// The slide voices plucked from silence inside this control block begin their first block
+    /// at once, for the rest of this one: their notes sound from their own sample, and their
+    /// blocks fall on the instrument's.
+    fn begin_first_slide_blocks(&mut self) {
+        let (_, slides) = self.pools();
+        let len = self.settings.block - self.in_block;
+        for i in self.notes.live_in(slides) {
+            if self.slides[i].fresh() {
+                let (settings, channel) = (self.note_settings(), self.channel_state(self.slides[i].strike.channel));
+                self.slides[i].begin_block(&settings, &channel, len);
+            }
+        }
     }
 
     /// What a slide voice reads from `channel`: its controllers, its pitch-bend sensitivity and

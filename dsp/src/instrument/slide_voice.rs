@@ -2,7 +2,10 @@
 //!
 //! The string is the slide-guitar preset (open A2, [`crate::preset::slide_guitar`]); the pitch
 //! comes from where the slide stops it. Per control block the voice sets the scene's controls,
-//! which the scene moves linearly across the block:
+//! which the scene moves linearly across the block. The blocks are the instrument's, fixed in
+//! time; a voice plucked from silence inside one begins its first block at once, for the rest of
+//! it, so that the note sounds from its own sample. A note from silence finds the slide lifted at
+//! rest where the note puts it, whatever the voice played before:
 //! - slide position `x_o = L(1 − 2^(−p/12))` for `p` semitones above the open string: the
 //!   `slide_position` setting, followed as it comes (host automation is already a gesture), or,
 //!   when following keys, the played key's distance from the open string, glided towards with time
@@ -380,7 +383,7 @@ impl SlideVoice {
         }
         if !self.sounding {
             self.glided = self.keys_and_bends(settings, &ChannelState::default());
-            self.slide_motion = Motion::at_rest(Self::slide_position(self.length, self.semitones(settings)));
+            self.lift_to(Self::slide_position(self.length, self.semitones(settings)));
             self.fresh = true;
         }
         if !self.sounding {
@@ -431,7 +434,7 @@ impl SlideVoice {
     /// offsets put the slide, as if they had come with the note-on.
     fn settle_if_fresh(&mut self, settings: &Settings) {
         if self.fresh && self.sounding {
-            self.slide_motion = Motion::at_rest(Self::slide_position(self.length, self.semitones(settings)));
+            self.lift_to(Self::slide_position(self.length, self.semitones(settings)));
         }
     }
 
@@ -549,11 +552,27 @@ impl SlideVoice {
     }
 
     /// Bring the string and the slide to rest, the slide lifted and the fingers off.
+    /// A silent voice's slide at rest at `x_o` (m), lifted, its trailing finger behind it: where
+    /// a note from silence starts, so that the slide does not first travel there from where the
+    /// voice last sounded.
+    fn lift_to(&mut self, x_o: f64) {
+        self.slide_motion = Motion::at_rest(x_o);
+        self.live.0 = SlideControls { slide_position: x_o, left_position: (x_o - TRAIL).max(0.002), ..self.live.0 };
+        self.rest_lifted();
+    }
+
     fn rest_lifted(&mut self) {
         let lifted = SlideControls { hand_height: HAND_RANGE.0, left_force: 0.0, right_force: 0.0, ..self.live.0 };
         self.live.0 = lifted;
         self.hand = Motion::at_rest(lifted.hand_height);
         self.core.set_body(self.body == SlideBody::Acoustic, lifted);
+    }
+
+    /// Whether it was plucked from silence and has not begun a control block since: it then
+    /// begins one at once, for what is left of the instrument's, so that its note sounds from its
+    /// own sample.
+    pub fn fresh(&self) -> bool {
+        self.fresh && self.sounding
     }
 
     /// Work at a control-block boundary: move the controls on for the coming `len` samples and
@@ -613,6 +632,7 @@ impl SlideVoice {
             right_force,
         };
         self.core.set_params(self.slide, [settings.finger_damping; 2], settings.block);
+        self.core.start_block(len);
         // The energies take a pass over the modes: every block, or every `ENERGY_INTERVAL`
         // samples when the blocks are shorter.
         self.unweighed += len;
@@ -630,7 +650,9 @@ impl SlideVoice {
         // judged on the string's motion.
         self.motion = kinetic.max(self.motion * self.motion_factor.get(-since / 0.05, f64::exp));
         if !self.key_down && self.pluck.is_none() && self.motion < RELEASE_ENERGY * self.reference_energy {
-            self.sounding = false;
+            // At rest and lifted, as a voice never played: the next note on it starts as on a
+            // fresh voice, not with the slide pressed where this one left it.
+            self.silence();
         }
     }
 

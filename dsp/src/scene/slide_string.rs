@@ -848,6 +848,15 @@ impl SlideCore {
         self.next_block = block.max(1);
     }
 
+    /// Begin a control block of `len` steps at the next step, in place of the rest of the block
+    /// under way: a caller with blocks of its own (the instrument's, fixed in time) keeps the
+    /// core's on them. The controls start from the latest block's target, so call it where that
+    /// block has run whole or the controls stand still (a core at rest).
+    pub fn start_block(&mut self, len: usize) {
+        self.next_block = len.max(1);
+        self.k = self.block;
+    }
+
     /// Move the pickup to `pickup` (the string's output weights), gliding over the next `glide`
     /// steps: each step's output is `(1 − t)·o_from + t·o_to` at `t = j/glide` for the `j`-th step,
     /// the outputs the weights heard now and the new weights give, so the output's weighting moves
