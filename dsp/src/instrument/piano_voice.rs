@@ -578,10 +578,11 @@ impl PianoVoice {
         let note = piano_note(strike.key);
         let position = Self::striking_point(strike.key, settings);
         let restrike = self.sounding && self.strike.key == strike.key && self.pending.is_none();
-        self.voicing = super::voicing_gain(strike.key, strike.velocity);
+        let gain = super::voicing_gain(strike.key, strike.velocity);
         let strings = note.strings as f64;
         if !restrike {
-            self.voiced = self.voicing;
+            self.voicing = gain;
+            self.voiced = gain;
             self.pan = super::pan_gains(strike.key, settings.stereo_width);
             if !self.tune(strike.key, settings, position, partners) {
                 return;
@@ -597,6 +598,16 @@ impl PianoVoice {
         // The felt starts two samples of travel beyond the string, so the hammer lands almost at once.
         let hammer = HammerParams { mass, velocity, position, gap: 2.0 * velocity / fs };
         let string_energy = self.core.own_energy();
+        if restrike {
+            // The voicing is the gain a strike at its level is heard with: it belongs to what the
+            // new strike adds, not to the sound already ringing, which keeps its own. One gain
+            // serves both, their powers weighted by their energies (the strings' now, the
+            // hammer's coming), so that a soft note repeated into a loud one's ringing does not
+            // turn that ringing down, nor a loud one into a soft one's turn it up.
+            let added = hammer.kinetic_energy();
+            let power = string_energy * self.voicing * self.voicing + added * gain * gain;
+            self.voicing = if string_energy + added > 0.0 { (power / (string_energy + added)).sqrt() } else { gain };
+        }
         let elsewhere = std::mem::take(&mut self.meets);
         self.core.set_background(elsewhere.motion, elsewhere.reach);
         self.core.strike(&hammer);
@@ -875,10 +886,12 @@ impl PianoVoice {
     }
 
     /// How loud the voice is now, what stealing and shedding rank voices by: the mean square of
-    /// its output (bridge force, N²) over its latest window (see [`LOUDNESS_WINDOW`]); infinite
-    /// for a note struck since that window closed, not heard yet.
+    /// its output (bridge force, N²) over its latest window (see [`LOUDNESS_WINDOW`]) times the
+    /// square of its voicing gain, the share of it that reaches the output (the voicing evens the
+    /// keys' loudness, up to 20 dB apart in bridge force); infinite for a note struck since that
+    /// window closed, not heard yet.
     pub fn loudness(&self) -> f64 {
-        self.heard.loudness
+        self.heard.loudness * self.voicing * self.voicing
     }
 
     /// Work at a control-block boundary: start a pending note, bring in the partners whose
@@ -941,8 +954,9 @@ impl PianoVoice {
         }
         self.swing_age += span;
         let update = if dampers.hovering() { HOVER_UPDATE } else { DAMPER_UPDATE };
-        let caught = dampers.caught & bit(self.strike.key) != 0;
-        let damped = !(self.key_down || caught) && has_damper(self.strike.key);
+        // The key may be held on another channel than the one that struck it last.
+        let up = (dampers.caught | dampers.held) & bit(self.strike.key) != 0;
+        let damped = !(self.key_down || up) && has_damper(self.strike.key);
         let target = if damped { settings.damper_rate * dampers.share(|| self.swing) } else { 0.0 };
         settle(&mut self.damper, target, step);
         self.since_update += span;
