@@ -701,7 +701,10 @@ fn slide_keys_0_and_127_play_the_ends_of_the_slides_range() {
 
 /// Every sample rate from 22.05 to 192 kHz: a note in each mode, and on each guitar, is finite
 /// and at its pitch (the engine band-limits every string to 20 kHz, or Nyquist below 40 kHz, so
-/// the sound is the same).
+/// the sound is the same). A slide's pitch is measured from 0.4 s on: on the acoustic guitar A3
+/// sits on the top's 219 Hz resonance, and for the first few hundred milliseconds the string's
+/// first partial and the body's mode trade energy, which pulls the period (at 22.05 kHz +1.7 %
+/// over 0.15–0.4 s, +0.8 % over 0.4–1 s; the electric guitar +0.7 % over both).
 #[test]
 fn sample_rates_from_22_to_192_khz() {
     let bundle = release_bundle();
@@ -714,11 +717,11 @@ fn sample_rates_from_22_to_192_khz() {
         assert_pitch(piano_pitch(&audio, fs, 69), 440.0, &format!("piano A4 at {fs} Hz"));
         let guitars = [("electric", 0.0), ("acoustic", 1.0)].map(|(guitar, body)| {
             let mut slide = Plugin::new(&bundle, fs, 4096, &[param("mode", 1.0), param("sbody", body)]);
-            let audio = slide.render_blocks(&[(0, Ev::On(0, 57, 0.8))], samples, 1024);
+            let audio = slide.render_blocks(&[(0, Ev::On(0, 57, 0.8))], 2 * samples, 1024);
             let what = format!("{guitar} slide A3 at {fs} Hz");
             audio.assert_finite(&what);
             assert!(audio.peak() > AUDIBLE, "{what} is silent");
-            assert_pitch(slide_pitch(&audio.tail((0.15 * fs) as usize), fs, 220.0), 220.0, &what);
+            assert_pitch(slide_pitch(&audio.tail(samples), fs, 220.0), 220.0, &what);
             audio
         });
         assert!(bit_identical(&guitars[0], &guitars[1]).is_some(), "the two guitars sound alike at {fs} Hz");

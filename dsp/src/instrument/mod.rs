@@ -1567,8 +1567,9 @@ mod tests {
     /// voices' bridges keep their energy; those voices' own strings drive them, and can through
     /// a contact: in the 16-voice run a G4 struck again at velocity 0.42, among copies ringing,
     /// holds 1.029 of its reference at the end of a host call (1.041 sample by sample, 1.2 ms in;
-    /// docs/physics.md §14.3); the other runs stay below 0.994 of it. A voice fading out for a stolen note is left out: its fade's damping weighs its
-    /// energy anew, and the guard does not read it.
+    /// docs/physics.md §14.3); the other runs stay below 0.994 of it. A voice fading out for a
+    /// stolen note is left out: its fade's damping weighs its energy anew, and the guard does not
+    /// read it.
     #[test]
     fn every_voice_stays_within_a_tenth_over_its_strikes_energy_through_steals_pedalling_and_parameter_jumps() {
         use crate::contact::Method;

@@ -551,7 +551,6 @@ impl SlideVoice {
         self.silence();
     }
 
-    /// Bring the string and the slide to rest, the slide lifted and the fingers off.
     /// A silent voice's slide at rest at `x_o` (m), lifted, its trailing finger behind it: where
     /// a note from silence starts, so that the slide does not first travel there from where the
     /// voice last sounded.
@@ -561,6 +560,7 @@ impl SlideVoice {
         self.rest_lifted();
     }
 
+    /// Bring the string and the slide to rest, the slide lifted and the fingers off.
     fn rest_lifted(&mut self) {
         let lifted = SlideControls { hand_height: HAND_RANGE.0, left_force: 0.0, right_force: 0.0, ..self.live.0 };
         self.live.0 = lifted;
