@@ -1224,10 +1224,6 @@ fn a_slide_voice_gliding_back_to_a_held_key_plays_that_keys_note() {
     assert!(held > 1e-3 && muted < 1e-2 * held, "held {held:.2e}, muted {muted:.2e}");
 }
 
-/// Following keys, the key a slide voice plays, struck again while held (a second note-on
-/// without a note-off), plucks again, as a new note: over the 50 ms after it the string sounds
-/// within 3 dB of a fresh pluck over its first 50 ms (the finger stops part of the old motion as
-/// it throws the string anew), where the string held on is 4.4 dB below it.
 /// The first sample of `out` from `from` on whose magnitude reaches `level` (full scale 1).
 fn onset(out: &[f32], from: usize, level: f32) -> usize {
     from + out[from..].iter().position(|v| v.abs() >= level).expect("the note sounds")
@@ -1329,6 +1325,33 @@ fn a_slide_note_on_busy_voices_takes_the_quietest_not_the_oldest() {
     assert_eq!(ended, [45], "the quiet, released A2 gives way; the held A3 sounds on");
 }
 
+/// The notes of a chord struck on busy slide voices all sound, older notes giving way: four
+/// loud notes held on four voices, then three softer ones on other channels in one sample. The
+/// three voices taken are old notes'. When a voice just plucked counted by its pluck's energy,
+/// softer than the notes ringing, each chord note took the one before it's voice and only the
+/// last one sounded.
+#[test]
+fn a_chord_struck_on_busy_slide_voices_sounds_whole() {
+    let mut p = Instrument::new(FS, 4, Settings { mode: Mode::Slide, ..Settings::default() });
+    let old = [45u8, 52, 57, 64];
+    let mut score: Score =
+        old.iter().enumerate().map(|(c, &key)| (0, Event::NoteOn { channel: c as u8, key, velocity: 1.0 })).collect();
+    let chord = [69u8, 72, 76];
+    score.extend(
+        chord.iter().enumerate().map(|(c, &key)| (1_280, Event::NoteOn { channel: 4 + c as u8, key, velocity: 0.5 })),
+    );
+    play(&mut p, &score, 9_600, || 64);
+    let mut ended: Vec<u8> = p.drain_ended().map(|e| e.note.key).collect();
+    ended.sort_unstable();
+    println!("ended {ended:?}");
+    assert_eq!(ended.len(), 3, "three old notes give way: {ended:?}");
+    assert!(ended.iter().all(|k| old.contains(k)), "no chord note is taken by the next: {ended:?}");
+}
+
+/// Following keys, the key a slide voice plays, struck again while held (a second note-on
+/// without a note-off), plucks again, as a new note: over the 50 ms after it the string sounds
+/// within 3 dB of a fresh pluck over its first 50 ms (the finger stops part of the old motion as
+/// it throws the string anew), where the string held on is 4.4 dB below it.
 #[test]
 fn a_slide_key_struck_again_while_held_plucks_again() {
     let held = play(&mut slide(Settings::default()), &vec![(0, on(50, 0.8))], 16_800, || 64);

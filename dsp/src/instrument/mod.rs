@@ -789,12 +789,13 @@ impl Instrument {
         }
     }
 
-    /// Apply `f` (with the settings in force) to the slide voices playing the addressed notes.
+    /// Apply `f` (with the latest settings, those a note struck now takes) to the slide voices
+    /// playing the addressed notes.
     fn each_slide(&mut self, target: NoteTarget, mut f: impl FnMut(&mut SlideVoice, &Settings)) {
-        let offset = self.voices.len();
+        let (offset, settings) = (self.voices.len(), self.note_settings());
         for (i, _) in self.notes.addressed(target) {
             if let Some(v) = i.checked_sub(offset).and_then(|j| self.slides.get_mut(j)) {
-                f(v, &self.settings);
+                f(v, &settings);
             }
         }
     }
@@ -925,11 +926,16 @@ impl Instrument {
             return Some(i);
         }
         // A free voice, else the one whose string moves least (the oldest among equals), not being
-        // shed: its string keeps its motion, so reuse does not click. The motion is weighed at
-        // control blocks, so the choice does not depend on the host's buffers.
+        // shed: its string keeps its motion, so reuse does not click. A voice still plucking goes
+        // last, so that the notes of a chord never take one another's voices. The motion is
+        // weighed at control blocks, so the choice does not depend on the host's buffers.
         let quietest = |shedding: bool| {
             let candidates = self.slides.iter().enumerate().filter(|(_, v)| shedding || !v.shedding());
-            candidates.min_by(|(_, a), (_, b)| a.motion().total_cmp(&b.motion()).then(a.started.cmp(&b.started)))
+            candidates.min_by(|(_, a), (_, b)| {
+                (a.plucking().cmp(&b.plucking()))
+                    .then(a.motion().total_cmp(&b.motion()))
+                    .then(a.started.cmp(&b.started))
+            })
         };
         let index = (self.slides.iter().position(|v| !v.sounding))
             .or_else(|| quietest(false).map(|(i, _)| i))

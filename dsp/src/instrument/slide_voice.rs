@@ -383,7 +383,7 @@ impl SlideVoice {
         }
         if !self.sounding {
             self.glided = self.keys_and_bends(settings, &ChannelState::default());
-            self.lift_to(Self::slide_position(self.length, self.semitones(settings)));
+            self.lift_to(Self::slide_position(self.length, self.semitones(settings)), settings);
             self.fresh = true;
         }
         if !self.sounding {
@@ -434,7 +434,7 @@ impl SlideVoice {
     /// offsets put the slide, as if they had come with the note-on.
     fn settle_if_fresh(&mut self, settings: &Settings) {
         if self.fresh && self.sounding {
-            self.lift_to(Self::slide_position(self.length, self.semitones(settings)));
+            self.lift_to(Self::slide_position(self.length, self.semitones(settings)), settings);
         }
     }
 
@@ -488,6 +488,7 @@ impl SlideVoice {
         self.sounding = false;
         self.key_down = false;
         self.pluck = None;
+        self.unweighed = 0;
         self.rest_lifted();
     }
 
@@ -551,12 +552,13 @@ impl SlideVoice {
         self.silence();
     }
 
-    /// A silent voice's slide at rest at `x_o` (m), lifted, its trailing finger behind it: where
-    /// a note from silence starts, so that the slide does not first travel there from where the
-    /// voice last sounded.
-    fn lift_to(&mut self, x_o: f64) {
+    /// A silent voice's slide at rest at `x_o` (m), lifted, its trailing finger behind it and the
+    /// plucking finger where `settings` put it: where a note from silence starts, so that neither
+    /// first travels there from where the voice last sounded.
+    fn lift_to(&mut self, x_o: f64, settings: &Settings) {
         self.slide_motion = Motion::at_rest(x_o);
-        self.live.0 = SlideControls { slide_position: x_o, left_position: (x_o - TRAIL).max(0.002), ..self.live.0 };
+        let (left_position, right_position) = ((x_o - TRAIL).max(0.002), settings.pluck_position * self.length);
+        self.live.0 = SlideControls { slide_position: x_o, left_position, right_position, ..self.live.0 };
         self.rest_lifted();
     }
 
@@ -573,6 +575,11 @@ impl SlideVoice {
     /// own sample.
     pub fn fresh(&self) -> bool {
         self.fresh && self.sounding
+    }
+
+    /// Whether its finger is still plucking its latest note ([`PLUCK_TIME`]).
+    pub fn plucking(&self) -> bool {
+        self.pluck.is_some()
     }
 
     /// Work at a control-block boundary: move the controls on for the coming `len` samples and
@@ -649,7 +656,9 @@ impl SlideVoice {
         // A pressed slide holds static energy in the string and the hand for ever, so silence is
         // judged on the string's motion.
         self.motion = kinetic.max(self.motion * self.motion_factor.get(-since / 0.05, f64::exp));
-        if !self.key_down && self.pluck.is_none() && self.motion < RELEASE_ENERGY * self.reference_energy {
+        // A voice caught over its bound trips at the next block instead (and is counted).
+        let quiet = self.motion < RELEASE_ENERGY * self.reference_energy;
+        if !self.key_down && self.pluck.is_none() && quiet && !self.guard_fade.is_fading() {
             // At rest and lifted, as a voice never played: the next note on it starts as on a
             // fresh voice, not with the slide pressed where this one left it.
             self.silence();
