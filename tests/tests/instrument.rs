@@ -113,6 +113,11 @@ fn rms(x: &[f32]) -> f64 {
     (x.iter().map(|&v| f64::from(v).powi(2)).sum::<f64>() / x.len() as f64).sqrt()
 }
 
+/// [`rms`] in dB (full scale 1).
+fn rms_db(x: &[f32]) -> f64 {
+    20.0 * rms(x).log10()
+}
+
 /// Each key sounds at its pitch, equal temperament moved by the octave stretch (C8 32.6 cents
 /// sharp): the first partial of the rendered sound is within 1 % of the key's tuned frequency (the
 /// damped-mode shift makes it 0.02 % sharp at C4), and the loudest note stays below full scale.
@@ -383,7 +388,7 @@ fn stealing_takes_the_voice_quietest_at_the_output_across_the_keyboard() {
     for (low, high) in [((24u8, 0.3f32), (87u8, 1.0f32)), ((36, 0.4), (86, 1.0)), ((48, 0.4), (86, 1.0))] {
         let heard = |(key, velocity): (u8, f32)| {
             let out = play(&mut piano(2), &vec![(0, on(key, velocity))], 24_000, || 64);
-            20.0 * rms(&out[23_040..24_000]).log10()
+            rms_db(&out[23_040..24_000])
         };
         let (low_db, high_db) = (heard(low), heard(high));
         let quieter = if low_db < high_db { low.0 } else { high.0 };
@@ -422,7 +427,7 @@ fn strings_alone(key: u8, strikes: &[(usize, f64)], samples: usize) -> Vec<f32> 
 /// within 0.5 dB, over 0.1–0.3 s.
 #[test]
 fn a_soft_restrike_of_a_ringing_key_leaves_its_ringing_as_loud() {
-    let level = |x: &[f32], (from, to): (f64, f64)| 20.0 * rms(&x[(from * FS) as usize..(to * FS) as usize]).log10();
+    let level = |x: &[f32], (from, to): (f64, f64)| rms_db(&x[(from * FS) as usize..(to * FS) as usize]);
     let change = |a: &[f32], b: &[f32], window| level(a, window) - level(b, window);
     let dry = |score: &[(usize, f32)], key: u8| {
         let mut p = piano(4);
@@ -468,7 +473,7 @@ fn a_key_held_on_two_channels_keeps_its_dampers_up_until_both_let_it_go() {
     let mut score = both.clone();
     score.extend([(14_400, up(1, 48)), (48_000, up(0, 48))]);
     let released = play(&mut piano(4), &score, 96_000, || 64);
-    let level = |x: &[f32], from: usize, to: usize| 20.0 * rms(&x[from..to]).log10();
+    let level = |x: &[f32], from: usize, to: usize| rms_db(&x[from..to]);
     let ringing = level(&released, 38_400, 48_000) - level(&held, 38_400, 48_000);
     let damped = level(&released, 72_000, 96_000) - level(&held, 72_000, 96_000);
     println!("after channel 2 lets go: {ringing:+.2} dB; after both: {damped:+.1} dB");

@@ -81,11 +81,7 @@ pub fn build<J: SceneJob>(
             ));
         }
     }
-    let default_v_ref = match scene {
-        SceneDescription::MassBarrier(d) => d.default_v_ref(),
-        SceneDescription::HammerString(d) => d.default_v_ref(),
-        SceneDescription::SlideString(d) => d.default_v_ref(),
-    };
+    let default_v_ref = scene.default_v_ref();
     // The default is the scene's own energy: when it leaves the floats, the fault is in the
     // values it comes from, not in a key the file does not have.
     if solver.method == Method::Qsa && solver.v_ref.is_none() && !(default_v_ref.is_finite() && default_v_ref > 0.0) {

@@ -72,6 +72,16 @@ impl SceneDescription {
         }
     }
 
+    /// The QSA reference energy V_ref a scene file that gives none takes (J): the largest energy
+    /// the scene can put into the contact.
+    pub fn default_v_ref(&self) -> f64 {
+        match self {
+            SceneDescription::MassBarrier(d) => d.default_v_ref(),
+            SceneDescription::HammerString(d) => d.default_v_ref(),
+            SceneDescription::SlideString(d) => d.default_v_ref(),
+        }
+    }
+
     /// The same scene with other solver settings (for comparing methods on one scene).
     pub fn with_solver(&self, solver: SolverSettings) -> Self {
         let mut out = self.clone();
