@@ -90,6 +90,7 @@ mod partners;
 mod piano_voice;
 mod presets;
 mod settings;
+mod slide_scale;
 mod slide_voice;
 mod solvers;
 mod voicing;
@@ -115,6 +116,7 @@ pub use presets::{
     CATEGORIES, FACTORY_PRESETS, Preset, PresetError, factory_presets, find_preset, load_factory_presets, parse_preset,
 };
 pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody, hammer_speed};
+pub use slide_scale::SlideScale;
 pub use slide_voice::{
     BRAKING, ChannelState, HAND_ACCELERATION, HAND_SPEED, OPEN_KEY, PICKUP_APERTURE, PLUCK_TIME, REST_FORCE,
     SLIDE_ACCELERATION, SLIDE_SPEED, SlideVoice, TRAIL,

@@ -6,7 +6,8 @@
 //! time; a voice plucked from silence inside one begins its first block at once, for the rest of
 //! it, so that the note sounds from its own sample. A note from silence finds the slide lifted at
 //! rest where the note puts it, whatever the voice played before:
-//! - slide position `x_o = L(1 − 2^(−p/12))` for `p` semitones above the open string: the
+//! - slide position `x_o` for `p` semitones above the open string ([`SlideScale`]: the ideal
+//!   string's `L(1 − 2^(−p/12))`, less the end correction of the model's string): the
 //!   `slide_position` setting, followed as it comes (host automation is already a gesture), or,
 //!   when following keys, the played key's distance from the open string, glided towards with time
 //!   constant `glide_time`; plus pitch bend × bend range, glided as well; plus the note's own
@@ -67,6 +68,7 @@ use crate::instrument::memo::{ENERGY_INTERVAL, Memo};
 use crate::instrument::notes::NoteParam;
 use crate::instrument::piano_voice::{GUARD_FACTOR, GuardFade, RELEASE_ENERGY, STEAL_TIME, Strike};
 use crate::instrument::settings::{HAND_RANGE, HandSource, Settings, SlideBody};
+use crate::instrument::slide_scale::SlideScale;
 use crate::instrument::solvers::Solvers;
 use crate::preset::slide_guitar;
 use crate::scene::{OutputKind, Pickup, SlideControls, SlideCore, SlideStringParams};
@@ -276,6 +278,8 @@ pub struct SlideVoice {
     pub body: SlideBody,
     /// Where the pickup's weights are made for (fraction of the length).
     pickup: f64,
+    /// Where the slide stops this voice's string for each pitch.
+    scale: SlideScale,
 }
 
 impl SlideVoice {
@@ -285,7 +289,8 @@ impl SlideVoice {
         let string = ModalString::band_limited(g.string, sample_rate, settings.max_frequency.min(0.5 * sample_rate))
             .expect("the slide-guitar preset is a valid string");
         let length = g.string.length;
-        let rest = Self::at_rest(length, settings);
+        let scale = SlideScale::new(&string);
+        let rest = Self::at_rest(length, &scale, settings);
         let x_o = rest.slide_position;
         let slide = Self::slide_params(settings);
         let params = SlideStringParams {
@@ -337,13 +342,14 @@ impl SlideVoice {
             unweighed: 0,
             body: SlideBody::Pickup,
             pickup: settings.pickup_position,
+            scale,
         }
     }
 
     /// The controls of a voice at rest on a string of length `length` (m) under `settings`: the
     /// slide lifted above its position, the fingers off.
-    fn at_rest(length: f64, settings: &Settings) -> SlideControls {
-        let x_o = Self::slide_position(length, settings.slide_position);
+    fn at_rest(length: f64, scale: &SlideScale, settings: &Settings) -> SlideControls {
+        let x_o = scale.position(settings.slide_position);
         SlideControls {
             slide_position: x_o,
             hand_height: HAND_RANGE.0,
@@ -357,12 +363,6 @@ impl SlideVoice {
     /// The slide and hand of `settings`.
     fn slide_params(settings: &Settings) -> SlideParams {
         SlideParams { mass: settings.slide_mass, stiffness: settings.hand_stiffness, damping: settings.hand_damping }
-    }
-
-    /// Slide position x_o (m) `semitones` above the open string of length `length` (m), kept
-    /// between 5 mm and 0.8 of the length.
-    fn slide_position(length: f64, semitones: f64) -> f64 {
-        (length * (1.0 - 2f64.powf(-semitones / 12.0))).clamp(0.005, 0.8 * length)
     }
 
     /// Pluck `strike` now. With `legato` (following keys, another key still held) the slide
@@ -383,7 +383,7 @@ impl SlideVoice {
         }
         if !self.sounding {
             self.glided = self.keys_and_bends(settings, &ChannelState::default());
-            self.lift_to(Self::slide_position(self.length, self.semitones(settings)), settings);
+            self.lift_to(self.scale.position(self.semitones(settings)), settings);
             self.fresh = true;
         }
         if !self.sounding {
@@ -434,7 +434,7 @@ impl SlideVoice {
     /// offsets put the slide, as if they had come with the note-on.
     fn settle_if_fresh(&mut self, settings: &Settings) {
         if self.fresh && self.sounding {
-            self.lift_to(Self::slide_position(self.length, self.semitones(settings)), settings);
+            self.lift_to(self.scale.position(self.semitones(settings)), settings);
         }
     }
 
@@ -497,7 +497,7 @@ impl SlideVoice {
     /// the energy weighed afresh.
     pub fn reset(&mut self, settings: &Settings) {
         self.guard_fade.clear();
-        let rest = Self::at_rest(self.length, settings);
+        let rest = Self::at_rest(self.length, &self.scale, settings);
         self.live.0 = rest;
         self.slide_motion = Motion::at_rest(rest.slide_position);
         // The rest is lifted already, so silencing brings the core to rest on it.
@@ -606,8 +606,8 @@ impl SlideVoice {
         if (target - self.glided).abs() < 1e-4 {
             self.glided = target;
         }
-        let length = self.length;
-        let x_o = self.position_at.get(self.semitones(settings), |semitones| Self::slide_position(length, semitones));
+        let scale = &self.scale;
+        let x_o = self.position_at.get(self.semitones(settings), |semitones| scale.position(semitones));
         self.slide_motion.approach(x_o, span, SLIDE_REACH);
         let pressed = |v: f64| HAND_RANGE.0 + (HAND_RANGE.1 - HAND_RANGE.0) * v.clamp(0.0, 1.0);
         let hand_height = match settings.hand_source {
