@@ -607,6 +607,13 @@ impl PianoVoice {
             let added = hammer.kinetic_energy();
             let power = string_energy * self.voicing * self.voicing + added * gain * gain;
             self.voicing = if string_energy + added > 0.0 { (power / (string_energy + added)).sqrt() } else { gain };
+            // A key going down lifts its damper half-way through its travel, well before the
+            // hammer arrives: a key struck again while its damper falls meets free strings.
+            if self.applied != 0.0 {
+                self.core.set_extra_decay(&[], 0.0);
+            }
+            self.damper = 0.0;
+            self.applied = 0.0;
         }
         let elsewhere = std::mem::take(&mut self.meets);
         self.core.set_background(elsewhere.motion, elsewhere.reach);
