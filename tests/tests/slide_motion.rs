@@ -6,13 +6,13 @@ use qsa_dsp::contact::{ContactSolver, ExplicitSolver, Method, NewtonSolver, Powe
 use qsa_dsp::control::Breakpoints;
 use qsa_dsp::control::ControlSource;
 use qsa_dsp::instrument::{
-    BRAKING, Event, Instrument, Mode, NoteTarget, SLIDE_ACCELERATION, SLIDE_SPEED, Settings, SlideScale,
+    BRAKING, Event, Instrument, Mode, NoteTarget, SLIDE_ACCELERATION, SLIDE_SPEED, Settings, SlideBody, SlideScale,
 };
 use qsa_dsp::preset::{key_frequency, slide_guitar};
 use qsa_dsp::scene::{Frame, Scene, SlideControls, SlideCore, SlideString, SlideStringParams};
 use qsa_dsp::scene_file::{SlideAutomation, parse_scene, render};
 use qsa_dsp::string::ModalString;
-use qsa_tests::{dc_db, log10_rel_l2, seeded_rng};
+use qsa_tests::{CLICK_DB, click_strength, dc_db, log10_rel_l2, seeded_rng};
 use xtask::report::gestures::{self, Gesture, Trajectory, grid, lanes, preset_params, semitone_position};
 
 const FS: f64 = gestures::FS;
@@ -243,8 +243,20 @@ fn a_finger_touching_again_after_a_glide_meets_the_current_cross_terms() {
 /// An instrument in slide mode with `settings`, rendered in 256-sample calls, with
 /// `changes` of the settings applied at the given samples; returns the left channel.
 fn play_slide(settings: Settings, changes: &[(usize, Settings)], key: u8, samples: usize) -> Vec<f64> {
+    let on = [(0, Event::NoteOn { channel: 0, key, velocity: 0.8 })];
+    perform_slide(settings, &on, changes, samples)
+}
+
+/// An instrument in slide mode with `settings` playing `events` and taking `changes` of the
+/// settings at the given samples (as a host does at the start of its calls), rendered in
+/// 256-sample calls split at both; returns the left channel.
+fn perform_slide(
+    settings: Settings,
+    events: &[(usize, Event)],
+    changes: &[(usize, Settings)],
+    samples: usize,
+) -> Vec<f64> {
     let mut instrument = Instrument::new(FS, 2, Settings { mode: Mode::Slide, ..settings });
-    instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.8 });
     let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
     let mut t = 0;
     while t < samples {
@@ -253,8 +265,9 @@ fn play_slide(settings: Settings, changes: &[(usize, Settings)], key: u8, sample
                 instrument.set_settings(&Settings { mode: Mode::Slide, ..*s });
             }
         }
-        let next_change = changes.iter().map(|c| c.0).filter(|&at| at > t).min().unwrap_or(samples);
-        let n = 256.min(next_change - t).min(samples - t);
+        events.iter().filter(|e| e.0 == t).for_each(|e| instrument.handle(e.1));
+        let next = changes.iter().map(|c| c.0).chain(events.iter().map(|e| e.0)).filter(|&at| at > t).min();
+        let n = 256.min(next.unwrap_or(samples) - t).min(samples - t);
         instrument.process(&mut left[t..t + n], &mut right[t..t + n]);
         t += n;
     }
@@ -287,6 +300,77 @@ fn automated_slide_position_is_followed_without_the_glide_lag() {
     );
     assert!((before / slide_pitch(5.0) - 1.0).abs() < 0.01, "before the move: {before} Hz");
     assert!((after / slide_pitch(7.0) - 1.0).abs() < 0.01, "after the move: {after} Hz");
+}
+
+/// A note let go after ringing a while is muted without a click: the finger laid on the string
+/// reaches its resting force over `MUTE_TIME` (20 ms, on a raised cosine). Stepped on within a
+/// block, it pushed the string aside under the pickup at once: a thump of the same size however
+/// quiet the note had become, 22 to 38 dB on the click detector after 2 to 3 s of ringing. A3
+/// and A4 let go after 1, 2 and 3 s, on the electric and on the acoustic guitar: every window
+/// from 0.1 s before the note-off to 0.2 s after it stays below `CLICK_DB`.
+#[test]
+fn a_slide_note_let_go_after_ringing_is_muted_without_a_click() {
+    for body in [SlideBody::Pickup, SlideBody::Acoustic] {
+        for key in [57u8, 69] {
+            for held in [1.0, 2.0, 3.0] {
+                let off = (held * FS) as usize;
+                let events =
+                    [(0, Event::NoteOn { channel: 0, key, velocity: 0.8 }), (off, Event::NoteOff { channel: 0, key })];
+                let settings = Settings { slide_body: body, ..Default::default() };
+                let out = perform_slide(settings, &events, &[], off + 9_600);
+                let (click, at) = click_strength(&out, FS, &[0..off - 4_800]);
+                println!("{body:?}, key {key} let go after {held} s: click {click:.1} dB at {:.3} s", at as f64 / FS);
+                assert!(click < CLICK_DB, "{body:?}, key {key}, {held} s: {click:.1} dB at sample {at}");
+            }
+        }
+    }
+}
+
+/// The plucking finger, muting a note let go, moves to a new `Pluck position` at the slide's
+/// speed limits rather than in one block: D3 let go at 0.45 s and the setting jumped from 0.9 to
+/// 0.5 (and from 0.98 to 0.5) at 0.6 s. Dragged along the string in one block, the pressing
+/// finger raised the muted string from −91 to −41 dBFS (the note's peak is −21) with a click of
+/// 18 to 21 dB. Now the jump stays below `CLICK_DB`, and the muted string stays 30 dB below the
+/// note's peak (the finger still drags the string's static dent along: 36 to 45 dB measured).
+#[test]
+fn a_pluck_position_jump_under_a_muting_finger_does_not_thump() {
+    for from in [0.9, 0.98] {
+        let base = Settings { pluck_position: from, ..Default::default() };
+        let events = [
+            (0, Event::NoteOn { channel: 0, key: 50, velocity: 0.8 }),
+            (21_600, Event::NoteOff { channel: 0, key: 50 }),
+        ];
+        let out = perform_slide(base, &events, &[(28_800, Settings { pluck_position: 0.5, ..base })], 48_000);
+        let peak = |x: &[f64]| 20.0 * x.iter().fold(0.0f64, |m, v| m.max(v.abs())).log10();
+        let (note, after) = (peak(&out[..21_600]), peak(&out[28_800..]));
+        let (click, at) = click_strength(&out, FS, &[0..26_400]);
+        println!("from {from}: note {note:.1} dBFS, after the jump {after:.1} dBFS, click {click:.1} dB at {at}");
+        assert!(click < CLICK_DB, "from {from}: click {click:.1} dB at sample {at}");
+        assert!(after < note - 30.0, "from {from}: {after:.1} dBFS after the jump, the note at {note:.1}");
+    }
+}
+
+/// Switching `Slide follows key` under a sounding note leaves its pitch where it is: D3 (5
+/// semitones up) played with `Slide position` at 5 semitones, the switch turned off at 0.5 s and
+/// on again at 0.9 s, with glide times of 50 ms and 2 s. The pitch over every 50 ms from 0.15 to
+/// 1.2 s stays D3's within 0.5 % (a semitone is 6 %). The key's part glided while the
+/// setting's came or went at once, and the note headed for 2.6 to 9.7 semitones.
+#[test]
+fn switching_follow_key_under_a_note_keeps_its_pitch() {
+    for (follow, glide_time) in [(true, 0.05), (false, 0.05), (true, 2.0), (false, 2.0)] {
+        let base = Settings { follow_key: follow, slide_position: 5.0, glide_time, ..Default::default() };
+        let switched = Settings { follow_key: !follow, ..base };
+        let out = play_slide(base, &[(24_000, switched), (43_200, base)], 50, 57_600);
+        let expected = slide_pitch(5.0);
+        for from in (7_200..55_200).step_by(2_400) {
+            let f = qsa_tests::fundamental(&out[from..from + 2_400], FS, 0.8 * expected, 1.25 * expected);
+            assert!(
+                (f / expected - 1.0).abs() < 0.005,
+                "follow {follow}, glide {glide_time} s: {f:.2} Hz at {:.2} s ({expected:.2} Hz)",
+                from as f64 / FS
+            );
+        }
+    }
 }
 
 /// Frequency (Hz) of partial `n` of a slide note `key` held 1 s at `fs` (Hz) under `settings`,

@@ -118,7 +118,7 @@ pub use presets::{
 pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody, hammer_speed};
 pub use slide_scale::SlideScale;
 pub use slide_voice::{
-    BRAKING, ChannelState, HAND_ACCELERATION, HAND_SPEED, OPEN_KEY, PICKUP_APERTURE, PLUCK_TIME, REST_FORCE,
+    BRAKING, ChannelState, HAND_ACCELERATION, HAND_SPEED, MUTE_TIME, OPEN_KEY, PICKUP_APERTURE, PLUCK_TIME, REST_FORCE,
     SLIDE_ACCELERATION, SLIDE_SPEED, SlideVoice, TRAIL,
 };
 pub use solvers::Solvers;

@@ -33,7 +33,10 @@
 //!   dead part of the string;
 //! - note-on plucks with the right finger at the plucking position: the force ramps up over
 //!   [`PLUCK_TIME`] to [`pluck_force`] `0.3 + 2.7·velocity` N and is then released; note-off lays
-//!   the finger on with 0.3 N, muting the string.
+//!   the finger on, its force rising to 0.3 N over [`MUTE_TIME`], muting the string. The finger
+//!   follows the `pluck_position` setting at the slide's speed limits, as it may be pressing;
+//! - switching `follow_key` under a sounding note leaves the slide where it is, which then
+//!   glides to where the new choice puts it.
 //!
 //! The slide's mass, the hand's stiffness and damping, the contact law (κ, α), the solver and
 //! its segments belong to the voice's note: a note on a silent voice takes the current ones, and
@@ -88,6 +91,11 @@ pub const PLUCK_TIME: f64 = 0.008;
 /// Force of a finger resting on the string: trailing the slide, or muting after note-off (N).
 pub const REST_FORCE: f64 = 0.3;
 
+/// How long a finger laid on the string to mute it takes to reach [`REST_FORCE`] (s), on a
+/// raised-cosine: a fingertip's pad landing (an estimate). A force stepping on within a block
+/// pushes the string aside at once, a thump under the pickup however quiet the note has become.
+pub const MUTE_TIME: f64 = 0.02;
+
 /// How far the left finger trails the slide (m).
 pub const TRAIL: f64 = 0.02;
 
@@ -117,7 +125,7 @@ pub struct Reach {
     pub acceleration: f64,
 }
 
-/// The slide moved along the string.
+/// The slide moved along the string; the plucking finger moves along it as fast.
 pub const SLIDE_REACH: Reach = Reach { speed: SLIDE_SPEED, acceleration: SLIDE_ACCELERATION };
 
 /// The hand pressing the slide onto the string or lifting it.
@@ -244,6 +252,14 @@ pub struct SlideVoice {
     slide_motion: Motion,
     /// The hand: its height `w_H` (m), within [`HAND_REACH`].
     hand: Motion,
+    /// The plucking finger along the string (m), within [`SLIDE_REACH`]: it mutes where it
+    /// plucks, and a finger pressing the string dragged along it in one block would thump.
+    right: Motion,
+    /// How far the muting finger has landed, from 0 (off) to 1 (at [`REST_FORCE`]).
+    mute: f64,
+    /// Whether the slide follows the played key (else the `slide_position` setting), as the
+    /// voice last rendered.
+    follow_key: bool,
     /// The slide and hand of the current note.
     slide: SlideParams,
     /// The contact law of the current note.
@@ -325,6 +341,9 @@ impl SlideVoice {
             glided: 0.0,
             slide_motion: Motion::at_rest(x_o),
             hand: Motion::at_rest(HAND_RANGE.0),
+            right: Motion::at_rest(rest.right_position),
+            mute: 0.0,
+            follow_key: settings.follow_key,
             slide,
             law,
             solver: (settings.method, settings.segments),
@@ -373,6 +392,9 @@ impl SlideVoice {
         // A voice taken while it was being shed sounds again.
         self.shed_fade.clear();
         self.start_expression(0.0);
+        if self.sounding {
+            self.follow(settings);
+        }
         if legato && self.sounding {
             return;
         }
@@ -382,6 +404,7 @@ impl SlideVoice {
             self.rest_lifted();
         }
         if !self.sounding {
+            self.follow_key = settings.follow_key;
             self.glided = self.keys_and_bends(settings, &ChannelState::default());
             self.lift_to(self.scale.position(self.semitones(settings)), settings);
             self.fresh = true;
@@ -488,6 +511,7 @@ impl SlideVoice {
         self.sounding = false;
         self.key_down = false;
         self.pluck = None;
+        self.mute = 0.0;
         self.unweighed = 0;
         self.rest_lifted();
     }
@@ -500,6 +524,8 @@ impl SlideVoice {
         let rest = Self::at_rest(self.length, &self.scale, settings);
         self.live.0 = rest;
         self.slide_motion = Motion::at_rest(rest.slide_position);
+        self.right = Motion::at_rest(rest.right_position);
+        self.follow_key = settings.follow_key;
         // The rest is lifted already, so silencing brings the core to rest on it.
         self.silence();
         self.core.restart();
@@ -524,7 +550,7 @@ impl SlideVoice {
     /// distance from the open string when following keys, plus the bends of its channel and of
     /// its MPE zone's master channel.
     fn keys_and_bends(&self, settings: &Settings, channel: &ChannelState) -> f64 {
-        let key = if settings.follow_key { f64::from(self.strike.key) - f64::from(OPEN_KEY) } else { 0.0 };
+        let key = if self.follow_key { f64::from(self.strike.key) - f64::from(OPEN_KEY) } else { 0.0 };
         key + channel.bend * channel.bend_range.unwrap_or(settings.bend_range) + channel.zone_bend
     }
 
@@ -532,9 +558,24 @@ impl SlideVoice {
     /// note's tuning, plus the `slide_position` setting (with the note's offset, clamped to its
     /// 0..=24 range) as it comes when not following keys.
     fn semitones(&self, settings: &Settings) -> f64 {
-        let setting =
-            if settings.follow_key { 0.0 } else { (settings.slide_position + self.slide_offset).clamp(0.0, 24.0) };
-        self.glided + self.tuning + setting
+        self.glided + self.tuning + self.setting_part(settings, self.follow_key)
+    }
+
+    /// The part of the slide position (semitones) the `slide_position` setting gives, with the
+    /// note's offset, clamped to its 0..=24 range: none when following keys.
+    fn setting_part(&self, settings: &Settings, follow_key: bool) -> f64 {
+        if follow_key { 0.0 } else { (settings.slide_position + self.slide_offset).clamp(0.0, 24.0) }
+    }
+
+    /// Take up `settings`' choice between following keys and the `slide_position` setting: the
+    /// slide stays where it is and glides from there to where the new choice puts it, as keys
+    /// glide, rather than adding or losing the setting's part at once.
+    fn follow(&mut self, settings: &Settings) {
+        if settings.follow_key != self.follow_key {
+            self.glided +=
+                self.setting_part(settings, self.follow_key) - self.setting_part(settings, settings.follow_key);
+            self.follow_key = settings.follow_key;
+        }
     }
 
     /// Whether the guard must silence the voice: its state is not finite, or its energy `energy`
@@ -558,6 +599,8 @@ impl SlideVoice {
     fn lift_to(&mut self, x_o: f64, settings: &Settings) {
         self.slide_motion = Motion::at_rest(x_o);
         let (left_position, right_position) = ((x_o - TRAIL).max(0.002), settings.pluck_position * self.length);
+        self.right = Motion::at_rest(right_position);
+        self.mute = 0.0;
         self.live.0 = SlideControls { slide_position: x_o, left_position, right_position, ..self.live.0 };
         self.rest_lifted();
     }
@@ -599,6 +642,7 @@ impl SlideVoice {
         self.fresh = false;
         let fs = self.core.string().sample_rate();
         let span = len as f64 / fs;
+        self.follow(settings);
         let target = self.keys_and_bends(settings, channel);
         self.glided += (target - self.glided) * self.glide_factor.get(-span / settings.glide_time, |x| 1.0 - x.exp());
         // Arrive: an exponential glide never quite does, and a moving slide costs a recomputation
@@ -620,6 +664,7 @@ impl SlideVoice {
         let right_force = match self.pluck {
             Some(t) if t < PLUCK_TIME => {
                 self.pluck = Some(t + span);
+                self.mute = 0.0;
                 pluck_force(self.strike.velocity) * ((t + span) / PLUCK_TIME).min(1.0)
             }
             Some(_) => {
@@ -627,15 +672,19 @@ impl SlideVoice {
                 0.0
             }
             None if self.key_down => 0.0,
-            None => REST_FORCE,
+            None => {
+                self.mute = (self.mute + span / MUTE_TIME).min(1.0);
+                REST_FORCE * 0.5 * (1.0 - (std::f64::consts::PI * self.mute).cos())
+            }
         };
+        self.right.approach(settings.pluck_position * self.length, span, SLIDE_REACH);
         let x_o = self.slide_motion.position;
         self.live.0 = SlideControls {
             slide_position: x_o,
             hand_height: self.hand.position,
             left_position: (x_o - TRAIL).max(0.002),
             left_force: REST_FORCE,
-            right_position: settings.pluck_position * self.length,
+            right_position: self.right.position,
             right_force,
         };
         self.core.set_params(self.slide, [settings.finger_damping; 2], settings.block);
