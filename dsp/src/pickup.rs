@@ -14,42 +14,61 @@
 //! underdamped pickups show a 3–5 dB bump. [`PICKUP_Q`] gives the middle of that: 4.0 dB.
 //!
 //! The low-pass is discretised by the bilinear transform prewarped at `ω_r`, so the resonance sits
-//! at its frequency at every sample rate (the biquad of Bristow-Johnson's cookbook).
+//! at its frequency at every sample rate: at `z = e^{jωΔt}`, `s/ω_r` becomes `jΩ` with
+//! `Ω = tan(ωΔt/2)/g` and `g = tan(ω_rΔt/2)`. It is run as a state-variable filter of trapezoidal
+//! integrators (Zavalishin, *The Art of VA Filter Design*, ch. 4), whose two states are the
+//! integrators' own: a resonance that moves changes `g` and leaves them where they are, so a
+//! swept tone control changes the sound smoothly. A direct-form biquad's states mix the old
+//! coefficients into the signal's past, and a step of its coefficients is a step of its output:
+//! a click at every control block of a sweep. Per sample, with `k = 1/Q`:
+//!
+//! ```text
+//! v1 = (s1 + g(x − s2)) / (1 + g(g + k)),   v2 = s2 + g·v1,   y = v2
+//! s1 ← 2v1 − s1,   s2 ← 2v2 − s2
+//! ```
+//!
+//! and `g` moves linearly across each call from where the last left it to where [`tune`]
+//! (PickupCircuit::tune) puts it.
 
 /// Quality factor of the loaded pickup: a resonance peak of 4.0 dB (`Q/√(1 − 1/(4Q²))`).
 pub const PICKUP_Q: f64 = 1.5;
 
-/// A magnetic pickup's resonant low-pass (module docs), in transposed direct form II.
+/// A magnetic pickup's resonant low-pass (module docs), a state-variable filter.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PickupCircuit {
-    b: [f64; 3],
-    a: [f64; 2],
+    /// `g = tan(ω_rΔt/2)` where the last call left it.
+    g: f64,
+    /// `g` of the resonance asked for, reached over the next call.
+    target: f64,
+    /// The integrators' states `s1`, `s2`.
     state: [f64; 2],
+    /// The resonance asked for (Hz).
     resonance: f64,
 }
 
 impl PickupCircuit {
     /// A pickup resonating at `resonance` (Hz, kept below 0.45 of `sample_rate`) with [`PICKUP_Q`].
     pub fn new(resonance: f64, sample_rate: f64) -> Self {
-        let mut circuit = Self { b: [1.0, 0.0, 0.0], a: [0.0; 2], state: [0.0; 2], resonance: 0.0 };
-        circuit.tune(resonance, sample_rate);
+        let mut circuit = Self { g: 0.0, target: 0.0, state: [0.0; 2], resonance: 0.0 };
+        circuit.set(resonance, sample_rate);
         circuit
     }
 
-    /// Move the resonance to `resonance` (Hz), keeping the filter's state.
+    /// Move the resonance to `resonance` (Hz) over the next call to [`process`](Self::process),
+    /// keeping the filter's state.
     pub fn tune(&mut self, resonance: f64, sample_rate: f64) {
         let resonance = if resonance.is_finite() { resonance.clamp(10.0, 0.45 * sample_rate) } else { 3500.0 };
         if resonance == self.resonance {
             return;
         }
         self.resonance = resonance;
-        let w0 = std::f64::consts::TAU * resonance / sample_rate;
-        let (sin, cos) = w0.sin_cos();
-        let alpha = sin / (2.0 * PICKUP_Q);
-        let a0 = 1.0 + alpha;
-        let b0 = 0.5 * (1.0 - cos) / a0;
-        self.b = [b0, 2.0 * b0, b0];
-        self.a = [-2.0 * cos / a0, (1.0 - alpha) / a0];
+        self.target = (std::f64::consts::PI * resonance / sample_rate).tan();
+    }
+
+    /// Put the resonance at `resonance` (Hz) at once, keeping the filter's state.
+    pub fn set(&mut self, resonance: f64, sample_rate: f64) {
+        self.tune(resonance, sample_rate);
+        self.g = self.target;
     }
 
     /// Bring the circuit to rest.
@@ -57,27 +76,39 @@ impl PickupCircuit {
         self.state = [0.0; 2];
     }
 
-    /// Filter `io` in place. A circuit at rest given silence stays at rest.
+    /// Filter `io` in place, `g` moving linearly to the resonance asked for. A circuit at rest
+    /// given silence stays at rest.
     pub fn process(&mut self, io: &mut [f64]) {
-        let ([b0, b1, b2], [a1, a2]) = (self.b, self.a);
+        let k = 1.0 / PICKUP_Q;
         let [mut s1, mut s2] = self.state;
-        for x in io.iter_mut() {
-            let y = b0 * *x + s1;
-            s1 = b1 * *x - a1 * y + s2;
-            s2 = b2 * *x - a2 * y;
-            *x = y;
+        let mut step = |x: f64, g: f64, a: f64| {
+            let v1 = a * (s1 + g * (x - s2));
+            let v2 = s2 + g * v1;
+            s1 = 2.0 * v1 - s1;
+            s2 = 2.0 * v2 - s2;
+            v2
+        };
+        if self.g == self.target {
+            let (g, a) = (self.g, 1.0 / (1.0 + self.g * (self.g + k)));
+            io.iter_mut().for_each(|x| *x = step(*x, g, a));
+        } else {
+            let (from, slope) = (self.g, (self.target - self.g) / io.len().max(1) as f64);
+            for (n, x) in io.iter_mut().enumerate() {
+                let g = from + slope * (n + 1) as f64;
+                *x = step(*x, g, 1.0 / (1.0 + g * (g + k)));
+            }
+            if !io.is_empty() {
+                self.g = self.target;
+            }
         }
         self.state = if s1.is_finite() && s2.is_finite() { [s1, s2] } else { [0.0; 2] };
     }
 
-    /// The response's magnitude at `frequency` (Hz) at `sample_rate` (Hz).
+    /// The magnitude (at `frequency`, Hz, at `sample_rate`, Hz) of the response asked for:
+    /// `|1/(1 − Ω² + jΩ/Q)|`.
     pub fn magnitude(&self, frequency: f64, sample_rate: f64) -> f64 {
-        let w = std::f64::consts::TAU * frequency / sample_rate;
-        let z1 = (w.cos(), -w.sin());
-        let z2 = ((2.0 * w).cos(), -(2.0 * w).sin());
-        let num = (self.b[0] + self.b[1] * z1.0 + self.b[2] * z2.0, self.b[1] * z1.1 + self.b[2] * z2.1);
-        let den = (1.0 + self.a[0] * z1.0 + self.a[1] * z2.0, self.a[0] * z1.1 + self.a[1] * z2.1);
-        (num.0.hypot(num.1)) / (den.0.hypot(den.1))
+        let omega = (std::f64::consts::PI * frequency / sample_rate).tan() / self.target;
+        1.0 / (1.0 - omega * omega).hypot(omega / PICKUP_Q)
     }
 }
 

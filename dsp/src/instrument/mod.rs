@@ -601,7 +601,7 @@ impl Instrument {
         self.settings = settings;
         self.pickup = settings.pickup_position;
         self.resonance = settings.pickup_resonance;
-        self.circuit.tune(self.resonance, self.sample_rate);
+        self.circuit.set(self.resonance, self.sample_rate);
         self.slides.iter_mut().for_each(|v| v.reset(&settings));
         self.sides.reset();
         self.output.reset();
