@@ -873,15 +873,56 @@ fn a_hard_damper_on_the_bass_does_not_trip_the_guard() {
     }
 }
 
+/// A released voice ends once it is far below hearing, not seconds later: C1, C3, C5 and A6 (no
+/// damper) struck at velocity 0.8 and let go after 0.5 s, with the sustain pedal down and up.
+/// The voice ends when its strings and partners hold 1e-10 of the strike's energy
+/// (`RELEASE_ENERGY`, 100 dB down): its dry output is then more than 90 dB below its peak, below
+/// a 16-bit floor for a note peaking at full scale (96.5 to 126 dB measured), and it ends within
+/// 8 s of falling 90 dB (at most 7.0 s measured, pedalled, where the slowest modes and the
+/// partners decay slowest). At 1e-14 (140 dB down) pedalled voices ran 7.7 to 15.4 s past that
+/// point, each costing a whole voice's work for nothing.
+#[test]
+fn a_released_voice_ends_soon_after_it_falls_far_below_hearing() {
+    for pedal in [1.0f32, 0.0] {
+        for key in [24u8, 48, 72, 93] {
+            let mut p = piano(4);
+            p.set_raw_output(true);
+            p.handle(Event::Sustain { channel: 0, depth: pedal });
+            p.handle(on(key, 0.8));
+            let (mut left, mut right) = (vec![0.0f32; 256], vec![0.0f32; 256]);
+            let mut levels = Vec::new();
+            let mut block = 0;
+            while p.sounding() > 0 && block < 40 * 48_000 / 256 {
+                if block * 256 == 24_064 {
+                    p.handle(off(key));
+                }
+                p.process(&mut left, &mut right);
+                levels.push(left.iter().zip(&right).fold(0.0f64, |m, (l, r)| m.max(f64::from(0.5 * (l + r)).abs())));
+                block += 1;
+            }
+            let peak = levels.iter().fold(0.0f64, |m, &v| m.max(v));
+            let db = |v: f64| 20.0 * (v / peak).max(1e-30).log10();
+            let below_90 = levels.iter().rposition(|&v| db(v) > -90.0).map_or(0, |b| b + 1);
+            let (ended, last) = (levels.len() as f64 * 256.0 / FS, db(*levels.last().unwrap()));
+            let after = ended - below_90 as f64 * 256.0 / FS;
+            println!(
+                "key {key}, pedal {pedal}: ended at {ended:.2} s, {after:.2} s after −90 dB, last block {last:.1} dB"
+            );
+            assert!(p.sounding() == 0, "key {key}, pedal {pedal}: still sounding after 40 s");
+            assert!(last < -90.0, "key {key}, pedal {pedal}: ended at {last:.1} dB of its peak");
+            assert!(after < 8.0, "key {key}, pedal {pedal}: ended {after:.2} s after falling 90 dB");
+        }
+    }
+}
+
 /// Voices end when their strings fall silent: 200 short notes in a row (50 ms each, one every
 /// 60 ms, keys with dampers (A0–D♯6) and velocities seeded at random) on 32 voices never need to
 /// steal, since the dampers silence each note within its release tail and the voice is free
 /// again; 4 s after the last note no voice sounds (a voice ends when its strings and the partners
 /// on its bridge are silent, and the partners without dampers that a key's partials set ringing
 /// ring on for a few seconds after its release). With the keys without dampers among them (E6
-/// up), whose strings ring on after release until they fall 70 dB (`RELEASE_ENERGY`; alone 13.4 s
-/// for E6 struck at full velocity, 5.3 s for C8, longer fed by the undamped strings their partials
-/// meet), the pool fills and notes steal, as they would from held notes, and 25 s after the last
+/// up), whose strings ring on after release until they fall 100 dB (`RELEASE_ENERGY`; longer fed
+/// by the undamped strings their partials meet), the pool fills and notes steal, as they would from held notes, and 25 s after the last
 /// note no voice sounds. (A voice is judged on its strings' energy: judged on the flying hammer's,
 /// no voice would ever be released, the pool would fill at the 33rd note and every later note
 /// would steal.)

@@ -79,8 +79,10 @@ use crate::scene::{MAX_PARTNERS, Shared, UnisonCore, UnisonParams, Watch};
 use crate::string::{Damping, ModalString, StringParams};
 
 /// Energy below which a voice that is not touching its hammer is released, relative to the
-/// energy of its latest strike (−140 dB in energy, −70 dB in amplitude).
-pub const RELEASE_ENERGY: f64 = 1e-14;
+/// energy of its latest strike: 100 dB down. The dry output is then 96 to 126 dB below the
+/// note's peak, from A0 to A6 with the pedal up and down: below a 16-bit floor for a note peaking
+/// at full scale. A slide voice is judged the same way, its string's motion against its pluck.
+pub const RELEASE_ENERGY: f64 = 1e-10;
 
 /// How far a voice's energy may exceed its bound before the guard silences it: the strike's
 /// energy for a piano voice, the energy at the pluck plus the controls' work for a slide voice.
