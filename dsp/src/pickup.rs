@@ -27,8 +27,9 @@
 //! s1 ← 2v1 − s1,   s2 ← 2v2 − s2
 //! ```
 //!
-//! and `g` moves linearly across each call from where the last left it to where [`tune`]
-//! (PickupCircuit::tune) puts it.
+//! and `g` moves linearly, a sample at a time, to where [`tune`](PickupCircuit::tune) puts it
+//! over the samples it is given (the instrument's control block), however the calls to
+//! [`process`](PickupCircuit::process) cut them.
 
 /// Quality factor of the loaded pickup: a resonance peak of 4.0 dB (`Q/√(1 − 1/(4Q²))`).
 pub const PICKUP_Q: f64 = 1.5;
@@ -36,10 +37,14 @@ pub const PICKUP_Q: f64 = 1.5;
 /// A magnetic pickup's resonant low-pass (module docs), a state-variable filter.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PickupCircuit {
-    /// `g = tan(ω_rΔt/2)` where the last call left it.
+    /// `g = tan(ω_rΔt/2)` now.
     g: f64,
-    /// `g` of the resonance asked for, reached over the next call.
+    /// `g` of the resonance asked for.
     target: f64,
+    /// How much `g` moves a sample on its way to `target`.
+    slope: f64,
+    /// Samples left before `g` reaches `target`.
+    left: usize,
     /// The integrators' states `s1`, `s2`.
     state: [f64; 2],
     /// The resonance asked for (Hz).
@@ -49,26 +54,28 @@ pub struct PickupCircuit {
 impl PickupCircuit {
     /// A pickup resonating at `resonance` (Hz, kept below 0.45 of `sample_rate`) with [`PICKUP_Q`].
     pub fn new(resonance: f64, sample_rate: f64) -> Self {
-        let mut circuit = Self { g: 0.0, target: 0.0, state: [0.0; 2], resonance: 0.0 };
+        let mut circuit = Self { g: 0.0, target: 0.0, slope: 0.0, left: 0, state: [0.0; 2], resonance: 0.0 };
         circuit.set(resonance, sample_rate);
         circuit
     }
 
-    /// Move the resonance to `resonance` (Hz) over the next call to [`process`](Self::process),
-    /// keeping the filter's state.
-    pub fn tune(&mut self, resonance: f64, sample_rate: f64) {
+    /// Move the resonance to `resonance` (Hz) over the next `samples` samples filtered, keeping
+    /// the filter's state.
+    pub fn tune(&mut self, resonance: f64, sample_rate: f64, samples: usize) {
         let resonance = if resonance.is_finite() { resonance.clamp(10.0, 0.45 * sample_rate) } else { 3500.0 };
         if resonance == self.resonance {
             return;
         }
         self.resonance = resonance;
         self.target = (std::f64::consts::PI * resonance / sample_rate).tan();
+        self.left = samples.max(1);
+        self.slope = (self.target - self.g) / self.left as f64;
     }
 
     /// Put the resonance at `resonance` (Hz) at once, keeping the filter's state.
     pub fn set(&mut self, resonance: f64, sample_rate: f64) {
-        self.tune(resonance, sample_rate);
-        self.g = self.target;
+        self.tune(resonance, sample_rate, 1);
+        (self.g, self.left) = (self.target, 0);
     }
 
     /// Bring the circuit to rest.
@@ -76,7 +83,7 @@ impl PickupCircuit {
         self.state = [0.0; 2];
     }
 
-    /// Filter `io` in place, `g` moving linearly to the resonance asked for. A circuit at rest
+    /// Filter `io` in place, `g` moving on towards the resonance asked for. A circuit at rest
     /// given silence stays at rest.
     pub fn process(&mut self, io: &mut [f64]) {
         let k = 1.0 / PICKUP_Q;
@@ -88,19 +95,14 @@ impl PickupCircuit {
             s2 = 2.0 * v2 - s2;
             v2
         };
-        if self.g == self.target {
-            let (g, a) = (self.g, 1.0 / (1.0 + self.g * (self.g + k)));
-            io.iter_mut().for_each(|x| *x = step(*x, g, a));
-        } else {
-            let (from, slope) = (self.g, (self.target - self.g) / io.len().max(1) as f64);
-            for (n, x) in io.iter_mut().enumerate() {
-                let g = from + slope * (n + 1) as f64;
-                *x = step(*x, g, 1.0 / (1.0 + g * (g + k)));
-            }
-            if !io.is_empty() {
-                self.g = self.target;
-            }
+        let (moving, still) = io.split_at_mut(self.left.min(io.len()));
+        for x in moving {
+            self.left -= 1;
+            self.g = if self.left == 0 { self.target } else { self.g + self.slope };
+            *x = step(*x, self.g, 1.0 / (1.0 + self.g * (self.g + k)));
         }
+        let (g, a) = (self.g, 1.0 / (1.0 + self.g * (self.g + k)));
+        still.iter_mut().for_each(|x| *x = step(*x, g, a));
         self.state = if s1.is_finite() && s2.is_finite() { [s1, s2] } else { [0.0; 2] };
     }
 
@@ -136,6 +138,45 @@ mod tests {
             assert!((db(3500.0) - 20.0 * PICKUP_Q.log10()).abs() < 1e-9);
             assert!(db(9900.0) < -12.0);
         }
+    }
+
+    /// A resonance moved over a control block gives the same output however the block is cut
+    /// into calls (zero-length ones included), to the bit, and reaches the resonance asked for
+    /// at the block's end; [`PickupCircuit::set`] reaches it at once.
+    #[test]
+    fn a_moving_resonance_does_not_depend_on_how_the_calls_cut_the_block() {
+        let fs = 48_000.0;
+        let input: Vec<f64> = (0..256).map(|k| (0.37 * k as f64).sin() + 0.2 * (1.9 * k as f64).cos()).collect();
+        let run = |cuts: &[usize]| {
+            let mut p = PickupCircuit::new(1_000.0, fs);
+            let mut io = input.clone();
+            let mut at = 0;
+            for block in io.chunks_mut(64) {
+                p.tune(1_000.0 * 2f64.powf(1.0 + at as f64 / 64.0), fs, 64);
+                let mut rest = block;
+                for &cut in cuts.iter().cycle().take(64) {
+                    let (now, later) = rest.split_at_mut(cut.min(rest.len()));
+                    p.process(now);
+                    rest = later;
+                    if rest.is_empty() {
+                        break;
+                    }
+                }
+                p.process(rest);
+                at += 64;
+            }
+            (io, p)
+        };
+        let (whole, p) = run(&[64]);
+        for cuts in [vec![1], vec![0, 7, 0, 20], vec![63, 1], vec![5, 0, 0, 59]] {
+            let (cut, q) = run(&cuts);
+            assert!(whole.iter().zip(&cut).all(|(a, b)| a.to_bits() == b.to_bits()), "cuts {cuts:?}");
+            assert_eq!((p.g, p.left), (q.g, q.left));
+        }
+        assert_eq!((p.g, p.left), (p.target, 0));
+        let mut set = PickupCircuit::new(1_000.0, fs);
+        set.set(8_000.0, fs);
+        assert_eq!((set.g, set.left), ((std::f64::consts::PI * 8_000.0 / fs).tan(), 0));
     }
 
     /// Filtering a sine gives the magnitude the response says (the filter is the response).

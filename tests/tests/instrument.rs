@@ -461,21 +461,22 @@ fn a_soft_restrike_of_a_ringing_key_leaves_its_ringing_as_loud() {
 
 /// A key struck again while its damper falls meets free strings: a key lifts its damper on its
 /// way down, before the hammer arrives. A0, C2, C3 and C4 struck at velocity 0.6, let go after
-/// 0.25 s and struck again 0.25 s later: over the 0.1 s after each strike the dry output is as
-/// loud as the first strike's within 0.5 dB (what little still rings under the damper adds to it
-/// or takes from it; 0.01 dB measured). When the damper lifted only with its 10 ms settling, the
-/// felt took the new note's high partials as it began, and the repeat was 5.6 (C4) to 12.0 (A0)
-/// dB softer.
+/// 0.25 s and struck again 15 ms later, the voice still sounding under its falling damper: over
+/// the 0.1 s after each strike the dry output is as loud as the first strike's within 1 dB (what
+/// still rings adds to it or takes from it). With the damper left to lift with its 10 ms
+/// settling, the felt took the new note's high partials as it began: A0's repeat was 8.9 dB
+/// softer.
 #[test]
 fn a_key_struck_again_as_its_damper_falls_is_as_loud_as_its_first_strike() {
     for key in [21u8, 36, 48, 60] {
         let mut p = piano(4);
         p.set_raw_output(true);
-        let score: Score = vec![(0, on(key, 0.6)), (12_000, off(key)), (24_000, on(key, 0.6))];
-        let out = play(&mut p, &score, 30_000, || 64);
-        let (first, again) = (rms_db(&out[..4_800]), rms_db(&out[24_000..28_800]));
+        let out = play(&mut p, &vec![(0, on(key, 0.6)), (12_000, off(key))], 12_720, || 64);
+        assert_eq!(p.sounding(), 1, "key {key}: the voice still sounds as the key is struck again");
+        let again = play(&mut p, &vec![(0, on(key, 0.6))], 4_800, || 64);
+        let (first, again) = (rms_db(&out[..4_800]), rms_db(&again));
         println!("key {key}: first strike {first:.2} dB, struck again {again:.2} dB");
-        assert!((again - first).abs() < 0.5, "key {key}: {first:.2} dB, then {again:.2} dB");
+        assert!((again - first).abs() < 1.0, "key {key}: {first:.2} dB, then {again:.2} dB");
     }
 }
 
@@ -922,8 +923,8 @@ fn a_released_voice_ends_soon_after_it_falls_far_below_hearing() {
 /// on its bridge are silent, and the partners without dampers that a key's partials set ringing
 /// ring on for a few seconds after its release). With the keys without dampers among them (E6
 /// up), whose strings ring on after release until they fall 100 dB (`RELEASE_ENERGY`; longer fed
-/// by the undamped strings their partials meet), the pool fills and notes steal, as they would from held notes, and 25 s after the last
-/// note no voice sounds. (A voice is judged on its strings' energy: judged on the flying hammer's,
+/// by the undamped strings their partials meet), the pool fills and notes steal, as they would
+/// from held notes, and 25 s after the last note no voice sounds. (A voice is judged on its strings' energy: judged on the flying hammer's,
 /// no voice would ever be released, the pool would fill at the 33rd note and every later note
 /// would steal.)
 #[test]
@@ -1557,7 +1558,8 @@ fn mpe_voices_glide_independently() {
 
 /// Slide mode renders the same for any host buffer size and allocates nothing while playing
 /// (per-note expression included), on the electric and on the acoustic guitar, and while the
-/// guitar changes between notes.
+/// guitar changes between notes. The pickup's resonance glides meanwhile: it moves across the
+/// instrument's control blocks, however the host's buffers cut them.
 #[test]
 fn slide_mode_is_buffer_invariant_and_allocation_free() {
     for body in [SlideBody::Pickup, SlideBody::Acoustic] {
@@ -1575,9 +1577,15 @@ fn slide_mode_is_buffer_invariant_and_allocation_free_on(body: SlideBody) {
         (15_000, off(57)),
     ];
     let settings = Settings { mode: Mode::Slide, block: 32, slide_body: body, ..Default::default() };
-    let reference = play(&mut Instrument::new(FS, 4, settings), &score, 19_200, || 19_200);
-    for size in [1usize, 32, 512] {
-        let out = play(&mut Instrument::new(FS, 4, settings), &score, 19_200, || size);
+    // The pickup's resonance glides from 1 to 9 kHz over the first 0.15 s.
+    let gliding = || {
+        let mut s = Instrument::new(FS, 4, Settings { pickup_resonance: 1_000.0, ..settings });
+        s.set_settings(&Settings { pickup_resonance: 9_000.0, ..settings });
+        s
+    };
+    let reference = play(&mut gliding(), &score, 19_200, || 19_200);
+    for size in [1usize, 7, 32, 512] {
+        let out = play(&mut gliding(), &score, 19_200, || size);
         assert!(out.iter().zip(&reference).all(|(a, b)| a.to_bits() == b.to_bits()), "blocks of {size}");
     }
     let mut s = Instrument::new(FS, 4, settings);

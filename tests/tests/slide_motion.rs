@@ -371,25 +371,45 @@ fn sweeping_the_pickup_resonance_under_a_note_does_not_click() {
     }
 }
 
-/// Switching `Slide follows key` under a sounding note leaves its pitch where it is: D3 (5
-/// semitones up) played with `Slide position` at 5 semitones, the switch turned off at 0.5 s and
-/// on again at 0.9 s, with glide times of 50 ms and 2 s. The pitch over every 50 ms from 0.15 to
-/// 1.2 s stays D3's within 0.5 % (a semitone is 6 %). The key's part glided while the
-/// setting's came or went at once, and the note headed for 2.6 to 9.7 semitones.
+/// Switching `Slide follows key` under a sounding note moves the slide from where it is: D3 (5
+/// semitones up) played with `Slide position` at 5 and at 7 semitones, the switch turned at
+/// 0.5 s and back at 0.9 s, with glide times of 50 ms and 2 s. Over every 50 ms from 0.15 to
+/// 1.2 s the pitch lies between the two places' (within 0.5 %; a semitone is 6 %), and with the
+/// 50 ms glide it has reached the new place within 0.5 % by the end of each stretch. The key's
+/// part glided while the setting's came or went at once, and the note headed for 2.6 to 9.7
+/// semitones at `Slide position` 5, where both choices agree.
 #[test]
-fn switching_follow_key_under_a_note_keeps_its_pitch() {
-    for (follow, glide_time) in [(true, 0.05), (false, 0.05), (true, 2.0), (false, 2.0)] {
-        let base = Settings { follow_key: follow, slide_position: 5.0, glide_time, ..Default::default() };
+fn switching_follow_key_under_a_note_moves_the_slide_from_where_it_is() {
+    let cases = [
+        (true, 0.05, 5.0),
+        (false, 0.05, 5.0),
+        (true, 2.0, 5.0),
+        (false, 2.0, 5.0),
+        (true, 0.05, 7.0),
+        (false, 0.05, 7.0),
+    ];
+    for (follow, glide_time, position) in cases {
+        let base = Settings { follow_key: follow, slide_position: position, glide_time, ..Default::default() };
         let switched = Settings { follow_key: !follow, ..base };
         let out = play_slide(base, &[(24_000, switched), (43_200, base)], 50, 57_600);
-        let expected = slide_pitch(5.0);
+        let (key, setting) = (slide_pitch(5.0), slide_pitch(position));
+        let (low, high) = (key.min(setting), key.max(setting));
+        let pitch = |from: usize| qsa_tests::fundamental(&out[from..from + 2_400], FS, 0.8 * low, 1.25 * high);
+        let what = format!("follow {follow}, glide {glide_time} s, slide position {position}");
         for from in (7_200..55_200).step_by(2_400) {
-            let f = qsa_tests::fundamental(&out[from..from + 2_400], FS, 0.8 * expected, 1.25 * expected);
+            let f = pitch(from);
             assert!(
-                (f / expected - 1.0).abs() < 0.005,
-                "follow {follow}, glide {glide_time} s: {f:.2} Hz at {:.2} s ({expected:.2} Hz)",
+                f > low * 0.995 && f < high * 1.005,
+                "{what}: {f:.2} Hz at {:.2} s, outside {low:.2}–{high:.2} Hz",
                 from as f64 / FS
             );
+        }
+        if glide_time < 0.1 {
+            let (before, after) = if follow { (key, setting) } else { (setting, key) };
+            for (from, expected) in [(21_600, before), (40_800, after), (55_200, before)] {
+                let f = pitch(from);
+                assert!((f / expected - 1.0).abs() < 0.005, "{what}: {f:.2} Hz at {from}, not {expected:.2} Hz");
+            }
         }
     }
 }

@@ -52,7 +52,7 @@
 //! fades out over 5 ms at a decay rate of 2000/s before its new note starts, so stealing does not
 //! click. When every voice fades already, the piano voice whose waiting note
 //! came first gives it up to the new note, the newest notes winning. A piano voice is released
-//! when its string's energy falls 140 dB below its strike's. A host's choke ([`Event::Choke`])
+//! when its strings' energy falls 100 dB below its strike's. A host's choke ([`Event::Choke`])
 //! fades the notes it addresses out the same way, whatever the pedals, and ends them.
 //!
 //! # Output
@@ -1050,7 +1050,7 @@ impl Instrument {
             let (down, up) = (0.5f64.powf(octaves), 2f64.powf(octaves));
             self.resonance = (self.resonance * (target / self.resonance).clamp(down, up))
                 .clamp(target.min(self.resonance), target.max(self.resonance));
-            self.circuit.tune(self.resonance, self.sample_rate);
+            self.circuit.tune(self.resonance, self.sample_rate, len);
         }
         self.partners.request(&self.settings);
         let mut seeks = PARTNER_SEEKS;

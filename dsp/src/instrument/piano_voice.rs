@@ -80,7 +80,7 @@ use crate::string::{Damping, ModalString, StringParams};
 
 /// Energy below which a voice that is not touching its hammer is released, relative to the
 /// energy of its latest strike: 100 dB down. The dry output is then 96 to 126 dB below the
-/// note's peak, from A0 to A6 with the pedal up and down: below a 16-bit floor for a note peaking
+/// note's peak, from C1 to A6 with the pedal up and down: below a 16-bit floor for a note peaking
 /// at full scale. A slide voice is judged the same way, its string's motion against its pluck.
 pub const RELEASE_ENERGY: f64 = 1e-10;
 

@@ -33,7 +33,11 @@
 //! x_o = x_p − δ(x_p)
 //! ```
 //!
-//! kept between 5 mm and 0.8 L (`δ` changes by far less than itself over `δ`).
+//! kept between 5 mm and 0.8 L (`δ` is taken at `x_p`, not at `x_o`; it varies slowly along the
+//! string but within the first table interval from the nut, where the slide stops at 5 mm).
+//!
+//! Measured against the flexible string, `R` also holds the shortening a point support gives a
+//! stiff string, about `√(EI/T)/2`, so the slide makes up for that too.
 //!
 //! What the player's slide does to the pitch is left as it is, as a player hears it: the slide's
 //! mass `M` on the hand's spring `K_H` raises partial `n` by the end correction

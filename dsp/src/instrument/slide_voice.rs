@@ -426,9 +426,10 @@ impl SlideVoice {
         self.core.set_params(self.slide, [settings.finger_damping; 2], settings.block);
         self.energy_at_pluck = self.energy();
         self.work_at_pluck = self.core.control_work();
-        // Static energy of the pluck: ½F² x(L − x)/(T L) for a point force F at x.
+        // Static energy of the pluck: ½F² x(L − x)/(T L) for a point force F at x, where the
+        // finger is (on its way to a new pluck position, it plucks where it has got to).
         let force = pluck_force(strike.velocity);
-        let (x, t) = (settings.pluck_position * self.length, self.core.string().params().tension);
+        let (x, t) = (self.right.position, self.core.string().params().tension);
         self.reference_energy =
             (0.5 * force * force * x * (self.length - x) / (t * self.length)).max(f64::MIN_POSITIVE);
         self.motion = self.reference_energy;
