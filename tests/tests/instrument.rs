@@ -924,9 +924,9 @@ fn a_released_voice_ends_soon_after_it_falls_far_below_hearing() {
 /// ring on for a few seconds after its release). With the keys without dampers among them (E6
 /// up), whose strings ring on after release until they fall 100 dB (`RELEASE_ENERGY`; longer fed
 /// by the undamped strings their partials meet), the pool fills and notes steal, as they would
-/// from held notes, and 25 s after the last note no voice sounds. (A voice is judged on its strings' energy: judged on the flying hammer's,
-/// no voice would ever be released, the pool would fill at the 33rd note and every later note
-/// would steal.)
+/// from held notes, and 25 s after the last note no voice sounds. (A voice is judged on its
+/// strings' energy: judged on the flying hammer's, no voice would ever be released, the pool
+/// would fill at the 33rd note and every later note would steal.)
 #[test]
 fn voices_are_released_after_their_tails() {
     for (keys, tail, steals) in [(21..=87u8, 4, false), (21..=108u8, 25, true)] {
