@@ -367,6 +367,19 @@ pub fn fundamental(signal: &[f64], fs: f64, f_min: f64, f_max: f64) -> f64 {
     fs / (lag as f64 + 0.5 * (a - c) / (a - 2.0 * b + c))
 }
 
+/// The string's displacement at a magnetic pickup (in the output's units times samples) from the
+/// slide's output, which is the string's velocity there: its running sum. Its first partial
+/// leads, as the string's does, where the velocity lifts the upper partials by their number.
+pub fn displacement(velocity: &[f32]) -> Vec<f64> {
+    velocity
+        .iter()
+        .scan(0.0, |sum, &v| {
+            *sum += f64::from(v);
+            Some(*sum)
+        })
+        .collect()
+}
+
 /// Frequency (Hz) of the largest spectral peak of `signal` between `f_lo` and `f_hi`: the
 /// Hann-windowed DFT evaluated on a grid of 1/8 bin, refined by a parabola through the log
 /// magnitudes around the maximum. Accurate to a small fraction of a bin for an isolated partial.

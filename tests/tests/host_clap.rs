@@ -936,13 +936,7 @@ fn relative_change(a: &Audio, b: &Audio, from: usize) -> f64 {
 /// The pitch of a slide note's displacement (the running sum of the pickup's velocity signal)
 /// over `a..b` seconds, searched within 20 % of `expected`.
 fn slide_pitch_between(audio: &Audio, a: f64, b: f64, expected: f64) -> f64 {
-    let signal: Vec<f64> = audio.left[(a * FS) as usize..(b * FS) as usize]
-        .iter()
-        .scan(0.0, |sum, &v| {
-            *sum += f64::from(v);
-            Some(*sum)
-        })
-        .collect();
+    let signal = qsa_tests::displacement(&audio.left[(a * FS) as usize..(b * FS) as usize]);
     slide_pitch(&signal, FS, expected)
 }
 

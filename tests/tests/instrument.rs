@@ -1165,13 +1165,7 @@ fn slide_pitch(out: &[f32], expected: f64) -> f64 {
 
 /// [`slide_pitch`] over `range` of `out`.
 fn slide_pitch_in(out: &[f32], range: std::ops::Range<usize>, expected: f64) -> f64 {
-    let signal: Vec<f64> = out[range]
-        .iter()
-        .scan(0.0, |sum, &v| {
-            *sum += f64::from(v);
-            Some(*sum)
-        })
-        .collect();
+    let signal = qsa_tests::displacement(&out[range]);
     fundamental(&signal, FS, 0.8 * expected, 1.2 * expected)
 }
 

@@ -49,13 +49,7 @@ fn play(instrument: &mut Instrument, score: &Score, samples: usize, chunk: usize
 /// displacement at the pickup) by autocorrelation, searched within 20 % of `expected` (as in
 /// `instrument.rs`).
 fn pitch(out: &[f32], from: usize, to: usize, expected: f64) -> f64 {
-    let signal: Vec<f64> = out[from..to]
-        .iter()
-        .scan(0.0, |sum, &v| {
-            *sum += f64::from(v);
-            Some(*sum)
-        })
-        .collect();
+    let signal = qsa_tests::displacement(&out[from..to]);
     fundamental(&signal, FS, 0.8 * expected, 1.2 * expected)
 }
 

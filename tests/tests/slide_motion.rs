@@ -425,13 +425,7 @@ fn slide_partial(fs: f64, settings: Settings, key: u8, n: f64) -> f64 {
     for (l, r) in left.chunks_mut(256).zip(right.chunks_mut(256)) {
         instrument.process(l, r);
     }
-    let displacement: Vec<f64> = left
-        .iter()
-        .scan(0.0, |sum, &v| {
-            *sum += f64::from(v);
-            Some(*sum)
-        })
-        .collect();
+    let displacement = qsa_tests::displacement(&left);
     let f = n * key_frequency(key);
     qsa_tests::spectral_peak(&displacement[(0.4 * fs) as usize..], fs, 0.96 * f, 1.04 * f)
 }
