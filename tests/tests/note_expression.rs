@@ -121,6 +121,42 @@ fn a_tuning_during_a_note_moves_only_that_note() {
     assert!((after / key_frequency(54) - 1.0).abs() < 0.01, "after: {after} Hz");
 }
 
+/// A bend that arrives before its note-on (as MPE controllers send a note's initial bend, and as
+/// a bend wheel held from an earlier note leaves it) places the slide from the start: key 50 bent
+/// +12 semitones renders sample for sample as key 62 unbent, with `Bend range` 12, on a member
+/// channel of an MPE zone (a quarter of its ±48), and on a channel whose earlier bent note was
+/// let go. From 40 to 100 ms it sounds at key 62's pitch (within 1 %, against a swoop from an octave
+/// below when the slide starts unbent and glides there).
+#[test]
+fn a_slide_note_bent_before_its_note_on_starts_at_its_bent_pitch() {
+    let wide = Settings { bend_range: 12.0, ..Settings::default() };
+    let plain = |key: u8| Event::NoteOn { channel: 2, key, velocity: 0.3 };
+    let bend = |value: f32| Event::PitchBend { channel: 2, value };
+    let rpn = |controller: u8, value: u8| Event::RegisteredParameter { channel: 0, controller, value };
+    let mpe_zone = [rpn(101, 0), rpn(100, 6), rpn(6, 15)];
+    let reference = play(&mut slide(wide), &vec![(0, plain(62))], 24_000, 256);
+    let mut cases: Vec<(&str, Settings, Score)> = vec![
+        ("bend range 12, bent +1", wide, vec![(0, bend(1.0)), (0, plain(50))]),
+        ("an MPE member channel bent +0.25", Settings::default(), vec![(0, bend(0.25)), (0, plain(50))]),
+    ];
+    cases[1].2.splice(0..0, mpe_zone.iter().map(|&e| (0, e)));
+    for (what, settings, score) in &cases {
+        let bent = play(&mut slide(*settings), score, 24_000, 256);
+        assert!(same(&bent, &reference), "{what}: key 50 bent +12 st differs from key 62");
+        let early = pitch(&bent, 1_920, 4_800, key_frequency(62));
+        println!("{what}: {early:.2} Hz over 40–100 ms (key 62: {:.2} Hz)", key_frequency(62));
+        assert!((early / key_frequency(62) - 1.0).abs() < 0.01, "{what}: starts at {early} Hz");
+    }
+    // The channel's earlier note, bent, is let go; the next note on it keeps the channel's bend.
+    let (first, again) = (24_000, 72_000);
+    let score =
+        vec![(0, bend(1.0)), (0, plain(50)), (first, Event::NoteOff { channel: 2, key: 50 }), (again, plain(50))];
+    let reused = play(&mut slide(wide), &score, again + 4_800, 256);
+    let early = pitch(&reused, again + 1_920, again + 4_800, key_frequency(62));
+    println!("the channel's next note: {early:.2} Hz over 40–100 ms");
+    assert!((early / key_frequency(62) - 1.0).abs() < 0.01, "the next note starts at {early} Hz");
+}
+
 /// Polyphonic modulation offsets a setting for one note: with the slide at 5 semitones (not
 /// following keys), +3 semitones for voice 22 at its note-on renders exactly as the setting at 8
 /// for everyone (and sounds at 8 semitones above the open string); a hand-height offset of

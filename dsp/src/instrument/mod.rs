@@ -917,6 +917,7 @@ impl Instrument {
     /// took it.
     fn slide_on(&mut self, strike: Strike) -> Option<usize> {
         let (now, settings) = (self.now, self.note_settings());
+        let channel = self.channel_state(strike.channel);
         // Following keys, a new key while another is held on the channel glides there (legato).
         if settings.follow_key
             && let Some(i) =
@@ -924,7 +925,7 @@ impl Instrument {
         {
             // The key it plays, struck again, plucks again.
             let legato = self.slides[i].strike.key != strike.key;
-            self.slides[i].play(strike, &settings, legato, now);
+            self.slides[i].play(strike, &settings, &channel, legato, now);
             return Some(i);
         }
         // A free voice, else the one whose string moves least (the oldest among equals), not being
@@ -948,7 +949,7 @@ impl Instrument {
             if voice.pickup() != self.pickup {
                 voice.set_pickup(self.pickup, 0);
             }
-            voice.play(strike, &settings, false, now);
+            voice.play(strike, &settings, &channel, false, now);
         }
         index
     }

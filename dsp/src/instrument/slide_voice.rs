@@ -385,8 +385,10 @@ impl SlideVoice {
     }
 
     /// Pluck `strike` now. With `legato` (following keys, another key still held) the slide
-    /// glides to the new key without a new pluck.
-    pub fn play(&mut self, strike: Strike, settings: &Settings, legato: bool, now: u64) {
+    /// glides to the new key without a new pluck. A note from silence finds the slide where its
+    /// key and `channel`'s bend put it: MPE controllers send a note's first bend before its
+    /// note-on, and a channel keeps its bend from note to note.
+    pub fn play(&mut self, strike: Strike, settings: &Settings, channel: &ChannelState, legato: bool, now: u64) {
         self.strike = strike;
         self.key_down = true;
         // A voice taken while it was being shed sounds again.
@@ -405,7 +407,7 @@ impl SlideVoice {
         }
         if !self.sounding {
             self.follow_key = settings.follow_key;
-            self.glided = self.keys_and_bends(settings, &ChannelState::default());
+            self.glided = self.keys_and_bends(settings, channel);
             self.lift_to(self.scale.position(self.semitones(settings)), settings);
             self.fresh = true;
         }
@@ -889,7 +891,13 @@ mod tests {
     fn plucked_on(body: SlideBody, blocks: usize) -> (SlideVoice, Settings) {
         let settings = Settings { mode: crate::instrument::Mode::Slide, slide_body: body, ..Settings::default() };
         let mut voice = SlideVoice::new(FS, &settings);
-        voice.play(Strike { channel: 0, key: 52, velocity: 0.8, shifted: false }, &settings, false, 0);
+        voice.play(
+            Strike { channel: 0, key: 52, velocity: 0.8, shifted: false },
+            &settings,
+            &ChannelState::default(),
+            false,
+            0,
+        );
         let mut out = [0.0; 64];
         for _ in 0..blocks {
             voice.begin_block(&settings, &ChannelState::default(), 64);
@@ -957,7 +965,13 @@ mod tests {
         voice.begin_block(&settings, &ChannelState::default(), 64);
         voice.render(&mut out);
         voice.silence();
-        voice.play(Strike { channel: 0, key: 50, velocity: 0.8, shifted: false }, &settings, false, 0);
+        voice.play(
+            Strike { channel: 0, key: 50, velocity: 0.8, shifted: false },
+            &settings,
+            &ChannelState::default(),
+            false,
+            0,
+        );
         let mut peak: f64 = 0.0;
         for _ in 0..8 {
             voice.begin_block(&settings, &ChannelState::default(), 64);
