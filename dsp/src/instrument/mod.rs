@@ -118,8 +118,8 @@ pub use presets::{
 pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody, hammer_speed};
 pub use slide_scale::SlideScale;
 pub use slide_voice::{
-    BRAKING, ChannelState, HAND_ACCELERATION, HAND_SPEED, MUTE_TIME, OPEN_KEY, PICKUP_APERTURE, PLUCK_TIME, REST_FORCE,
-    SLIDE_ACCELERATION, SLIDE_SPEED, SlideVoice, TRAIL,
+    BRAKING, ChannelState, HAND_ACCELERATION, HAND_SPEED, LANDING_SPEED, MUTE_HAND_DAMPING, MUTE_TIME, OPEN_KEY,
+    PICKUP_APERTURE, PLUCK_TIME, REST_FORCE, SLIDE_ACCELERATION, SLIDE_SPEED, SlideVoice, TRAIL, hand_reach,
 };
 pub use solvers::Solvers;
 pub use voicing::{VOICING_DB, VOICING_VELOCITIES, voicing_gain};

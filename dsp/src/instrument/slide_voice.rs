@@ -22,7 +22,10 @@
 //!   most [`HAND_ACCELERATION`] (the same law): the hand's damping `r_H` passes a change of its
 //!   speed straight on to a pressed slide and so to the string, and a hand that reversed at once
 //!   (the setting or a controller jumping at every control block) would kick the string with a
-//!   step of force each time, heard as clicks;
+//!   step of force each time, heard as clicks. Lowering the slide, the hand sets it down gently
+//!   ([`hand_reach`]: at most [`LANDING_ACCELERATION`], slowing to [`LANDING_SPEED`] before the
+//!   slide touches and pressing on at that pace), except for a note from silence, whose slide
+//!   comes down at the hand's full reach while the finger plucks;
 //! - per note, a host's polyphonic modulation offsets the `slide_position` and `hand_height`
 //!   settings (where they act: not following keys, and the hand height from the parameter), the
 //!   sums clamped to the settings' ranges. Tuning, offsets and poly pressure belong to the note:
@@ -33,7 +36,8 @@
 //!   dead part of the string;
 //! - note-on plucks with the right finger at the plucking position: the force ramps up over
 //!   [`PLUCK_TIME`] to [`pluck_force`] `0.3 + 2.7·velocity` N and is then released; note-off lays
-//!   the finger on, its force rising to 0.3 N over [`MUTE_TIME`], muting the string. The finger
+//!   the finger on, its force rising to 0.3 N over [`MUTE_TIME`], muting the string, and the hand
+//!   stills the slide as the finger lands (damping it at least [`MUTE_HAND_DAMPING`]). The finger
 //!   follows the `pluck_position` setting at the slide's speed limits, as it may be pressing;
 //! - switching `follow_key` under a sounding note leaves the slide where it is, which then
 //!   glides to where the new choice puts it.
@@ -74,7 +78,7 @@ use crate::instrument::settings::{HAND_RANGE, HandSource, Settings, SlideBody};
 use crate::instrument::slide_scale::SlideScale;
 use crate::instrument::solvers::Solvers;
 use crate::preset::slide_guitar;
-use crate::scene::{OutputKind, Pickup, SlideControls, SlideCore, SlideStringParams};
+use crate::scene::{OutputKind, PIECE_TURN, Pickup, SlideControls, SlideCore, SlideStringParams};
 use crate::string::ModalString;
 
 /// Length of string the slide guitar's pickup senses (m): a single coil's, about an inch
@@ -96,6 +100,13 @@ pub const REST_FORCE: f64 = 0.3;
 /// pushes the string aside at once, a thump under the pickup however quiet the note has become.
 pub const MUTE_TIME: f64 = 0.02;
 
+/// The least damping (kg/s) of the hand holding the slide once its note is let go, reached as
+/// the muting finger lands: the hand stills the slide as the finger mutes the string (the
+/// default `Hand damping`). A slide on a hand without damping bobs on its spring for ever, and,
+/// hitting the string or riding on it, keeps it sounding, so that the note never ends. Damping
+/// only takes energy, so it may change under a sounding note.
+pub const MUTE_HAND_DAMPING: f64 = 5.0;
+
 /// How far the left finger trails the slide (m).
 pub const TRAIL: f64 = 0.02;
 
@@ -115,6 +126,11 @@ pub const HAND_SPEED: f64 = 0.5;
 /// player's hand (5 g).
 pub const HAND_ACCELERATION: f64 = 50.0;
 
+/// Fastest the hand brings the slide down onto the string at rest, and presses it further in
+/// (m/s): a player sets a slide down gently, and a slide landing at the hand's top speed claps
+/// against the string (an estimate; the clap's level grows in proportion to the landing speed).
+pub const LANDING_SPEED: f64 = 0.05;
+
 /// How fast a player moves what the hand holds: the top speed (m/s) and the largest
 /// acceleration (m/s²).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -130,6 +146,29 @@ pub const SLIDE_REACH: Reach = Reach { speed: SLIDE_SPEED, acceleration: SLIDE_A
 
 /// The hand pressing the slide onto the string or lifting it.
 pub const HAND_REACH: Reach = Reach { speed: HAND_SPEED, acceleration: HAND_ACCELERATION };
+
+/// Largest acceleration of the hand lowering the slide (m/s²): a quarter of
+/// [`HAND_ACCELERATION`]. The slide rides on the hand's spring (about 90 Hz with the defaults),
+/// and a hand whose acceleration jumps by `Δa` sets it swinging at up to `Δa/ω` (9 cm/s for
+/// 50 m/s²), which it would bring onto the string on top of the hand's own speed.
+pub const LANDING_ACCELERATION: f64 = HAND_ACCELERATION / 4.0;
+
+/// How far above the string (m) the hand has slowed down to [`LANDING_SPEED`]: the slide lags
+/// the hand on its spring, and the hand's speed changes block by block.
+pub const LANDING_MARGIN: f64 = 0.5e-3;
+
+/// The hand's reach from `height` towards `target` (m) with the slide `gap` (m) above the string
+/// under it: lowering the slide, the hand speeds up and slows down at most at
+/// [`LANDING_ACCELERATION`] `a_l`, slowing down as the slide nears the string,
+/// `v ≤ v_land + √(2·a_l·gap)` ([`LANDING_SPEED`]), and presses it further in at `v_land`;
+/// lifting, it moves within [`HAND_REACH`].
+pub fn hand_reach(height: f64, target: f64, gap: f64) -> Reach {
+    if target >= height {
+        return HAND_REACH;
+    }
+    let speed = LANDING_SPEED + (2.0 * LANDING_ACCELERATION * (gap - LANDING_MARGIN).max(0.0)).sqrt();
+    Reach { speed: speed.min(HAND_SPEED), acceleration: LANDING_ACCELERATION }
+}
 
 /// The share of the acceleration limit a `Motion` (the slide along the string, or the hand towards
 /// it) brakes with towards a still target. Braking at the full limit, the block that meets the
@@ -234,6 +273,9 @@ pub struct SlideVoice {
     pub sounding: bool,
     /// Whether its key is held down.
     pub key_down: bool,
+    /// Lowering the slide for a note from silence, during its pluck: at the hand's full reach,
+    /// until the hand first arrives.
+    setting_down: bool,
     /// Sample index of its latest note-on.
     pub started: u64,
     /// Poly pressure of its key, 0..=1.
@@ -323,6 +365,7 @@ impl SlideVoice {
         };
         let law = PowerLaw::new(settings.slide_kappa, settings.slide_alpha).expect("clamped settings give a valid law");
         let mut core = SlideCore::new(string, &params, rest, rest);
+        core.cut_blocks(PIECE_TURN);
         core.attach_body(&BodyParams::guitar(), false);
         Self {
             core,
@@ -332,6 +375,7 @@ impl SlideVoice {
             strike: Strike { channel: 0, key: OPEN_KEY, velocity: 0.0, shifted: false },
             sounding: false,
             key_down: false,
+            setting_down: false,
             started: 0,
             poly_pressure: 0.0,
             tuning: 0.0,
@@ -410,6 +454,7 @@ impl SlideVoice {
             self.glided = self.keys_and_bends(settings, channel);
             self.lift_to(self.scale.position(self.semitones(settings)), settings);
             self.fresh = true;
+            self.setting_down = true;
         }
         if !self.sounding {
             let Ok(law) = PowerLaw::new(settings.slide_kappa, settings.slide_alpha) else { return };
@@ -570,6 +615,18 @@ impl SlideVoice {
         if follow_key { 0.0 } else { (settings.slide_position + self.slide_offset).clamp(0.0, 24.0) }
     }
 
+    /// The hand height (m) the setting, with the note's offset, or the controller chosen for it
+    /// asks for.
+    fn hand_height(&self, settings: &Settings, channel: &ChannelState) -> f64 {
+        let pressed = |v: f64| HAND_RANGE.0 + (HAND_RANGE.1 - HAND_RANGE.0) * v.clamp(0.0, 1.0);
+        match settings.hand_source {
+            HandSource::Parameter => (settings.hand_height + self.hand_offset).clamp(-3e-3, 3e-3),
+            HandSource::ModWheel => pressed(channel.mod_wheel),
+            HandSource::ChannelPressure => pressed(channel.pressure),
+            HandSource::PolyPressure => pressed(self.poly_pressure),
+        }
+    }
+
     /// Take up `settings`' choice between following keys and the `slide_position` setting: the
     /// slide stays where it is and glides from there to where the new choice puts it, as keys
     /// glide, rather than adding or losing the setting's part at once.
@@ -656,14 +713,18 @@ impl SlideVoice {
         let scale = &self.scale;
         let x_o = self.position_at.get(self.semitones(settings), |semitones| scale.position(semitones));
         self.slide_motion.approach(x_o, span, SLIDE_REACH);
-        let pressed = |v: f64| HAND_RANGE.0 + (HAND_RANGE.1 - HAND_RANGE.0) * v.clamp(0.0, 1.0);
-        let hand_height = match settings.hand_source {
-            HandSource::Parameter => (settings.hand_height + self.hand_offset).clamp(-3e-3, 3e-3),
-            HandSource::ModWheel => pressed(channel.mod_wheel),
-            HandSource::ChannelPressure => pressed(channel.pressure),
-            HandSource::PolyPressure => pressed(self.poly_pressure),
+        let hand_height = self.hand_height(settings, channel);
+        // A note from silence lowers the slide as the finger plucks, at the hand's full reach: a
+        // gentle landing would leave the string open for the pluck's first 20 ms.
+        let reach = if self.setting_down {
+            HAND_REACH
+        } else {
+            hand_reach(self.hand.position, hand_height, -self.core.compressions().1)
         };
-        self.hand.approach(hand_height, span, HAND_REACH);
+        self.hand.approach(hand_height, span, reach);
+        self.setting_down &= self.hand.position != hand_height || self.hand.velocity != 0.0;
+        // The slide of the current note, its hand stilling it as the finger mutes the string.
+        let mut slide = self.slide;
         let right_force = match self.pluck {
             Some(t) if t < PLUCK_TIME => {
                 self.pluck = Some(t + span);
@@ -677,7 +738,9 @@ impl SlideVoice {
             None if self.key_down => 0.0,
             None => {
                 self.mute = (self.mute + span / MUTE_TIME).min(1.0);
-                REST_FORCE * 0.5 * (1.0 - (std::f64::consts::PI * self.mute).cos())
+                let landed = 0.5 * (1.0 - (std::f64::consts::PI * self.mute).cos());
+                slide.damping = slide.damping.max(MUTE_HAND_DAMPING * landed);
+                REST_FORCE * landed
             }
         };
         self.right.approach(settings.pluck_position * self.length, span, SLIDE_REACH);
@@ -690,7 +753,7 @@ impl SlideVoice {
             right_position: self.right.position,
             right_force,
         };
-        self.core.set_params(self.slide, [settings.finger_damping; 2], settings.block);
+        self.core.set_params(slide, [settings.finger_damping; 2], settings.block);
         self.core.start_block(len);
         // The energies take a pass over the modes: every block, or every `ENERGY_INTERVAL`
         // samples when the blocks are shorter.

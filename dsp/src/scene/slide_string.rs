@@ -40,6 +40,16 @@
 //! finger while its force is non-zero at either end of the block. With [`Fixed`](crate::control::Fixed) controls none of
 //! this runs.
 //!
+//! A straight line between two end vectors cuts the corner of each mode's shape as the shape
+//! turns: mode `i` falls short of `h_i(x(t))` by about `(β_i Δx)²/8` mid-block for a travel `Δx`,
+//! and the pressing force times that shortfall, back in every block and swelling with the speed,
+//! is heard at multiples of `fs/N_b` (a vibrato's buzz). So the instrument's voices
+//! ([`SlideCore::cut_blocks`]) cut a block whose contacts travel further than [`PIECE_TURN`]
+//! allows the highest mode into equal pieces, each planned as a block of its own from the
+//! controls at its ends (which lie on the block's ramps): the vectors are then made at the
+//! pieces' ends, and the scheme, and its energy balance, is the same as a shorter block's. The
+//! scenes keep the seed's blocks whole (§6.7), as the report's control-block study measures them.
+//!
 //! # The compression carried across a moving vector
 //!
 //! The contact potential is evaluated on carried compressions: `y^{n+1} = ĥ_oᵀũ^{n+1} − w_o^{n+1}`
@@ -112,7 +122,26 @@ impl SlideControls {
     fn positions(&self) -> [f64; 3] {
         [self.slide_position, self.left_position, self.right_position]
     }
+
+    /// The controls a fraction `t` of the way from `self` to `to`, every one linearly.
+    fn lerp(&self, to: &Self, t: f64) -> Self {
+        let at = |a: f64, b: f64| a + (b - a) * t;
+        Self {
+            slide_position: at(self.slide_position, to.slide_position),
+            hand_height: at(self.hand_height, to.hand_height),
+            left_position: at(self.left_position, to.left_position),
+            left_force: at(self.left_force, to.left_force),
+            right_position: at(self.right_position, to.right_position),
+            right_force: at(self.right_force, to.right_force),
+        }
+    }
 }
+
+/// The most a contact's vector may turn across one piece of a control block: the angle
+/// `β_max |Δx|` (rad) of the highest mode over the piece's travel `Δx`. A block whose contacts
+/// travel further is cut into equal pieces with vectors made at their ends (module docs), where a
+/// core cuts blocks at all ([`SlideCore::cut_blocks`]).
+pub const PIECE_TURN: f64 = 0.05;
 
 /// The slide's contact, then the left and the right finger.
 const SLIDE: usize = 0;
@@ -686,6 +715,17 @@ pub struct SlideCore {
     slide_jumped: bool,
     /// Steps since the slide's vector last changed (saturating).
     slide_still: u32,
+    /// A control block cut into pieces (module docs): its controls at its end, its length, the
+    /// number of pieces and the index of the piece under way; one piece when the block is whole.
+    whole_end: SlideControls,
+    whole_len: usize,
+    pieces: usize,
+    piece: usize,
+    /// `β_max`, the highest mode's wavenumber (1/m).
+    beta_max: f64,
+    /// The most a contact's vector may turn across a piece of a block (rad): infinite, blocks
+    /// whole, unless [`cut_blocks`](Self::cut_blocks) says otherwise.
+    piece_turn: f64,
     out_now: f64,
     losses: f64,
     control_work: f64,
@@ -734,6 +774,12 @@ impl SlideCore {
             slide_state: [[0.0; 2]; 2],
             slide_jumped: false,
             slide_still: u32::MAX,
+            whole_end: target,
+            whole_len: block,
+            pieces: 1,
+            piece: 0,
+            beta_max: string.wavenumbers().iter().fold(0.0, |m: f64, &b| m.max(b)),
+            piece_turn: f64::INFINITY,
             out_now: 0.0,
             losses: 0.0,
             control_work: 0.0,
@@ -772,6 +818,7 @@ impl SlideCore {
         self.slide_state = [[0.0; 2]; 2];
         self.slide_jumped = false;
         self.slide_still = u32::MAX;
+        (self.pieces, self.piece) = (1, 0);
         self.y_prev = -self.sho.previous();
         self.y_now = -self.sho.position();
         self.out_now = 0.0;
@@ -806,6 +853,13 @@ impl SlideCore {
         self.body = Some(BodyCoupling { on, ..coupling });
         self.plan_block();
         self.slide_jumped = false;
+    }
+
+    /// Cut each control block from the next on into pieces over which no contact's vector turns
+    /// by more than `turn` (rad) at the highest mode (module docs); `f64::INFINITY` keeps blocks
+    /// whole, as made.
+    pub fn cut_blocks(&mut self, turn: f64) {
+        self.piece_turn = turn;
     }
 
     /// Couple the string's end to the attached body (`on`) or hold it still, and bring string,
@@ -855,6 +909,7 @@ impl SlideCore {
     pub fn start_block(&mut self, len: usize) {
         self.next_block = len.max(1);
         self.k = self.block;
+        (self.pieces, self.piece) = (1, 0);
     }
 
     /// Move the pickup to `pickup` (the string's output weights), gliding over the next `glide`
@@ -1022,10 +1077,33 @@ impl SlideCore {
         self.theta = block_theta(plan, &v.gram);
     }
 
-    /// Start a new block: move the targets on and plan its vectors.
+    /// Start a new block: move the targets on, cut the block into pieces if its contacts
+    /// travel further than the core allows ([`cut_blocks`](Self::cut_blocks)), and begin the
+    /// first.
     fn begin_block<C: ControlSource<SlideControls>>(&mut self, controls: &mut C) {
+        let (start, end, len) = (self.target, controls.at(self.n + self.block as u64), self.block);
+        let travel = start.positions().iter().zip(end.positions()).fold(0.0, |m: f64, (a, b)| m.max((b - a).abs()));
+        let pieces = (self.beta_max * travel / self.piece_turn).ceil();
+        (self.whole_end, self.whole_len) = (end, len);
+        self.pieces = if pieces > 1.0 { (pieces as usize).min(len) } else { 1 };
+        self.piece = 0;
+        self.begin_piece();
+    }
+
+    /// Begin the block's next piece: steps `len·j/m` to `len·(j+1)/m` of the block, from where
+    /// the last one ended to the controls there (linear across the block, as the ramps are),
+    /// and plan its vectors.
+    fn begin_piece(&mut self) {
+        let (j, m, len) = (self.piece, self.pieces, self.whole_len);
+        let (from, to) = (len * j / m, len * (j + 1) / m);
         self.start = self.target;
-        self.target = controls.at(self.n + self.block as u64);
+        self.target = if j + 1 == m {
+            self.whole_end
+        } else {
+            self.start.lerp(&self.whole_end, (to - from) as f64 / (len - from) as f64)
+        };
+        self.block = to - from;
+        self.inv_block = 1.0 / self.block as f64;
         let (s, t, len) = (&self.start, &self.target, self.block);
         self.hand = Ramp::new(s.hand_height, t.hand_height, len);
         self.left_force = Ramp::new(s.left_force, t.left_force, len);
@@ -1378,10 +1456,15 @@ impl SlideCore {
         while done < count {
             if self.k == self.block {
                 self.k = 0;
-                self.block = self.next_block;
-                self.inv_block = 1.0 / self.block as f64;
-                if C::VARYING {
-                    self.begin_block(controls);
+                if self.piece + 1 < self.pieces {
+                    self.piece += 1;
+                    self.begin_piece();
+                } else {
+                    self.block = self.next_block;
+                    self.inv_block = 1.0 / self.block as f64;
+                    if C::VARYING {
+                        self.begin_block(controls);
+                    }
                 }
             }
             let run = (self.block - self.k).min(count - done);
