@@ -405,7 +405,8 @@ fn a_pluck_position_jump_under_a_muting_finger_does_not_thump() {
 /// held 2 mm above it (mezzo-forte, a 2.46 N pluck), then `Hand height` jumped to −1.5 mm after
 /// 1 s and 3 s, on both guitars, at control blocks of 16, 64 and 256 samples. The hand slows
 /// down to `LANDING_SPEED` (5 cm/s, a player's gentle landing) before the slide touches, and
-/// the landing's loudest sample stays 25 dB below the pluck's at block 16 (a slide landing at
+/// at every block the landing's loudest sample stays 25 dB below the pluck's at block 16 (the
+/// pluck's own peak depends on the block, which cuts its release; a slide landing at
 /// 5 cm/s on a still string claps 26 dB below a 2.46 N pluck, measured in the scene at
 /// per-sample control; 27.8 to 33.8 dB here). The hand brought the slide down at 0.37 to
 /// 0.47 m/s, its top speed, and the clap was 6 to 8 dB below the pluck.

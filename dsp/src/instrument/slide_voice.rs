@@ -10,7 +10,8 @@
 //!   string's `L(1 − 2^(−p/12))`, less the end correction of the model's string): the
 //!   `slide_position` setting, followed as it comes (host automation is already a gesture), or,
 //!   when following keys, the played key's distance from the open string, glided towards with time
-//!   constant `glide_time`; plus pitch bend × bend range, glided as well; plus the note's own
+//!   constant `glide_time`; plus pitch bend × bend range, glided as well (a note from silence
+//!   takes the bend its channel has at once); plus the note's own
 //!   tuning (a host's per-note tuning expression, in semitones, followed as it comes). A hand
 //!   moves a slide at a few metres per second at most and cannot change its speed at once, so
 //!   the slide never travels faster than [`SLIDE_SPEED`] nor speeds up or slows down faster than
@@ -157,17 +158,21 @@ pub const LANDING_ACCELERATION: f64 = HAND_ACCELERATION / 4.0;
 /// the hand on its spring, and the hand's speed changes block by block.
 pub const LANDING_MARGIN: f64 = 0.5e-3;
 
-/// The hand's reach from `height` towards `target` (m) with the slide `gap` (m) above the string
-/// under it: lowering the slide, the hand speeds up and slows down at most at
-/// [`LANDING_ACCELERATION`] `a_l`, slowing down as the slide nears the string,
-/// `v ≤ v_land + √(2·a_l·gap)` ([`LANDING_SPEED`]), and presses it further in at `v_land`;
-/// lifting, it moves within [`HAND_REACH`].
-pub fn hand_reach(height: f64, target: f64, gap: f64) -> Reach {
-    if target >= height {
+/// The reach of `hand` towards `target` (m) with the slide `gap` (m) above the string under it:
+/// lowering the slide, the hand speeds up and slows down at most at [`LANDING_ACCELERATION`]
+/// `a_l`, slowing down as the slide nears the string, `v ≤ v_land + √(2·a_l·(gap − margin))`
+/// ([`LANDING_SPEED`], [`LANDING_MARGIN`]), and presses it further in at `v_land`; a hand too
+/// fast to stop on its target at `a_l` (lowered at its full reach, or turned back from lifting)
+/// brakes within [`HAND_REACH`]. Lifting, it moves within [`HAND_REACH`].
+pub fn hand_reach(hand: &Motion, target: f64, gap: f64) -> Reach {
+    if target >= hand.position {
         return HAND_REACH;
     }
     let speed = LANDING_SPEED + (2.0 * LANDING_ACCELERATION * (gap - LANDING_MARGIN).max(0.0)).sqrt();
-    Reach { speed: speed.min(HAND_SPEED), acceleration: LANDING_ACCELERATION }
+    let speed = speed.min(HAND_SPEED);
+    let too_fast = hand.velocity * hand.velocity > 2.0 * LANDING_ACCELERATION * (target - hand.position).abs();
+    let acceleration = if too_fast { HAND_ACCELERATION } else { LANDING_ACCELERATION };
+    Reach { speed, acceleration }
 }
 
 /// The share of the acceleration limit a `Motion` (the slide along the string, or the hand towards
@@ -273,8 +278,8 @@ pub struct SlideVoice {
     pub sounding: bool,
     /// Whether its key is held down.
     pub key_down: bool,
-    /// Lowering the slide for a note from silence, during its pluck: at the hand's full reach,
-    /// until the hand first arrives.
+    /// Lowering the slide for a note from silence as the finger plucks: at the hand's full reach,
+    /// until the hand first meets its target.
     setting_down: bool,
     /// Sample index of its latest note-on.
     pub started: u64,
@@ -292,7 +297,7 @@ pub struct SlideVoice {
     glided: f64,
     /// The slide along the string: its position `x_o` (m) from the nut, within [`SLIDE_REACH`].
     slide_motion: Motion,
-    /// The hand: its height `w_H` (m), within [`HAND_REACH`].
+    /// The hand: its height `w_H` (m), within [`HAND_REACH`], lowering within [`hand_reach`].
     hand: Motion,
     /// The plucking finger along the string (m), within [`SLIDE_REACH`]: it mutes where it
     /// plucks, and a finger pressing the string dragged along it in one block would thump.
@@ -706,7 +711,7 @@ impl SlideVoice {
         let target = self.keys_and_bends(settings, channel);
         self.glided += (target - self.glided) * self.glide_factor.get(-span / settings.glide_time, |x| 1.0 - x.exp());
         // Arrive: an exponential glide never quite does, and a moving slide costs a recomputation
-        // of the contact vectors every block.
+        // of the contact vectors every block (or piece).
         if (target - self.glided).abs() < 1e-4 {
             self.glided = target;
         }
@@ -719,10 +724,12 @@ impl SlideVoice {
         let reach = if self.setting_down {
             HAND_REACH
         } else {
-            hand_reach(self.hand.position, hand_height, -self.core.compressions().1)
+            hand_reach(&self.hand, hand_height, -self.core.compressions().1)
         };
         self.hand.approach(hand_height, span, reach);
-        self.setting_down &= self.hand.position != hand_height || self.hand.velocity != 0.0;
+        // Arrived where it is asked to be (a moving target is met on its way too).
+        // Arrived where it is asked to be (a moving target is met on its way too).
+        self.setting_down &= self.hand.position != hand_height;
         // The slide of the current note, its hand stilling it as the finger mutes the string.
         let mut slide = self.slide;
         let right_force = match self.pluck {

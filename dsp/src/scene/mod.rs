@@ -12,7 +12,7 @@ mod unison;
 
 pub use hammer_string::{HammerCore, HammerString, HammerStringParams, OutputKind, Pickup};
 pub use mass_barrier::{MassBarrier, MassBarrierParams};
-pub use slide_string::{PIECE_TURN, SlideControls, SlideCore, SlideString, SlideStringParams};
+pub use slide_string::{MAX_PIECES, PIECE_TURN, SlideControls, SlideCore, SlideString, SlideStringParams};
 pub use unison::{
     HammerUnison, MAX_PARTNERS, MAX_UNISON, PARTNER_MODES, Shared, UnisonCore, UnisonError, UnisonParams, Watch,
 };

@@ -35,8 +35,8 @@
 //! `ĥ_ζ = (1 − a) h_ζ(x_ζ^start) + a h_ζ(x_ζ^end)` at fraction `a = k/N_b` of the block. A step
 //! then projects `z̃` on both end vectors and spreads each force along both, and
 //! `θ(a) = (1−a)² θ_ss + a(1−a)(θ_se + θ_es) + a² θ_ee` comes from one Gram matrix of the block's
-//! vectors. The vectors are made at block boundaries only (an end vector becomes the next
-//! block's start vector), and only for contacts that touch the string: the slide always, a
+//! vectors. The vectors are made at block boundaries only (or at the ends of a block's pieces,
+//! below; an end vector becomes the next block's start vector), and only for contacts that touch the string: the slide always, a
 //! finger while its force is non-zero at either end of the block. With [`Fixed`](crate::control::Fixed) controls none of
 //! this runs.
 //!
@@ -44,8 +44,8 @@
 //! turns: mode `i` falls short of `h_i(x(t))` by about `(β_i Δx)²/8` mid-block for a travel `Δx`,
 //! and the pressing force times that shortfall, back in every block and swelling with the speed,
 //! is heard at multiples of `fs/N_b` (a vibrato's buzz). So the instrument's voices
-//! ([`SlideCore::cut_blocks`]) cut a block whose contacts travel further than [`PIECE_TURN`]
-//! allows the highest mode into equal pieces, each planned as a block of its own from the
+//! ([`SlideCore::cut_blocks`]) cut a block whose touching contacts travel further than
+//! [`PIECE_TURN`] allows the highest mode into equal pieces (at most [`MAX_PIECES`]), each planned as a block of its own from the
 //! controls at its ends (which lie on the block's ramps): the vectors are then made at the
 //! pieces' ends, and the scheme, and its energy balance, is the same as a shorter block's. The
 //! scenes keep the seed's blocks whole (§6.7), as the report's control-block study measures them.
@@ -142,6 +142,11 @@ impl SlideControls {
 /// travel further is cut into equal pieces with vectors made at their ends (module docs), where a
 /// core cuts blocks at all ([`SlideCore::cut_blocks`]).
 pub const PIECE_TURN: f64 = 0.05;
+
+/// The most pieces a control block is cut into: a slide travelling fast enough to need more (a
+/// glide or a jump at metres per second) sweeps its partials through the block-rate bands, which
+/// hides what is left, and a block costs at most this many makings of the vectors.
+pub const MAX_PIECES: usize = 16;
 
 /// The slide's contact, then the left and the right finger.
 const SLIDE: usize = 0;
@@ -814,6 +819,11 @@ impl SlideCore {
         self.left_force = Ramp::new(controls.left_force, controls.left_force, self.block);
         self.right_force = Ramp::new(controls.right_force, controls.right_force, self.block);
         self.hand_prev = controls.hand_height;
+        if self.pieces > 1 {
+            // A block cut short by its pieces is whole again.
+            self.block = self.whole_len;
+            self.inv_block = 1.0 / self.block as f64;
+        }
         self.plan_block();
         self.slide_state = [[0.0; 2]; 2];
         self.slide_jumped = false;
@@ -1082,10 +1092,17 @@ impl SlideCore {
     /// first.
     fn begin_block<C: ControlSource<SlideControls>>(&mut self, controls: &mut C) {
         let (start, end, len) = (self.target, controls.at(self.n + self.block as u64), self.block);
-        let travel = start.positions().iter().zip(end.positions()).fold(0.0, |m: f64, (a, b)| m.max((b - a).abs()));
+        // The slide always touches; a finger only while it presses at either end of the block.
+        let touching = [
+            true,
+            start.left_force != 0.0 || end.left_force != 0.0,
+            start.right_force != 0.0 || end.right_force != 0.0,
+        ];
+        let moves = start.positions().into_iter().zip(end.positions()).zip(touching);
+        let travel = moves.fold(0.0, |m: f64, ((a, b), on)| if on { m.max((b - a).abs()) } else { m });
         let pieces = (self.beta_max * travel / self.piece_turn).ceil();
         (self.whole_end, self.whole_len) = (end, len);
-        self.pieces = if pieces > 1.0 { (pieces as usize).min(len) } else { 1 };
+        self.pieces = if pieces > 1.0 { (pieces as usize).min(len).min(MAX_PIECES) } else { 1 };
         self.piece = 0;
         self.begin_piece();
     }
