@@ -728,7 +728,6 @@ impl SlideVoice {
         };
         self.hand.approach(hand_height, span, reach);
         // Arrived where it is asked to be (a moving target is met on its way too).
-        // Arrived where it is asked to be (a moving target is met on its way too).
         self.setting_down &= self.hand.position != hand_height;
         // The slide of the current note, its hand stilling it as the finger mutes the string.
         let mut slide = self.slide;

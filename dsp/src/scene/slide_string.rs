@@ -36,19 +36,20 @@
 //! then projects `z̃` on both end vectors and spreads each force along both, and
 //! `θ(a) = (1−a)² θ_ss + a(1−a)(θ_se + θ_es) + a² θ_ee` comes from one Gram matrix of the block's
 //! vectors. The vectors are made at block boundaries only (or at the ends of a block's pieces,
-//! below; an end vector becomes the next block's start vector), and only for contacts that touch the string: the slide always, a
-//! finger while its force is non-zero at either end of the block. With [`Fixed`](crate::control::Fixed) controls none of
-//! this runs.
+//! below; an end vector becomes the next block's start vector), and only for contacts that touch
+//! the string: the slide always, a finger while its force is non-zero at either end of the block.
+//! With [`Fixed`](crate::control::Fixed) controls none of this runs.
 //!
 //! A straight line between two end vectors cuts the corner of each mode's shape as the shape
 //! turns: mode `i` falls short of `h_i(x(t))` by about `(β_i Δx)²/8` mid-block for a travel `Δx`,
 //! and the pressing force times that shortfall, back in every block and swelling with the speed,
 //! is heard at multiples of `fs/N_b` (a vibrato's buzz). So the instrument's voices
 //! ([`SlideCore::cut_blocks`]) cut a block whose touching contacts travel further than
-//! [`PIECE_TURN`] allows the highest mode into equal pieces (at most [`MAX_PIECES`]), each planned as a block of its own from the
-//! controls at its ends (which lie on the block's ramps): the vectors are then made at the
-//! pieces' ends, and the scheme, and its energy balance, is the same as a shorter block's. The
-//! scenes keep the seed's blocks whole (§6.7), as the report's control-block study measures them.
+//! [`PIECE_TURN`] allows the highest mode into equal pieces (at most [`MAX_PIECES`]), each planned
+//! as a block of its own from the controls at its ends (which lie on the block's ramps): the
+//! vectors are then made at the pieces' ends, and the scheme, and its energy balance, is the same
+//! as a shorter block's. The scenes keep the seed's blocks whole (§6.7), as the report's
+//! control-block study measures them.
 //!
 //! # The compression carried across a moving vector
 //!
