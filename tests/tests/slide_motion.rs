@@ -325,6 +325,11 @@ fn perform_slide(
     left.iter().map(|&v| f64::from(v)).collect()
 }
 
+/// The largest sample of `x`, in dBFS.
+fn peak_dbfs(x: &[f64]) -> f64 {
+    20.0 * x.iter().fold(0.0f64, |m, v| m.max(v.abs())).log10()
+}
+
 /// Pitch (Hz) of a slide note `semitones` above the open string: the speaking length's.
 fn slide_pitch(semitones: f64) -> f64 {
     110.0 * 2f64.powf(semitones / 12.0)
@@ -392,8 +397,7 @@ fn a_pluck_position_jump_under_a_muting_finger_does_not_thump() {
             (21_600, Event::NoteOff { channel: 0, key: 50 }),
         ];
         let out = perform_slide(base, &events, &[(28_800, Settings { pluck_position: 0.5, ..base })], 48_000);
-        let peak = |x: &[f64]| 20.0 * x.iter().fold(0.0f64, |m, v| m.max(v.abs())).log10();
-        let (note, after) = (peak(&out[..21_600]), peak(&out[28_800..]));
+        let (note, after) = (peak_dbfs(&out[..21_600]), peak_dbfs(&out[28_800..]));
         let before = 0..26_400;
         let (click, at) = click_strength(&out, FS, std::slice::from_ref(&before));
         println!("from {from}: note {note:.1} dBFS, after the jump {after:.1} dBFS, click {click:.1} dB at {at}");
@@ -413,7 +417,6 @@ fn a_pluck_position_jump_under_a_muting_finger_does_not_thump() {
 /// 0.47 m/s, its top speed, and the clap was 6 to 8 dB below the pluck.
 #[test]
 fn a_slide_set_down_on_the_string_lands_without_a_clap() {
-    let peak = |x: &[f64]| 20.0 * x.iter().fold(0.0f64, |m, v| m.max(v.abs())).log10();
     for body in [SlideBody::Pickup, SlideBody::Acoustic] {
         let mut pluck = None;
         for block in [16, 64, 256] {
@@ -428,8 +431,8 @@ fn a_slide_set_down_on_the_string_lands_without_a_clap() {
                 };
                 let land = (at * FS) as usize;
                 let out = play_slide(base, &[(land, Settings { hand_height: -1.5e-3, ..base })], 45, land + 9_600);
-                let pluck = *pluck.get_or_insert(peak(&out[..24_000]));
-                let landing = peak(&out[land..]);
+                let pluck = *pluck.get_or_insert(peak_dbfs(&out[..24_000]));
+                let landing = peak_dbfs(&out[land..]);
                 println!("{body:?}, block {block}, set down at {at} s: {:.1} dB below the pluck", pluck - landing);
                 assert!(landing < pluck - 25.0, "{body:?}, block {block}, {at} s: {landing:.1} dBFS, pluck {pluck:.1}");
             }
@@ -444,7 +447,6 @@ fn a_slide_set_down_on_the_string_lands_without_a_clap() {
 /// (measured 32.7 and 34.8 dB). With the hand lowering the slide at its top speed it was 8.6 dB.
 #[test]
 fn a_slide_pressed_by_streaming_pressure_lands_without_a_clap() {
-    let peak = |x: &[f64]| 20.0 * x.iter().fold(0.0f64, |m, v| m.max(v.abs())).log10();
     for body in [SlideBody::Pickup, SlideBody::Acoustic] {
         let settings = Settings { hand_source: HandSource::ChannelPressure, slide_body: body, ..Default::default() };
         let pressure = |at: usize, value: f32| (at, Event::ChannelPressure { channel: 0, value });
@@ -454,7 +456,7 @@ fn a_slide_pressed_by_streaming_pressure_lands_without_a_clap() {
         let (lift, press) = (48_000, 72_000);
         events.extend([pressure(lift, 0.0), pressure(press, 0.9)]);
         let out = perform_slide(settings, &events, &[], press + 9_600);
-        let (pluck, landing) = (peak(&out[..24_000]), peak(&out[press..]));
+        let (pluck, landing) = (peak_dbfs(&out[..24_000]), peak_dbfs(&out[press..]));
         println!("{body:?}: the second landing {:.1} dB below the pluck", pluck - landing);
         assert!(landing < pluck - 25.0, "{body:?}: {landing:.1} dBFS, pluck {pluck:.1}");
     }
