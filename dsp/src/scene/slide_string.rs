@@ -125,7 +125,7 @@ impl SlideControls {
     }
 
     /// The controls a fraction `t` of the way from `self` to `to`, every one linearly.
-    fn lerp(&self, to: &Self, t: f64) -> Self {
+    pub fn lerp(&self, to: &Self, t: f64) -> Self {
         let at = |a: f64, b: f64| a + (b - a) * t;
         Self {
             slide_position: at(self.slide_position, to.slide_position),
