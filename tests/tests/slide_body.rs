@@ -172,16 +172,16 @@ fn the_body_drains_each_partial_as_its_conductance_says() {
 
 /// The acoustic guitar is voiced as the electric: D3 at velocity 80 (the note
 /// [`SLIDE_SCALE`](qsa_dsp::instrument::SLIDE_SCALE) is set by) measures the same integrated
-/// loudness on both within 0.5 LU (measured −39.1 and −39.0). Across A2–C5 the body colours the
-/// notes without one standing out: against the same note on the electric guitar (relative to
-/// D3 on each), every note lies within 11 LU (measured −9.9 to +2.7), and A3, on the top's 219 Hz
-/// resonance, within 4 LU (measured +2.7). With the two-mass model alone, whose response is flat
+/// loudness on both within 0.5 LU (measured −39.27 and −39.28). Across A2–C5 the body colours
+/// the notes without one standing out: against the same note on the electric guitar (relative to
+/// D3 on each), every note lies within 11 LU (measured −8.8 to +2.0), and A3, on the top's 219 Hz
+/// resonance, within 4 LU (measured +1.1). With the two-mass model alone, whose response is flat
 /// above the top's resonance, A3 stood 9.1 LU out (docs/physics.md §13.5).
 #[test]
 fn the_acoustic_guitar_is_voiced_as_the_electric_and_its_body_colours_every_note() {
     let lufs = |body, key| integrated_lufs(&slide_note(body, key, None), REALISM_FS);
     let (electric, acoustic) = (lufs(SlideBody::Pickup, 50), lufs(SlideBody::Acoustic, 50));
-    println!("D3: {electric:.1} LUFS electric, {acoustic:.1} acoustic");
+    println!("D3: {electric:.2} LUFS electric, {acoustic:.2} acoustic");
     assert!((electric - acoustic).abs() < 0.5);
     let colour: Vec<(u8, f64)> = (45..=72u8)
         .map(|k| (k, (lufs(SlideBody::Acoustic, k) - acoustic) - (lufs(SlideBody::Pickup, k) - electric)))

@@ -160,14 +160,14 @@ pub const OUTPUT_SCALE: f64 = 0.016;
 /// of the flux the string modulates, so the string's velocity under it: a slide or finger holding
 /// the string deflected gives no signal, where a displacement output would carry that
 /// deflection as a DC offset and step at every press and release. A note plucked at velocity 80
-/// (D3, the slide pressed), heard through the pickup's circuit, measures −39.1 LUFS over 2 s and
+/// (D3, the slide pressed), heard through the pickup's circuit, measures −39.3 LUFS over 2 s and
 /// peaks at 0.054.
 pub const SLIDE_SCALE: f64 = 0.06;
 
 /// Output scale of the acoustic slide guitar: what the body radiates (in newtons of bridge force
 /// above a kilohertz, [`crate::body::BodyParams::guitar`]) to full scale, set so that the note
 /// [`SLIDE_SCALE`] is set by measures the same loudness on either guitar.
-pub const ACOUSTIC_SCALE: f64 = 0.063;
+pub const ACOUSTIC_SCALE: f64 = 0.067;
 
 /// A note or controller event, as MIDI delivers them.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -8,12 +8,13 @@
 //! ```
 //!
 //! The model's string stopped there sounds sharp: under a point force it is stiffer than the ideal
-//! string it stands for. It keeps only the `N` modes below its frequency limit, and it steps each
-//! with the scheme's stiffness `K̂_i` (`crate::string`), which exceeds `m̃ω_i²` the more the nearer
-//! the mode is to Nyquist. The point compliance it lacks at `x` is
+//! string it stands for: it keeps only the `N` modes below its frequency limit. (The voice's core
+//! reaches each mode through the continuous mode's stiffness `m̃ω_i²`, not the scheme's `K̂_i`,
+//! which exceeds it the more the nearer the mode is to Nyquist: `ModalString::coupling_weights`.)
+//! The point compliance it lacks at `x` is
 //!
 //! ```text
-//! R(x) = x(L − x)/(TL) − Σ_{i≤N} sin²(β_i x)/K̂_i        (m/N)
+//! R(x) = x(L − x)/(TL) − Σ_{i≤N} sin²(β_i x)/(m̃ω_i²)        (m/N)
 //! ```
 //!
 //! the ideal string's static compliance less the model's. For the notes the slide plays, far below
@@ -26,7 +27,7 @@
 //! ```
 //!
 //! about `L/(π²N)` from the modes beyond the limit (the tail of `Σ 2L sin²(iπx/L)/(i²π²T)`, with
-//! `sin²` at its mean ½), plus the time step's share. The slide is placed `δ` nearer the nut, as a
+//! `sin²` at its mean ½), whatever the time step. The slide is placed `δ` nearer the nut, as a
 //! player places a slide by ear:
 //!
 //! ```text
@@ -70,11 +71,15 @@ impl SlideScale {
     pub fn new(string: &ModalString) -> Self {
         let (length, tension) = (string.params().length, string.params().tension);
         let modes = string.modes();
-        let (wavenumbers, stiffness) = (&string.wavenumbers()[..modes], &string.stiffness()[..modes]);
+        // The voice's core couples to each mode through the continuous mode's stiffness m̃ω0²
+        // (`ModalString::coupling_weights`), not the scheme's K̂.
+        let (m, omega0) = (string.modal_mass(), &string.angular_frequencies()[..modes]);
+        let stiffness: Vec<f64> = omega0.iter().map(|&w| m * w * w).collect();
+        let wavenumbers = &string.wavenumbers()[..modes];
         let step = REACH * length / (POINTS - 1) as f64;
         let correction = std::array::from_fn(|j| {
             let x = j as f64 * step;
-            let kept: f64 = wavenumbers.iter().zip(stiffness).map(|(&beta, &k)| (beta * x).sin().powi(2) / k).sum();
+            let kept: f64 = wavenumbers.iter().zip(&stiffness).map(|(&beta, &k)| (beta * x).sin().powi(2) / k).sum();
             tension * (x * (length - x) / (tension * length) - kept)
         });
         Self { length, step, correction }
@@ -124,34 +129,26 @@ mod tests {
         }
     }
 
-    /// The time step's share: the scheme's stiffness `K̂ = (4m̃/Δt²) tan²(ωΔt/2)` exceeds `m̃ω²`,
-    /// so the same modes at 48 kHz lack more compliance than at 4 MHz, by
-    /// `Σ (2L/(i²π²))(1 − ((ωΔt/2)/tan(ωΔt/2))²)` with `sin²` at ½: summed here mode by mode,
-    /// within 2 %. The table's interpolation is the exact sum at its points to 1e-9 m.
+    /// The time step adds nothing: the slide core reaches each mode through `m̃ω²`, not the
+    /// scheme's `K̂ = (4m̃/Δt²) tan²(ωΔt/2)`, so the same modes lack the same compliance at 48 kHz
+    /// as at 4 MHz. The table's interpolation is the exact sum at its points to 1e-9 m.
     #[test]
-    fn the_time_step_adds_the_compliance_its_stiffer_modes_lack() {
+    fn the_time_step_adds_no_compliance() {
         let fine = SlideScale::new(&ModalString::band_limited(ideal(), 4_000_000.0, 20_000.0).expect("valid"));
         let string = ModalString::band_limited(ideal(), 48_000.0, 20_000.0).expect("valid");
         let coarse = SlideScale::new(&string);
-        let (l, dt) = (string.params().length, 1.0 / 48_000.0);
-        let share: f64 = string.angular_frequencies()[..string.modes()]
-            .iter()
-            .enumerate()
-            .map(|(i, &w)| {
-                let half = 0.5 * w * dt;
-                let i = (i + 1) as f64;
-                2.0 * l / (i * std::f64::consts::PI).powi(2) * (1.0 - (half / half.tan()).powi(2))
-            })
-            .sum::<f64>()
-            / 2.0;
+        let l = string.params().length;
         for x in [0.1, 0.2, 0.325, 0.4, 0.5] {
             let added = coarse.end_correction(x) - fine.end_correction(x);
-            println!("x = {x} m: the time step adds {:.4} mm (expected {:.4} mm)", 1e3 * added, 1e3 * share);
-            assert!((added / share - 1.0).abs() < 0.02, "x = {x}: {added} m vs {share} m");
+            assert!(added.abs() < 1e-9, "x = {x}: the time step adds {added} m");
         }
         let x = 7.0 * coarse.step;
+        let m = string.modal_mass();
         let kept: f64 = (1..=string.modes())
-            .map(|i| (i as f64 * std::f64::consts::PI * x / l).sin().powi(2) / string.stiffness()[i - 1])
+            .map(|i| {
+                (i as f64 * std::f64::consts::PI * x / l).sin().powi(2)
+                    / (m * string.angular_frequencies()[i - 1].powi(2))
+            })
             .sum();
         let exact = string.params().tension * (x * (l - x) / (string.params().tension * l) - kept);
         assert!((coarse.end_correction(x) - exact).abs() < 1e-9);

@@ -423,6 +423,7 @@ impl SlideVoice {
         };
         let law = PowerLaw::new(settings.slide_kappa, settings.slide_alpha).expect("clamped settings give a valid law");
         let mut core = SlideCore::new(string, &params, rest, rest);
+        core.couple_statically();
         core.cut_blocks(PIECE_TURN);
         core.attach_body(&BodyParams::guitar(), false);
         Self {

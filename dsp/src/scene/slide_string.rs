@@ -51,6 +51,16 @@
 //! as a shorter block's. The scenes keep the seed's blocks whole (§6.7), as the report's
 //! control-block study measures them.
 //!
+//! A force meets mode `i` through the scheme's static stiffness `K̂_i`, which exceeds the
+//! continuous mode's `m̃ω_i²` by `(tan x/x)²`, `x = ω_iΔt/2` (23 times at 20 kHz at 44.1 kHz): a
+//! pressed slide, a point support, then lets more of the string's motion through to the dead side
+//! at lower rates, and a stopped note decays faster there. The instrument's voices
+//! ([`SlideCore::couple_statically`]) reach mode `i` along `w_i h_i`, `w_i = √(K̂_i/(m̃ω_i²))`, in
+//! every vector (slide, fingers, the body's lift, the pickup): the change of variable
+//! `u_i = w_i ũ_i`, which leaves the free recursion and the energy balance as they are and gives
+//! each mode its continuous static compliance (docs/physics.md §7.7). The scenes keep the seed's
+//! vectors.
+//!
 //! # The compression carried across a moving vector
 //!
 //! The contact potential is evaluated on carried compressions: `y^{n+1} = ĥ_oᵀũ^{n+1} − w_o^{n+1}`
@@ -334,7 +344,10 @@ struct ContactVectors {
     made_at: [f64; SLOTS],
     /// `θ_jk = h_jᵀ(C∘h_k)` between the slots of the current plan (m/N), both triangles.
     gram: [[f64; SLOTS]; SLOTS],
-    /// Window factors of the fingers (the slide and the lift have none).
+    /// Per-mode factors of each contact's vectors: the fingers' windows, times the string's
+    /// coupling weights where the core reaches the modes through their static stiffness
+    /// ([`SlideCore::couple_statically`]), which the slide's are then (the lift, made whole in
+    /// [`SlideCore::attach_body`], has none here).
     windows: [Option<Vec<f64>>; 4],
 }
 
@@ -850,20 +863,41 @@ impl SlideCore {
     /// before its first step. Allocates: call it before the audio thread runs.
     pub fn attach_body(&mut self, body: &BodyParams, on: bool) {
         let coupling = BodyCoupling::new(body, &self.string);
-        // The lift `g_i = ρA(−1)^{i+1}/β_i` (mode `i` from 1) and its gain `C∘g`.
+        // The lift `g_i = ρA(−1)^{i+1}/β_i` (mode `i` from 1), with the coupling weights where
+        // the slide's vectors carry them, and its gain `C∘g`.
         let (string, v) = (&self.string, &mut self.vectors);
         let rho = string.params().linear_density;
         let (lift, gain) = (&mut v.shapes[BRIDGE_SLOT], &mut v.gains[BRIDGE_SLOT]);
         lift.fill(0.0);
         gain.fill(0.0);
+        let weights = v.windows[SLIDE].as_deref();
         for (i, &beta) in string.wavenumbers().iter().enumerate() {
             let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
-            lift[i] = sign * rho / beta;
+            lift[i] = sign * rho / beta * weights.map_or(1.0, |w| w[i]);
             gain[i] = lift[i] * string.input_gains()[i];
         }
         self.body = Some(BodyCoupling { on, ..coupling });
         self.plan_block();
         self.slide_jumped = false;
+    }
+
+    /// Reach every mode through the continuous mode's static stiffness `m̃ω0_i²` rather than the
+    /// scheme's `K̂_i` (module docs): the slide's and the fingers' vectors, the pickup's weights
+    /// and the body's lift (attached after) carry the string's coupling weights
+    /// ([`ModalString::coupling_weights`]). Call it on a core at rest, before its first step and
+    /// before [`attach_body`](Self::attach_body). Allocates: call it before the audio thread runs.
+    pub fn couple_statically(&mut self) {
+        let weights = self.string.coupling_weights();
+        let v = &mut self.vectors;
+        for window in v.windows[LEFT..=RIGHT].iter_mut().flatten() {
+            window.iter_mut().zip(&weights).for_each(|(f, w)| *f *= w);
+        }
+        for pickup in [&mut self.pickup, &mut self.pickup_from] {
+            pickup.iter_mut().zip(&weights).for_each(|(p, w)| *p *= w);
+        }
+        v.windows[SLIDE] = Some(weights);
+        v.made_at = [f64::NAN; SLOTS];
+        self.plan_block();
     }
 
     /// Cut each control block from the next on into pieces over which no contact's vector turns
@@ -944,6 +978,9 @@ impl SlideCore {
         let s = &self.string;
         s.fit_vector(&mut self.pickup);
         pickup.weights(s, &mut self.pickup);
+        if let Some(weights) = &self.vectors.windows[SLIDE] {
+            self.pickup.iter_mut().zip(weights).for_each(|(p, w)| *p *= w);
+        }
         let glides = glide > 0 && self.kind == pickup.kind && self.pickup_from.len() == self.pickup.len();
         self.kind = pickup.kind;
         self.out_now = s.project_state(&self.pickup).1;

@@ -169,6 +169,22 @@ impl ModalString {
         &self.stiffness[..self.modes()]
     }
 
+    /// Per-mode coupling weights `w_i = √(K̂_i/(m̃ω0_i²))` ([`padded_len`](Self::padded_len) entries,
+    /// zero past M), from the string's own `K̂_i`: a contact or a pickup that reaches mode `i`
+    /// along `w_i h_i` in place of `h_i` meets the continuous mode's static stiffness `m̃ω0_i²`
+    /// whatever the time step, where along `h_i` it meets `K̂_i`, which exceeds it by about
+    /// `tan²(ωΔt/2)/(ωΔt/2)²` (23× for a 20 kHz mode at 44.1 kHz). The change of variable
+    /// `u_i = w_i ũ_i` leaves the free recursion, and the energy balance of any scheme whose
+    /// vectors all carry it, as they are. Allocates.
+    pub fn coupling_weights(&self) -> Vec<f64> {
+        let mut w = self.vector();
+        for (i, w) in w.iter_mut().enumerate().take(self.modes()) {
+            let omega0 = self.omega0[i];
+            *w = (self.own_stiffness[i] / (self.modal_mass * omega0 * omega0)).sqrt();
+        }
+        w
+    }
+
     /// Modal mass m̃ = ρAL/2 (kg).
     pub fn modal_mass(&self) -> f64 {
         self.modal_mass
