@@ -978,19 +978,22 @@ fn a_released_note_on_a_lossless_hand_ends() {
     }
 }
 
-/// The level (dB) of the left output 20 to 70 ms after a slide note `key` of velocity 0.8 is
-/// plucked from silence at `fs` (Hz) with `settings`, rendered in 256-sample calls.
-fn pluck_level(fs: f64, settings: Settings, key: u8) -> f64 {
+/// The level (dB) of the left output from `from` to `to` seconds after a slide note `key` of
+/// velocity 0.8 is plucked from silence at `fs` (Hz) with `settings`.
+fn level_between(fs: f64, settings: Settings, key: u8, (from, to): (f64, f64)) -> f64 {
     let mut instrument = Instrument::new(fs, 1, Settings { mode: Mode::Slide, ..settings });
     instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.8 });
-    let samples = (0.07 * fs) as usize;
+    let samples = (to * fs) as usize;
     let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
     for (l, r) in left.chunks_mut(256).zip(right.chunks_mut(256)) {
         instrument.process(l, r);
     }
-    let window = &left[(0.02 * fs) as usize..];
+    let window = &left[(from * fs) as usize..];
     10.0 * (window.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / window.len() as f64).log10()
 }
+
+/// The window (s after the note-on) where a pluck's level is measured: after the finger lets go.
+const ATTACK_WINDOW: (f64, f64) = (0.02, 0.07);
 
 /// The largest minus the smallest of `levels`.
 fn spread(levels: &[f64]) -> f64 {
@@ -1012,30 +1015,17 @@ fn a_slide_pluck_is_as_loud_at_every_rate_and_block_length() {
     let rates = [44_100.0, 48_000.0, 96_000.0, 192_000.0];
     for body in [SlideBody::Pickup, SlideBody::Acoustic] {
         let lifted = Settings { slide_body: body, hand_height: 2e-3, ..Settings::default() };
-        let mut levels: Vec<f64> = rates.iter().map(|&fs| pluck_level(fs, lifted, 45)).collect();
-        levels.extend([16, 256].map(|block| pluck_level(44_100.0, Settings { block, ..lifted }, 45)));
+        let mut levels: Vec<f64> = rates.iter().map(|&fs| level_between(fs, lifted, 45, ATTACK_WINDOW)).collect();
+        levels.extend([16, 256].map(|block| level_between(44_100.0, Settings { block, ..lifted }, 45, ATTACK_WINDOW)));
         println!("{body:?}, open A2, slide lifted: {levels:.2?} dB at {rates:?} Hz, then blocks 16 and 256");
         assert!(spread(&levels) < 0.1, "{body:?}: the pluck's level spreads {:.2} dB", spread(&levels));
     }
     for key in [50u8, 57, 62, 69] {
-        let levels: Vec<f64> = rates.iter().map(|&fs| pluck_level(fs, Settings::default(), key)).collect();
+        let levels: Vec<f64> =
+            rates.iter().map(|&fs| level_between(fs, Settings::default(), key, ATTACK_WINDOW)).collect();
         println!("electric, key {key}: {levels:.2?} dB at {rates:?} Hz");
         assert!(spread(&levels) < 0.6, "key {key}: the note's level spreads {:.2} dB", spread(&levels));
     }
-}
-
-/// The level (dB) of the left output from `from` to `to` seconds after a slide note `key` of
-/// velocity 0.8 is plucked from silence at `fs` (Hz) with `settings`.
-fn level_between(fs: f64, settings: Settings, key: u8, (from, to): (f64, f64)) -> f64 {
-    let mut instrument = Instrument::new(fs, 1, Settings { mode: Mode::Slide, ..settings });
-    instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.8 });
-    let samples = (to * fs) as usize;
-    let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
-    for (l, r) in left.chunks_mut(256).zip(right.chunks_mut(256)) {
-        instrument.process(l, r);
-    }
-    let window = &left[(from * fs) as usize..];
-    10.0 * (window.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / window.len() as f64).log10()
 }
 
 /// A stopped note rings as long at every rate. The scheme steps each mode exactly, but a force
@@ -1055,7 +1045,7 @@ fn a_stopped_slide_note_decays_alike_at_every_rate() {
                 .iter()
                 .map(|&(fs, block)| {
                     let settings = Settings { slide_body: body, block, ..Settings::default() };
-                    level_between(fs, settings, key, (0.02, 0.07)) - level_between(fs, settings, key, (0.5, 0.6))
+                    level_between(fs, settings, key, ATTACK_WINDOW) - level_between(fs, settings, key, (0.5, 0.6))
                 })
                 .collect();
             println!("{body:?}, key {key}: falls {falls:.2?} dB at 44.1, 88.2 and 176.4 kHz");
