@@ -56,10 +56,10 @@
 //! pressed slide, a point support, then lets more of the string's motion through to the dead side
 //! at lower rates, and a stopped note decays faster there. The instrument's voices
 //! ([`SlideCore::couple_statically`]) reach mode `i` along `w_i h_i`, `w_i = √(K̂_i/(m̃ω_i²))`, in
-//! every vector (slide, fingers, the body's lift, the pickup): the change of variable
-//! `u_i = w_i ũ_i`, which leaves the free recursion and the energy balance as they are and gives
-//! each mode its continuous static compliance (docs/physics.md §7.7). The scenes keep the seed's
-//! vectors.
+//! every vector (slide, fingers, the body's lift, the pickup): in `q_i = w_i ũ_i` the seed's
+//! scheme for a string whose mode `i` has mass `m̃/w_i²`, so the energy balance holds as it was
+//! and each mode has its continuous static compliance; the lighter top modes answer fast force
+//! changes more strongly (docs/physics.md §7.7). The scenes keep the seed's vectors.
 //!
 //! # The compression carried across a moving vector
 //!

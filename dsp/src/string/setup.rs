@@ -173,9 +173,10 @@ impl ModalString {
     /// zero past M), from the string's own `K̂_i`: a contact or a pickup that reaches mode `i`
     /// along `w_i h_i` in place of `h_i` meets the continuous mode's static stiffness `m̃ω0_i²`
     /// whatever the time step, where along `h_i` it meets `K̂_i`, which exceeds it by about
-    /// `tan²(ωΔt/2)/(ωΔt/2)²` (23× for a 20 kHz mode at 44.1 kHz). The change of variable
-    /// `u_i = w_i ũ_i` leaves the free recursion, and the energy balance of any scheme whose
-    /// vectors all carry it, as they are. Allocates.
+    /// `tan²(ωΔt/2)/(ωΔt/2)²` (23× for a 20 kHz mode at 44.1 kHz). A scheme whose vectors all
+    /// carry them is the same scheme for a string whose mode `i` has mass `m̃/w_i²` (in
+    /// `q_i = w_i ũ_i`): its free recursion and energy balance are as they were, and its top modes
+    /// answer fast force changes more strongly (docs/physics.md §7.7). Allocates.
     pub fn coupling_weights(&self) -> Vec<f64> {
         let mut w = self.vector();
         for (i, w) in w.iter_mut().enumerate().take(self.modes()) {
