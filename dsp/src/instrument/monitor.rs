@@ -55,17 +55,14 @@ impl Default for Monitor {
 impl Instrument {
     /// A snapshot of the loudest voice (the one whose string moves most). All zeros when silent.
     pub fn monitor(&self) -> Monitor {
-        let piano = self
-            .voices
-            .iter()
-            .filter(|v| v.sounding)
-            .map(|v| (v.string().kinetic_energy(), v.string(), v.energy(), v.contact(), v.strike.key, Mode::Piano));
-        let slide = self
-            .slides
-            .iter()
-            .filter(|v| v.sounding)
-            .map(|v| (v.string().kinetic_energy(), v.string(), v.energy(), v.contact(), v.strike.key, Mode::Slide));
-        let Some((_, string, energy, (compression, force, position), key, mode)) =
+        let piano = self.voices.iter().filter(|v| v.sounding).map(|v| {
+            (v.string().kinetic_energy(), v.string(), None, v.energy(), v.contact(), v.strike.key, Mode::Piano)
+        });
+        let slide = self.slides.iter().filter(|v| v.sounding).map(|v| {
+            let weights = v.coupling_weights();
+            (v.string().kinetic_energy(), v.string(), weights, v.energy(), v.contact(), v.strike.key, Mode::Slide)
+        });
+        let Some((_, string, weights, energy, (compression, force, position), key, mode)) =
             piano.chain(slide).max_by(|a, b| a.0.total_cmp(&b.0))
         else {
             return Monitor { guard_trips: self.guard_trips(), shed: self.shed_count(), ..Monitor::default() };
@@ -74,7 +71,7 @@ impl Instrument {
         let mut shape = [0.0f32; SHAPE_POINTS];
         for (k, s) in shape.iter_mut().enumerate() {
             let x = length * k as f64 / (SHAPE_POINTS - 1) as f64;
-            *s = string.displacement_at(x) as f32;
+            *s = string.displacement_at(x, weights) as f32;
         }
         Monitor {
             sounding: self.sounding(),

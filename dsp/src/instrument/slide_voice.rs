@@ -872,6 +872,12 @@ impl SlideVoice {
         self.core.string()
     }
 
+    /// The weights the core reaches the string's modes through, for monitoring: the string's
+    /// shape is `Σ w_i sin(β_i x) ũ_i` ([`ModalString::displacement_at`]).
+    pub fn coupling_weights(&self) -> Option<&[f64]> {
+        self.core.coupling_weights()
+    }
+
     /// `(compression (m), latest contact force (N), slide position (fraction of the length))`.
     pub fn contact(&self) -> (f64, f64, f64) {
         let (y, f, x) = self.core.contact();
@@ -976,6 +982,33 @@ mod tests {
         let strike = Strike { channel: 0, key: 52, velocity: 0.8, shifted: false };
         voice.play(strike, &settings, &ChannelState::default(), false, 0);
         (voice, settings, strike)
+    }
+
+    /// The monitor draws the string as the core reaches it: through the coupling weights, the
+    /// shape at `x` is the state's projection on the weighted mode shapes there (to 1e-10 of
+    /// itself), which the unweighted sum is not.
+    #[test]
+    fn the_string_is_drawn_through_the_cores_weights() {
+        let (mut voice, settings, _) = plucking();
+        let channel = ChannelState::default();
+        let mut out = [0.0; 64];
+        for _ in 0..5 {
+            voice.begin_block(&settings, &channel, 64);
+            voice.render(&mut out);
+        }
+        let (string, weights) = (voice.string(), voice.coupling_weights().expect("the voice weighs its modes"));
+        let mut shape = string.vector();
+        for x in [0.05, 0.3, 0.58] {
+            string.mode_shapes(x, &mut shape);
+            shape.iter_mut().zip(weights).for_each(|(h, w)| *h *= w);
+            let expected = string.project_state(&shape).1;
+            let drawn = string.displacement_at(x, Some(weights));
+            assert!(
+                (drawn - expected).abs() <= 1e-12 * expected.abs().max(1e-9),
+                "x = {x}: {drawn} against {expected}"
+            );
+            assert_ne!(string.displacement_at(x, None), drawn, "x = {x}: the weights change the shape");
+        }
     }
 
     /// The pluck's corners cut blocks into pieces of the voice's own; a host that splits the

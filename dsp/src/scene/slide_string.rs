@@ -900,6 +900,12 @@ impl SlideCore {
         self.plan_block();
     }
 
+    /// The string's coupling weights, if the core reaches the modes through them
+    /// ([`couple_statically`](Self::couple_statically)).
+    pub fn coupling_weights(&self) -> Option<&[f64]> {
+        self.vectors.windows[SLIDE].as_deref()
+    }
+
     /// Cut each control block from the next on into pieces over which no contact's vector turns
     /// by more than `turn` (rad) at the highest mode (module docs); `f64::INFINITY` keeps blocks
     /// whole, as made.

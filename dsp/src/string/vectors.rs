@@ -70,14 +70,16 @@ impl ModalString {
         (gram, (prev, now))
     }
 
-    /// String displacement `u(x) = Σ sin(β_i x) ũ_i^n` (m) at `x` (m): one pass over the modes.
-    pub fn displacement_at(&self, x: f64) -> f64 {
+    /// String displacement `u(x) = Σ w_i sin(β_i x) ũ_i^n` (m) at `x` (m), with the coupling
+    /// `weights` `w_i` of a core that reaches the modes through them
+    /// ([`coupling_weights`](Self::coupling_weights)), else `w_i = 1`: one pass over the modes.
+    pub fn displacement_at(&self, x: f64, weights: Option<&[f64]>) -> f64 {
         let theta = std::f64::consts::PI * x / self.params.length;
         let (s1, c1) = theta.sin_cos();
         let two_c = 2.0 * c1;
         let (mut prev, mut now, mut sum) = (0.0, s1, 0.0);
-        for &u in &self.u_now[..self.modes()] {
-            sum += now * u;
+        for (i, &u) in self.u_now[..self.modes()].iter().enumerate() {
+            sum += now * u * weights.map_or(1.0, |w| w[i]);
             let next = two_c * now - prev;
             prev = now;
             now = next;
