@@ -1006,8 +1006,7 @@ fn spread(levels: &[f64]) -> f64 {
 /// 48, 96 and 192 kHz, and at 44.1 kHz with blocks of 16, 64 and 256 samples, sounds within
 /// 0.1 dB (a tenth of the 1 dB a listener hears; measured 0.03 dB) on both guitars; stopped
 /// notes on the electric guitar, the slide pressed, within 0.6 dB across the rates (measured
-/// 0.48 dB: the slide's landing and the stopped string's decay keep a share of the rate of their
-/// own). Released at the first control-block boundary after its time, over one block, the
+/// 0.25 dB: the slide's landing keeps a share of the rate of its own). Released at the first control-block boundary after its time, over one block, the
 /// pluck's level on the open string moved by 1.1 dB across the rates and by 6.1 dB with the
 /// block (256 samples: released 1.3 ms late, over 5.8 ms), and on stopped notes by 1.6 dB.
 #[test]
