@@ -560,18 +560,24 @@ fn switching_follow_key_under_a_note_moves_the_slide_from_where_it_is() {
     }
 }
 
-/// Frequency (Hz) of partial `n` of a slide note `key` held 1 s at `fs` (Hz) under `settings`,
-/// measured from 0.4 s on the string's displacement at the pickup (the running sum of its
-/// velocity), near `n` times the key's pitch.
-fn slide_partial(fs: f64, settings: Settings, key: u8, n: f64) -> f64 {
+/// The left output of `seconds` of a slide note `key` of velocity 0.8 plucked from silence at
+/// `fs` (Hz) with `settings`, rendered in 256-sample calls.
+fn slide_note(fs: f64, settings: Settings, key: u8, seconds: f64) -> Vec<f32> {
     let mut instrument = Instrument::new(fs, 1, Settings { mode: Mode::Slide, ..settings });
     instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.8 });
-    let samples = fs as usize;
+    let samples = (seconds * fs) as usize;
     let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
     for (l, r) in left.chunks_mut(256).zip(right.chunks_mut(256)) {
         instrument.process(l, r);
     }
-    let displacement = qsa_tests::displacement(&left);
+    left
+}
+
+/// Frequency (Hz) of partial `n` of a slide note `key` held 1 s at `fs` (Hz) under `settings`,
+/// measured from 0.4 s on the string's displacement at the pickup (the running sum of its
+/// velocity), near `n` times the key's pitch.
+fn slide_partial(fs: f64, settings: Settings, key: u8, n: f64) -> f64 {
+    let displacement = qsa_tests::displacement(&slide_note(fs, settings, key, 1.0));
     let f = n * key_frequency(key);
     qsa_tests::spectral_peak(&displacement[(0.4 * fs) as usize..], fs, 0.96 * f, 1.04 * f)
 }
@@ -614,8 +620,7 @@ fn a_slide_note_sounds_at_its_pitch_at_every_rate_and_mode_count() {
         for (c, configuration) in cents.iter().zip(&configurations) {
             assert!(c.abs() < 2.0, "key {key} at {configuration:?}: {c:+.2} cents");
         }
-        let spread =
-            cents.iter().fold(f64::NEG_INFINITY, |a, &c| a.max(c)) - cents.iter().fold(f64::INFINITY, |a, &c| a.min(c));
+        let spread = spread(&cents);
         assert!(spread < 1.5, "key {key}: partial 2 moves {spread:.2} cents across rates and modes");
     }
 }
@@ -981,13 +986,7 @@ fn a_released_note_on_a_lossless_hand_ends() {
 /// The level (dB) of the left output from `from` to `to` seconds after a slide note `key` of
 /// velocity 0.8 is plucked from silence at `fs` (Hz) with `settings`.
 fn level_between(fs: f64, settings: Settings, key: u8, (from, to): (f64, f64)) -> f64 {
-    let mut instrument = Instrument::new(fs, 1, Settings { mode: Mode::Slide, ..settings });
-    instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.8 });
-    let samples = (to * fs) as usize;
-    let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
-    for (l, r) in left.chunks_mut(256).zip(right.chunks_mut(256)) {
-        instrument.process(l, r);
-    }
+    let left = slide_note(fs, settings, key, to);
     let window = &left[(from * fs) as usize..];
     10.0 * (window.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / window.len() as f64).log10()
 }
