@@ -40,6 +40,10 @@
 
 use super::{ContactProblem, ContactSolution, ContactSolver, Method, PowerLaw};
 
+/// The share of the critical stiffness `4/q_N` that the explicit part of a still contact
+/// started by [`ExplicitSolver::start_still`] may reach ([`ExplicitSolver::still_force`]).
+pub const STILL_SHARE: f64 = 0.5;
+
 /// The EXP solver with the branched gradient.
 #[derive(Debug, Clone)]
 pub struct ExplicitSolver {
@@ -59,9 +63,57 @@ impl ExplicitSolver {
         self.law = law;
     }
 
+    /// The contact law.
+    pub fn law(&self) -> &PowerLaw {
+        &self.law
+    }
+
     /// The auxiliary variable ψ at the latest half step (√J).
     pub fn psi(&self) -> f64 {
         self.psi
+    }
+
+    /// The magnitude (N) of the force EXP holds still at the compression `y` (m), started there
+    /// by [`start_still`](Self::start_still), where the contact meets the compliance `q_N` (m/N)
+    /// at the Nyquist rate: the law's `V'(y)` where that is stable with room to spare, else less,
+    /// ψ short of `√(2V(y))`.
+    ///
+    /// Linearised about a still contact holding `F = ψψ'(y)` (any ψ: the update keeps
+    /// `ψ^{n+1/2} − ψ'(y)·μ_t+y` constant, so a still state with ψ short of `√(2V(y))` is as much
+    /// an equilibrium of the scheme as the consistent one), the force's answer to a deviation δy
+    /// is `−ψ'²·(δy^{n+1} + 2δy^n + δy^{n−1})/4 − ψψ''·δy^n`: a stiffness `ψ'²` averaged as an
+    /// implicit scheme does, and an explicit one, `k_e = ψψ'' = F(α − 1)/(2y)`, at `y^n` alone.
+    /// A deviation alternating from step to step escapes the average and sees the masses behind
+    /// the contact as `q_N/4` ([`SlideCore::nyquist_compliance`](crate::scene::SlideCore::nyquist_compliance)),
+    /// so it grows unless `k_e·q_N/4 < 1` (below that the scheme's energy, whose ½ψ² holds
+    /// `½k_e δy^n δy^{n+1}`, bounds it). On the consistent ψ, `k_e = κ(α − 1)y^{α−1}/2` grows with the
+    /// press: a slide pressed with about a newton on the defaults (α = 1.5) is at
+    /// `k_e·q_N/4 ≈ 4.75` and starts chattering at Nyquist from rounding, its compression's
+    /// deviation doubling every step. For the same force a deeper compression has a smaller
+    /// `k_e`, so EXP's still contact holds at most `y·8s/((α − 1)q_N)` with the share
+    /// `s =` [`STILL_SHARE`]: `min(V'(y), 8s·y/((α − 1)q_N))`, increasing in y. (A slide set down
+    /// onto the string gets there by itself: its landing chatters until ψ has been drained that
+    /// far, and with the defaults a landed slide rests at `k_e·q_N/4 ≈ 0.58`, ψ about 4 % of
+    /// `√(2V(y))`.) With α = 1, ψ'' = 0 and the force is the law's.
+    pub fn still_force(&self, y: f64, nyquist: f64) -> f64 {
+        let consistent = self.law.potential_slope(y);
+        let alpha = self.law.alpha();
+        if alpha > 1.0 && nyquist > 0.0 {
+            consistent.min(8.0 * STILL_SHARE * y / ((alpha - 1.0) * nyquist))
+        } else {
+            consistent
+        }
+    }
+
+    /// Start at rest at the compression `y` (m) holding the force magnitude `held` (N), from
+    /// [`still_force`](Self::still_force): `ψ = held/ψ'(y)`, which is `√(2V(y))` when `held` is
+    /// the law's `V'(y)` (and 0 off contact).
+    pub fn start_still(&mut self, y: f64, held: f64) {
+        self.psi = if y > 0.0 && held < self.law.potential_slope(y) {
+            held.max(0.0) / self.law.psi_gradient(y)
+        } else {
+            self.law.psi(y)
+        };
     }
 }
 
@@ -110,5 +162,41 @@ impl ContactSolver for ExplicitSolver {
 
     fn last_work(&self) -> u32 {
         0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A contact started still by `start_still` with the force `still_force` gives it holds that
+    /// force and stays still: the law's `V'(y)` (ψ = √(2V(y))) while its explicit stiffness
+    /// `k_e = F(α − 1)/(2y)` is within the share of `4/q_N`, and at the share beyond (ψ short of
+    /// √(2V(y))); the law's at any press with α = 1.
+    #[test]
+    fn a_still_start_holds_its_force() {
+        let (nyquist, q) = (7.1e-5, 2.2e-5);
+        let law = PowerLaw::new(1e9, 1.5).unwrap();
+        let mut exp = ExplicitSolver::new(law);
+        for y in [1e-9, 1e-7, 1e-6, 1e-5, 1e-4] {
+            let held = exp.still_force(y, nyquist);
+            let share = held * (law.alpha() - 1.0) / (2.0 * y) * nyquist / 4.0;
+            if held < law.potential_slope(y) {
+                assert!((share / STILL_SHARE - 1.0).abs() < 1e-12, "{y:e}: {share}");
+            } else {
+                assert!(share <= STILL_SHARE, "{y:e}: {share}");
+            }
+            exp.start_still(y, held);
+            let psi = exp.psi();
+            if held == law.potential_slope(y) {
+                assert_eq!(psi, law.psi(y));
+            }
+            let solution = exp.solve(&ContactProblem { y_prev: y, y_now: y, z: -q * held, q });
+            assert!(solution.s.abs() < 1e-14 * q * held, "{y:e}: s = {:e}", solution.s);
+            assert!((solution.force / -held - 1.0).abs() < 1e-14, "{y:e}: {} N", solution.force);
+            assert!((exp.psi() / psi - 1.0).abs() < 1e-14);
+        }
+        let linear = ExplicitSolver::new(PowerLaw::new(1e9, 1.0).unwrap());
+        assert_eq!(linear.still_force(1e-4, nyquist), 1e5);
     }
 }

@@ -28,7 +28,7 @@ mod newton;
 mod qsa;
 mod spline;
 
-pub use explicit::ExplicitSolver;
+pub use explicit::{ExplicitSolver, STILL_SHARE};
 pub use law::PowerLaw;
 pub use newton::{MAX_ITERATIONS, NewtonSolver};
 pub use qsa::{QsaSolver, SegmentSearch};

@@ -112,6 +112,11 @@ impl SlideHand {
         self.w_now = w0;
     }
 
+    /// The slide and hand parameters.
+    pub fn params(&self) -> SlideParams {
+        self.params
+    }
+
     /// `w_o^{n−1}` (m).
     #[inline]
     pub fn previous(&self) -> f64 {

@@ -119,7 +119,8 @@ pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settin
 pub use slide_scale::SlideScale;
 pub use slide_voice::{
     BRAKING, ChannelState, HAND_ACCELERATION, HAND_SPEED, LANDING_SPEED, MUTE_HAND_DAMPING, MUTE_TIME, OPEN_KEY,
-    PICKUP_APERTURE, PLUCK_TIME, REST_FORCE, SLIDE_ACCELERATION, SLIDE_SPEED, SlideVoice, TRAIL, hand_reach,
+    PICKUP_APERTURE, PLUCK_RELEASE, PLUCK_TIME, REST_FORCE, SLIDE_ACCELERATION, SLIDE_SPEED, SlideVoice, TRAIL,
+    hand_reach, pluck_force,
 };
 pub use solvers::Solvers;
 pub use voicing::{VOICING_DB, VOICING_VELOCITIES, voicing_gain};
@@ -161,13 +162,13 @@ pub const OUTPUT_SCALE: f64 = 0.016;
 /// the string deflected gives no signal, where a displacement output would carry that
 /// deflection as a DC offset and step at every press and release. A note plucked at velocity 80
 /// (D3, the slide pressed), heard through the pickup's circuit, measures −39.3 LUFS over 2 s and
-/// peaks at 0.054.
+/// peaks at 0.053.
 pub const SLIDE_SCALE: f64 = 0.06;
 
 /// Output scale of the acoustic slide guitar: what the body radiates (in newtons of bridge force
 /// above a kilohertz, [`crate::body::BodyParams::guitar`]) to full scale, set so that the note
 /// [`SLIDE_SCALE`] is set by measures the same loudness on either guitar.
-pub const ACOUSTIC_SCALE: f64 = 0.067;
+pub const ACOUSTIC_SCALE: f64 = 0.076;
 
 /// A note or controller event, as MIDI delivers them.
 #[derive(Debug, Clone, Copy, PartialEq)]

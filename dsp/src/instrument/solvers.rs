@@ -59,6 +59,32 @@ impl Solvers {
         true
     }
 
+    /// Start the solver in use afresh, at rest at the compression `y` (m) holding the force
+    /// magnitude `held` (N) that [`static_slope`](Self::static_slope) gave there, its law and fit
+    /// kept: QSA and IMP from the compressions alone, EXP with ψ to match
+    /// ([`ExplicitSolver::start_still`]).
+    pub fn start_still(&mut self, y: f64, held: f64) {
+        match self.method {
+            Method::Qsa => self.qsa.start(y, y),
+            Method::Imp => self.imp.start(y, y),
+            Method::Exp => self.exp.start_still(y, held),
+        }
+    }
+
+    /// The magnitude `V̂'(y)` (N) of the force the solver in use holds at a still compression
+    /// `y` (m) where the contact meets the compliance `q_N` (m/N) at the Nyquist rate
+    /// ([`SlideCore::nyquist_compliance`](crate::scene::SlideCore::nyquist_compliance)): the
+    /// spline's slope for QSA, the law's `κ[y]₊^α` for IMP, and for EXP the law's where its
+    /// explicit gradient holds that still, else the most it holds stably
+    /// ([`ExplicitSolver::still_force`]).
+    pub fn static_slope(&self, y: f64, nyquist: f64) -> f64 {
+        match self.method {
+            Method::Qsa => self.qsa.spline().slope(y),
+            Method::Imp => self.imp.law().potential_slope(y),
+            Method::Exp => self.exp.still_force(y, nyquist),
+        }
+    }
+
     /// The contact's share of the energy (J) of the solver in use, given `y^{n+1}` and `y^n` (m).
     pub fn stored_energy(&self, y_next: f64, y_now: f64) -> f64 {
         match self.method {

@@ -851,6 +851,146 @@ impl SlideCore {
         self.last_force = 0.0;
     }
 
+    /// Bring string, slide, hand and body (if the string's end moves with one) to the static
+    /// equilibrium of the scheme under the still `controls`: each finger pressing with its force,
+    /// the hand at its height and the slide pressed onto the string as far as the hand's spring
+    /// and the contact balance, held from now on until the controls move again. `slope(y, q_N)`
+    /// is the magnitude `V̂'(y)` (N) of the contact force the solver will hold at a still
+    /// compression `y` (m), given the compliance `q_N` (m/N) the contact meets at the Nyquist rate
+    /// there ([`nyquist_compliance`](Self::nyquist_compliance)): the spline's slope for QSA, the
+    /// law's `κy^α` for IMP, at most a share of the stiffness EXP can hold for EXP
+    /// ([`ExplicitSolver::still_force`](crate::contact::ExplicitSolver::still_force)). Returns whether the
+    /// slide touches the string there (else the state holds the fingers' deflection alone, the
+    /// slide at the hand's height); `false`, with the core at rest as [`rest`](Self::rest) leaves
+    /// it, if the hand has no spring to hold the slide still. Never allocates; O(modes).
+    ///
+    /// With `K̂_i` the scheme's static stiffness (the string's update leaves `ũ_i = f_i/K̂_i` where
+    /// it is under a static modal force `f_i`), the string's end on the body at `b = C'Σ_ζ ℓ_ζF_ζ`
+    /// (`C' = C_b/(1 + C_b T/L)`, `C_b = Σ_j 1/K̂_j` of the body's modes, the string's `T/L`
+    /// pulling its end back) and the slide at `w_o = w_H − F/k_H`, the compression is linear in
+    /// the slide's force `F ≤ 0`: `y = d + A F` with `A = h_oᵀK̂⁻¹h_o + C'ℓ_o² + 1/k_H` and
+    /// `d = Σ_φ (h_oᵀK̂⁻¹h_φ + C'ℓ_oℓ_φ) F_φe − w_H`; the contact closes it, `F = −V̂'(y)`, a
+    /// monotone scalar equation `y + A V̂'(y) = d`, solved by bisection for `y ∈ (0, d]`.
+    pub fn rest_pressed(&mut self, controls: SlideControls, slope: impl Fn(f64, f64) -> f64) -> bool {
+        self.rest(controls);
+        let k_h = self.sho.params().stiffness;
+        if !(k_h > 0.0) {
+            return false;
+        }
+        let length = self.string.params().length;
+        let plan = self.plan;
+        let fingers = [LEFT, RIGHT].map(|c| {
+            let force = [controls.left_force, controls.right_force][c - 1];
+            if plan.touching[c] { force } else { 0.0 }
+        });
+        let positions = controls.positions();
+        let levers = positions.map(|x| x / length);
+        // The body's static compliance at the bridge, with the string's own pull on its end.
+        let compliance = match &self.body {
+            Some(body) if body.on => {
+                let c_b: f64 = body.bank.stiffness().iter().map(|k| 1.0 / k).sum();
+                c_b / (1.0 + c_b * body.lift_stiffness)
+            }
+            _ => 0.0,
+        };
+        let (modes, stiffness) = (self.string.modes(), self.string.stiffness());
+        let shapes = &self.vectors.shapes;
+        let slide = &shapes[slot(SLIDE, false)][..modes];
+        let mut a = 1.0 / k_h + compliance * levers[SLIDE] * levers[SLIDE];
+        let mut d = -controls.hand_height;
+        for (i, (&h, &k)) in slide.iter().zip(stiffness).enumerate() {
+            a += h * h / k;
+            for c in [LEFT, RIGHT] {
+                if fingers[c - 1] != 0.0 {
+                    d += h * shapes[slot(c, false)][i] / k * fingers[c - 1];
+                }
+            }
+        }
+        for c in [LEFT, RIGHT] {
+            d += compliance * levers[SLIDE] * levers[c] * fingers[c - 1];
+        }
+        let nyquist = self.nyquist_compliance();
+        let slope = |y| slope(y, nyquist);
+        // `y + A V̂'(y) = d`: increasing in `y`, negative at 0 and non-negative at `d`.
+        let y = if d > 0.0 {
+            let (mut lo, mut hi) = (0.0, d);
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                if mid <= lo || mid >= hi {
+                    break;
+                }
+                if mid + a * slope(mid) > d { hi = mid } else { lo = mid }
+            }
+            let residual = |y: f64| (y + a * slope(y) - d).abs();
+            if residual(lo) < residual(hi) { lo } else { hi }
+        } else {
+            -d
+        };
+        let force = if d > 0.0 { -slope(y) } else { 0.0 };
+        let along = [force, fingers[0], fingers[1]];
+        let vectors = [0, 1, 2].map(|c| (c == SLIDE || along[c] != 0.0).then(|| &shapes[slot(c, false)][..]));
+        self.string.rest_under(|i| {
+            let mut f = 0.0;
+            for c in 0..3 {
+                if let Some(h) = vectors[c] {
+                    f += h[i] * along[c];
+                }
+            }
+            f
+        });
+        let mut under = self.string.project_state(&shapes[slot(SLIDE, false)]).1;
+        self.slide_state = [[under; 2], [self.string.project_state(&shapes[slot(SLIDE, true)]).1; 2]];
+        if let Some(body) = self.body.as_mut().filter(|b| b.on) {
+            let on_bridge: f64 = (0..3).map(|c| levers[c] * along[c]).sum();
+            let b = compliance * on_bridge;
+            let pull = on_bridge - body.lift_stiffness * b;
+            body.bank.rest_under(|_| pull);
+            let b = body.bank.project_state(&body.sole).1;
+            let lifted = self.string.project_state(&shapes[BRIDGE_SLOT]).1;
+            let heard = body.bank.project_state(&body.radiation).1;
+            let sides = [0, 1].map(|j| body.bank.project_state(&body.sides[j]).1);
+            body.b = (b, b);
+            body.lifted = (lifted, lifted);
+            body.heard = (heard, heard);
+            body.heard_sides = sides.map(|x| (x, x));
+            body.sides_now = [0.0; 2];
+            under += levers[SLIDE] * b;
+        }
+        self.sho.rest(controls.hand_height - force / k_h);
+        // The carried compressions are the ones the force belongs to (the state measures them
+        // within rounding: `under − w_o`).
+        let y = if d > 0.0 { y } else { under - self.sho.position() };
+        self.y_prev = y;
+        self.y_now = y;
+        self.out_now = self.string.project_state(&self.pickup).1;
+        self.out_from = self.string.project_state(&self.pickup_from).1;
+        self.last_force = force;
+        d > 0.0
+    }
+
+    /// The compliance `q_N` (m/N) the slide's contact meets at the Nyquist rate, where the slide
+    /// is now: the compression's answer `y^n = −(q_N/4)F^n` to a force alternating from step to
+    /// step. There `μ_t²` and `δ_t·` vanish, so stiffness and damping drop out and each mode, the
+    /// slide on its hand and each of the body's modes answers as its mass alone, `Δt²/(4m)`:
+    /// `q_N = Δt²(Σ_i h_i²/m̃ + 1/m_o + ℓ_o²Σ_j 1/m_j)` (the body's modes reached through the
+    /// lever `ℓ_o = x_o/L`; the string's share of the bridge's mass, which only stiffens it, left
+    /// out). It exceeds the step's coupling `q` (each mode's `C_i` is `Δt²/(4m̃)` times
+    /// `1 + 2P_i + Q_i ≤ 4`), about 3.3 times with the defaults, from the modes near Nyquist.
+    /// Never allocates; O(modes).
+    pub fn nyquist_compliance(&self) -> f64 {
+        let dt2 = self.dt * self.dt;
+        let h = &self.vectors.shapes[slot(SLIDE, false)][..self.string.modes()];
+        let modes: f64 = h.iter().map(|h| h * h).sum::<f64>() / self.string.modal_mass();
+        let body = match &self.body {
+            Some(body) if body.on => {
+                let lever = self.start.slide_position / self.string.params().length;
+                lever * lever * body.bank.masses().iter().map(|m| 1.0 / m).sum::<f64>()
+            }
+            _ => 0.0,
+        };
+        dt2 * (modes + 1.0 / self.sho.params().mass + body)
+    }
+
     /// As made, for a core brought to rest ([`rest`](Self::rest)): the control blocks counted
     /// from this step and the energy's books at zero.
     pub fn restart(&mut self) {

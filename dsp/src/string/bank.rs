@@ -279,6 +279,21 @@ impl ModalBank {
         self.history_ready = false;
     }
 
+    /// Hold every mode still under the static force `force(i)` (N) on it:
+    /// `u_i^{n−1} = u_i^n = C_i force(i)/(B_i − A_i)`, which is `force(i)/K̂_i` (with any extra
+    /// decay), the scheme's own equilibrium. Never allocates.
+    pub fn rest_under(&mut self, force: impl Fn(usize) -> f64) {
+        let m = self.modes;
+        for i in 0..m {
+            let u = self.coef_c[i] * force(i) / (self.coef_b[i] - self.coef_a[i]);
+            self.u_prev[i] = u;
+            self.u_now[i] = u;
+        }
+        self.u_prev[m..].fill(0.0);
+        self.u_now[m..].fill(0.0);
+        self.history_ready = false;
+    }
+
     /// Every mode at rest.
     pub fn reset(&mut self) {
         self.u_prev.fill(0.0);

@@ -88,6 +88,21 @@ impl ModalString {
         (&mut self.u_prev[..m], &mut self.u_now[..m])
     }
 
+    /// Hold the string still under the static modal forces `force(i)` (N, mode `i` from 0):
+    /// `ũ_i^{n−1} = ũ_i^n = C_i force(i)/(B_i − A_i)`, which is `force(i)/K̂_i`, the scheme's own
+    /// equilibrium (a state its update leaves where it is under those forces). Never allocates.
+    pub fn rest_under(&mut self, force: impl Fn(usize) -> f64) {
+        let m = self.modes();
+        for i in 0..m {
+            let u = self.coef_c[i] * force(i) / (self.coef_b[i] - self.coef_a[i]);
+            self.u_prev[i] = u;
+            self.u_now[i] = u;
+        }
+        self.u_prev[m..].fill(0.0);
+        self.u_now[m..].fill(0.0);
+        self.history_ready = false;
+    }
+
     /// Bring the string to rest.
     pub fn reset(&mut self) {
         self.u_prev.fill(0.0);
