@@ -1240,8 +1240,8 @@ fn readme(
          The string drives the body, which drains it and radiates. D3 measures {:.1} LUFS on the electric \
          guitar and {:.1} on the acoustic (the two are voiced alike there). Against the electric guitar (each \
          note relative to D3 on its guitar), the body colours the notes by {:+.1} to {:+.1} LU, and A3, on the \
-         top's 219 Hz resonance, by {:+.1} LU: the two-mass model alone, flat above its resonances, left A3 \
-         9.1 LU out. The second picture shows why: the pair alone is flat above the top's resonance, which \
+         top's 219 Hz resonance, by {:+.1} LU: the two-mass model alone, flat above its resonances, leaves A3 \
+         10.7 LU out. The second picture shows why: the pair alone is flat above the top's resonance, which \
          stands 30 dB above that plateau; with the top's higher modes the plateau rises, the resonance stands \
          19 dB above it, and the plate's modes put their own peaks and valleys in it from 300 Hz up. \
          A2, C3, E3, A3 and C4 at velocity 80 on each, a note every 0.45 s, 32 kHz mono 16-bit, one gain for \
