@@ -92,14 +92,8 @@ impl ModalString {
     /// `ũ_i^{n−1} = ũ_i^n = C_i force(i)/(B_i − A_i)`, which is `force(i)/K̂_i`, the scheme's own
     /// equilibrium (a state its update leaves where it is under those forces). Never allocates.
     pub fn rest_under(&mut self, force: impl Fn(usize) -> f64) {
-        let m = self.modes();
-        for i in 0..m {
-            let u = self.coef_c[i] * force(i) / (self.coef_b[i] - self.coef_a[i]);
-            self.u_prev[i] = u;
-            self.u_now[i] = u;
-        }
-        self.u_prev[m..].fill(0.0);
-        self.u_now[m..].fill(0.0);
+        let coefficients = (&self.coef_a[..], &self.coef_b[..], &self.coef_c[..]);
+        super::bank::hold_still(coefficients, self.modes(), (&mut self.u_prev, &mut self.u_now), force);
         self.history_ready = false;
     }
 
