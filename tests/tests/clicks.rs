@@ -263,10 +263,10 @@ enum Act {
 /// new notes sound on too.
 ///
 /// EXP stays out of the slide's half: a slide pressed on the string by a hand that jumps at every
-/// block rattles audibly under EXP through the acoustic guitar's body (23.6 dB on the detector
-/// for seed 1, against 15.2 dB with QSA and IMP), its auxiliary variable's force lagging the
+/// block rattles audibly under EXP through the acoustic guitar's body (25.3 dB on the detector
+/// for seed 19, against 17.3 dB with QSA and IMP), its auxiliary variable's force lagging the
 /// compression the hand imposes (docs/physics.md §4.2); with the hand still, or on the electric
-/// guitar (10.8–14.2 dB over the four seeds), EXP stays below the threshold.
+/// guitar (9.9–15.0 dB over the four seeds), EXP stays below the threshold.
 fn automation(disturb: bool, seed: u64, guitars: &[SlideBody]) -> Vec<(usize, Act)> {
     let s = |t: f64| (t * FS) as usize;
     let mut acts = Vec::new();
