@@ -912,7 +912,7 @@ impl SlideCore {
         let nyquist = self.nyquist_compliance();
         let slope = |y| slope(y, nyquist);
         // `y + A V̂'(y) = d`: increasing in `y`, negative at 0 and non-negative at `d`.
-        let y = if d > 0.0 {
+        let pressed = (d > 0.0).then(|| {
             let (mut lo, mut hi) = (0.0, d);
             for _ in 0..200 {
                 let mid = 0.5 * (lo + hi);
@@ -923,10 +923,8 @@ impl SlideCore {
             }
             let residual = |y: f64| (y + a * slope(y) - d).abs();
             if residual(lo) < residual(hi) { lo } else { hi }
-        } else {
-            -d
-        };
-        let force = if d > 0.0 { -slope(y) } else { 0.0 };
+        });
+        let force = pressed.map_or(0.0, |y| -slope(y));
         let along = [force, fingers[0], fingers[1]];
         let vectors = [0, 1, 2].map(|c| (c == SLIDE || along[c] != 0.0).then(|| &shapes[slot(c, false)][..]));
         self.string.rest_under(|i| {
@@ -959,13 +957,13 @@ impl SlideCore {
         self.sho.rest(controls.hand_height - force / k_h);
         // The carried compressions are the ones the force belongs to (the state measures them
         // within rounding: `under − w_o`).
-        let y = if d > 0.0 { y } else { under - self.sho.position() };
+        let y = pressed.unwrap_or(under - self.sho.position());
         self.y_prev = y;
         self.y_now = y;
         self.out_now = self.string.project_state(&self.pickup).1;
         self.out_from = self.string.project_state(&self.pickup_from).1;
         self.last_force = force;
-        d > 0.0
+        pressed.is_some()
     }
 
     /// The compliance `q_N` (m/N) the slide's contact meets at the Nyquist rate, where the slide
