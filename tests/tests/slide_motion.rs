@@ -6,8 +6,8 @@ use qsa_dsp::contact::{ContactSolver, ExplicitSolver, Method, NewtonSolver, Powe
 use qsa_dsp::control::Breakpoints;
 use qsa_dsp::control::ControlSource;
 use qsa_dsp::instrument::{
-    BRAKING, Event, HandSource, Instrument, Mode, NoteTarget, SLIDE_ACCELERATION, SLIDE_SPEED, Settings, SlideBody,
-    SlideScale, pluck_force,
+    BRAKING, Event, HAND_RANGE, HandSource, Instrument, Mode, NoteTarget, SLIDE_ACCELERATION, SLIDE_SPEED, Settings,
+    SlideBody, SlideScale, pluck_force,
 };
 use qsa_dsp::preset::{key_frequency, slide_guitar};
 use qsa_dsp::scene::{Frame, PIECE_TURN, Scene, SlideControls, SlideCore, SlideString, SlideStringParams};
@@ -1031,28 +1031,79 @@ fn a_slide_pluck_is_as_loud_at_every_rate_and_block_length() {
     }
 }
 
-/// A note from silence starts with its slide already at rest on the string, pressed as its hand
-/// height asks, in the scheme's static equilibrium (`SlideCore::rest_pressed`), so the control
-/// block cannot shape its start: keys 45, 50, 57 and 69 on both guitars, at 44.1 kHz with blocks
-/// of 8 to 256 samples, sound within 0.1 dB (a tenth of what a listener hears; measured 0.00 dB).
-/// Lowered onto the string at the hand's full reach during the pluck, along the hand's path
-/// quantized to the blocks, the slide landed differently at each block: 0.5 to 1.9 dB apart on the
-/// electric guitar, 2.5 to 9.3 dB on the acoustic one (the open A2).
+/// A note from silence starts with its slide already at rest, pressed onto the string as its
+/// hand height asks or held still above it, in the scheme's static equilibrium
+/// (`SlideCore::rest_pressed`), so the control block cannot shape its start: keys 45, 50, 57 and
+/// 69 on both guitars, the slide pressed (the default hand) or held 0.6 mm above the string, at
+/// 44.1 kHz with blocks of 8 to 256 samples, sound within 0.1 dB (a tenth of what a listener
+/// hears; measured 0.00 dB). Lowered onto the string at the hand's full reach during the pluck,
+/// along the hand's path quantized to the blocks, the slide landed differently at each block:
+/// 0.5 to 1.9 dB apart on the electric guitar, 2.5 to 9.3 dB on the acoustic one (the open A2);
+/// held above the string, it started 2 mm up and came down to its height with the resting finger
+/// ramping on in the first block, up to 0.46 dB apart (0.01 to 0.46 dB).
 #[test]
 fn a_slide_note_from_silence_is_as_loud_at_every_block_length() {
     let blocks = [8usize, 16, 32, 64, 128, 256];
     for body in [SlideBody::Pickup, SlideBody::Acoustic] {
-        for key in [45u8, 50, 57, 69] {
-            let levels: Vec<f64> = blocks
-                .iter()
-                .map(|&block| {
-                    let settings = Settings { slide_body: body, block, ..Settings::default() };
-                    level_between(44_100.0, settings, key, ATTACK_WINDOW)
-                })
-                .collect();
-            println!("{body:?}, key {key}: {levels:.2?} dB with blocks of {blocks:?} samples");
-            assert!(spread(&levels) < 0.1, "{body:?}, key {key}: the note's level spreads {:.2} dB", spread(&levels));
+        for hand_height in [Settings::default().hand_height, 0.6e-3] {
+            for key in [45u8, 50, 57, 69] {
+                let levels: Vec<f64> = blocks
+                    .iter()
+                    .map(|&block| {
+                        let settings = Settings { slide_body: body, block, hand_height, ..Settings::default() };
+                        level_between(44_100.0, settings, key, ATTACK_WINDOW)
+                    })
+                    .collect();
+                println!("{body:?}, hand at {hand_height:e} m, key {key}: {levels:.2?} dB with blocks of {blocks:?}");
+                let spread = spread(&levels);
+                assert!(
+                    spread < 0.1,
+                    "{body:?}, hand at {hand_height:e} m, key {key}: the level spreads {spread:.2} dB"
+                );
+            }
         }
+    }
+}
+
+/// A hand height from a controller counts for a note from silence when the controller comes
+/// with the note-on (a host sends a note's pressure at its note-on's time): poly pressure,
+/// per-note pressure, channel pressure or the mod wheel at full, sent right after the note-on,
+/// start the note pressed as the `Hand height` parameter at full press does (`HAND_RANGE.1`):
+/// the slide in contact from the first sample and the first 50 ms the same to rounding (within
+/// 1e-6 of the note's peak). Read only at the note-on, such a hand started lifted and came down
+/// onto the string 22 ms later, after the pluck.
+#[test]
+fn a_controllers_hand_sent_with_the_note_on_starts_the_note_pressed() {
+    let fs = 48_000.0;
+    let first_50_ms = |source: HandSource, hand_height: f64, controller: Option<Event>| {
+        let settings = Settings { mode: Mode::Slide, hand_source: source, hand_height, ..Settings::default() };
+        let mut instrument = Instrument::new(fs, 1, settings);
+        instrument.handle(Event::NoteOn { channel: 0, key: 52, velocity: 0.8 });
+        if let Some(event) = controller {
+            instrument.handle(event);
+        }
+        let n = (0.05 * fs) as usize;
+        let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
+        instrument.process(&mut left[..1], &mut right[..1]);
+        let touching = instrument.in_contact() > 0;
+        instrument.process(&mut left[1..], &mut right[1..]);
+        (left, touching)
+    };
+    let (reference, touching) = first_50_ms(HandSource::Parameter, HAND_RANGE.1, None);
+    assert!(touching, "the parameter at full press starts the note pressed");
+    let peak = reference.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    for (source, event) in [
+        (HandSource::PolyPressure, Event::PolyPressure { channel: 0, key: 52, value: 1.0 }),
+        (HandSource::PolyPressure, Event::NotePressure { note: NoteTarget::key(0, 52), value: 1.0 }),
+        (HandSource::ChannelPressure, Event::ChannelPressure { channel: 0, value: 1.0 }),
+        (HandSource::ModWheel, Event::ModWheel { channel: 0, value: 1.0 }),
+    ] {
+        let (left, touching) = first_50_ms(source, 0.0, Some(event));
+        let worst = left.iter().zip(&reference).fold(0.0f32, |m, (a, b)| m.max((a - b).abs())) / peak;
+        println!(
+            "{source:?} by {event:?}: in contact at the first sample {touching}, off the parameter's by {worst:.1e} of its peak"
+        );
+        assert!(touching && worst < 1e-6, "{source:?} by {event:?}: touching {touching}, off by {worst:e}");
     }
 }
 

@@ -8,7 +8,9 @@
 //! where the note puts it, whatever the voice played before: pressed onto the string as the
 //! note's hand height presses it, in the scheme's static equilibrium of string, slide, hand,
 //! resting finger and body, so that the pluck alone sounds (a player's slide is on the string
-//! before the finger plucks), or lifted where the hand height holds it off the string:
+//! before the finger plucks), or held still above it where the hand height holds it off the
+//! string; a hand height from a controller is read as the voice first renders, so that pressure
+//! sent with the note-on counts:
 //! - slide position `x_o` for `p` semitones above the open string ([`SlideScale`]: the ideal
 //!   string's `L(1 − 2^(−p/12))`, less the end correction of the model's string): the
 //!   `slide_position` setting, followed as it comes (host automation is already a gesture), or,
@@ -576,17 +578,17 @@ impl SlideVoice {
         }
     }
 
-    /// A note from silence, its slide at rest where [`lift_to`](Self::lift_to) put it: where the
-    /// note's hand height presses the slide onto the string, string, slide, hand and body start
-    /// in the scheme's static equilibrium of the pressed slide, the left finger resting on the
-    /// string with [`REST_FORCE`] and the right finger off ([`SlideCore::rest_pressed`]), so that
-    /// nothing lands and the note is the pluck's alone; else the slide stays lifted. The solver
-    /// starts afresh from the compressions. Never allocates.
+    /// A note from silence, its slide at rest where [`lift_to`](Self::lift_to) put it: string,
+    /// slide, hand and body start in the scheme's static equilibrium under the note's hand
+    /// height, the left finger resting on the string with [`REST_FORCE`] and the right finger off
+    /// ([`SlideCore::rest_pressed`]): the slide pressed onto the string, or held still above it,
+    /// so that nothing lands or settles and the note is the pluck's alone. The solver starts
+    /// afresh from the compression and the force. Never allocates.
     fn press(&mut self, settings: &Settings) {
         let height = self.hand_height(settings, &self.channel);
         let still = SlideControls { hand_height: height, left_force: REST_FORCE, right_force: 0.0, ..self.live.0 };
         let solvers = &self.solvers;
-        if self.core.rest_pressed(still, |y, nyquist| solvers.static_slope(y, nyquist)) {
+        if self.core.rest_pressed(still, |y, nyquist| solvers.static_slope(y, nyquist)).is_some() {
             self.live.0 = still;
             self.hand = Motion::at_rest(height);
         } else {
@@ -786,6 +788,12 @@ impl SlideVoice {
         if self.shed_fade.is_silent() {
             self.silence();
             return;
+        }
+        // A note from silence not rendered yet starts where the channel and the note ask for the
+        // hand now: pressure and controllers arrive with the note-on or right after it.
+        if self.fresh && self.hand_height(settings, channel) != self.hand.position {
+            self.channel = *channel;
+            self.settle_if_fresh(settings);
         }
         self.fresh = false;
         let fs = self.core.string().sample_rate();
@@ -1346,16 +1354,17 @@ mod tests {
         }
     }
 
-    /// A note from silence with the hand pressing starts in the scheme's static equilibrium:
-    /// played but not plucked (the finger never comes), on both guitars and with each solver,
-    /// the string, slide, hand and body stay still for 0.2 s: the output stays 100 dB below the
-    /// pluck's peak and the energy (string, hand, contact, body) is constant to 1e-9 of itself.
+    /// A note from silence starts in the scheme's static equilibrium, the hand pressing the slide
+    /// onto the string or holding it 0.6 mm above: played but not plucked (the finger never
+    /// comes), on both guitars and with each solver, the string, slide, hand and body stay still
+    /// for 0.2 s: the output stays 100 dB below the pluck's peak and the energy (string, hand,
+    /// contact, body) is constant to 1e-9 of itself.
     /// (EXP starts in a still state its explicit gradient keeps still, ψ short of `√(2V(y))`
     /// ([`ExplicitSolver::still_force`](crate::contact::ExplicitSolver::still_force)): from the
     /// consistent one, a deviation of the compression alternating from step to step would double
     /// every step from rounding, the output 17 dB below the pluck within 0.2 s.)
     #[test]
-    fn a_pressed_note_from_silence_starts_still() {
+    fn a_note_from_silence_starts_still() {
         for body in [SlideBody::Pickup, SlideBody::Acoustic] {
             let (mut plucked, _) = plucked_on(body, 0);
             let mut out = [0.0; 64];
@@ -1369,15 +1378,23 @@ mod tests {
                 plucked.render(&mut out);
                 pluck_peak = out.iter().fold(pluck_peak, |m, v| m.max(v.abs()));
             }
-            for method in [Method::Qsa, Method::Imp, Method::Exp] {
-                let settings =
-                    Settings { mode: crate::instrument::Mode::Slide, slide_body: body, method, ..Settings::default() };
+            let pressing = Settings::default().hand_height;
+            for (method, hand_height) in [Method::Qsa, Method::Imp, Method::Exp]
+                .into_iter()
+                .flat_map(|method| [(method, pressing), (method, 0.6e-3)])
+            {
+                let mode = crate::instrument::Mode::Slide;
+                let settings = Settings { mode, slide_body: body, method, hand_height, ..Settings::default() };
                 let mut voice = SlideVoice::new(FS, &settings);
                 let strike = Strike { channel: 0, key: 52, velocity: 0.8, shifted: false };
                 voice.play(strike, &settings, &ChannelState::default(), false, 0);
                 voice.pluck = None;
                 let (y, force, _) = voice.contact();
-                assert!(voice.in_contact() && force < 0.0, "{body:?} {method:?}: pressed ({y:e} m, {force} N)");
+                let pressed = hand_height == pressing;
+                assert!(
+                    voice.in_contact() == pressed && (force < 0.0) == pressed,
+                    "{body:?} {method:?}, hand at {hand_height:e} m: {y:e} m, {force} N"
+                );
                 let e0 = voice.energy();
                 let mut peak = 0.0f64;
                 let mut drift = 0.0f64;
@@ -1389,8 +1406,8 @@ mod tests {
                 }
                 let below = 20.0 * (pluck_peak / peak.max(1e-300)).log10();
                 println!(
-                    "{body:?} {method:?}: y* = {y:.4e} m, F = {force:.4} N, E = {e0:.4e} J; output {below:.1} dB \
-                     below the pluck, energy drift {drift:.2e}"
+                    "{body:?} {method:?}, hand at {hand_height:e} m: y* = {y:.4e} m, F = {force:.4} N, E = {e0:.4e} J; \
+                     output {below:.1} dB below the pluck, energy drift {drift:.2e}"
                 );
                 assert!(below > 100.0, "{body:?} {method:?}: {below} dB");
                 assert!(drift < 1e-9, "{body:?} {method:?}: drift {drift:e}");

@@ -859,10 +859,11 @@ impl SlideCore {
     /// compression `y` (m), given the compliance `q_N` (m/N) the contact meets at the Nyquist rate
     /// there ([`nyquist_compliance`](Self::nyquist_compliance)): the spline's slope for QSA, the
     /// law's `κy^α` for IMP, at most a share of the stiffness EXP can hold for EXP
-    /// ([`ExplicitSolver::still_force`](crate::contact::ExplicitSolver::still_force)). Returns whether the
-    /// slide touches the string there (else the state holds the fingers' deflection alone, the
-    /// slide at the hand's height); `false`, with the core at rest as [`rest`](Self::rest) leaves
-    /// it, if the hand has no spring to hold the slide still. Never allocates; O(modes).
+    /// ([`ExplicitSolver::still_force`](crate::contact::ExplicitSolver::still_force)). Returns
+    /// whether the slide touches the string there (else the state holds the fingers' deflection
+    /// alone, the slide still at the hand's height, which is the equilibrium too); `None`, with
+    /// the core at rest as [`rest`](Self::rest) leaves it, if the hand has no spring to hold the
+    /// slide still. Never allocates; O(modes).
     ///
     /// With `K̂_i` the scheme's static stiffness (the string's update leaves `ũ_i = f_i/K̂_i` where
     /// it is under a static modal force `f_i`), the string's end on the body at `b = C'Σ_ζ ℓ_ζF_ζ`
@@ -871,11 +872,11 @@ impl SlideCore {
     /// the slide's force `F ≤ 0`: `y = d + A F` with `A = h_oᵀK̂⁻¹h_o + C'ℓ_o² + 1/k_H` and
     /// `d = Σ_φ (h_oᵀK̂⁻¹h_φ + C'ℓ_oℓ_φ) F_φe − w_H`; the contact closes it, `F = −V̂'(y)`, a
     /// monotone scalar equation `y + A V̂'(y) = d`, solved by bisection for `y ∈ (0, d]`.
-    pub fn rest_pressed(&mut self, controls: SlideControls, slope: impl Fn(f64, f64) -> f64) -> bool {
+    pub fn rest_pressed(&mut self, controls: SlideControls, slope: impl Fn(f64, f64) -> f64) -> Option<bool> {
         self.rest(controls);
         let k_h = self.sho.params().stiffness;
         if !(k_h > 0.0) {
-            return false;
+            return None;
         }
         let length = self.string.params().length;
         let plan = self.plan;
@@ -963,7 +964,7 @@ impl SlideCore {
         self.out_now = self.string.project_state(&self.pickup).1;
         self.out_from = self.string.project_state(&self.pickup_from).1;
         self.last_force = force;
-        pressed.is_some()
+        Some(pressed.is_some())
     }
 
     /// The compliance `q_N` (m/N) the slide's contact meets at the Nyquist rate, where the slide
