@@ -509,24 +509,18 @@ impl SlideVoice {
         if legato && self.sounding {
             return;
         }
-        // A note from silence on another guitar: the string is moved onto (or off) the body.
-        if !self.sounding && self.body != settings.slide_body {
+        let from_silence = !self.sounding;
+        if from_silence {
+            // On the guitar of the moment: the string is moved onto (or off) the body as the
+            // slide is lifted to where the note puts it, from rest.
             self.body = settings.slide_body;
-            self.rest_lifted();
-        }
-        if !self.sounding {
             self.follow_key = settings.follow_key;
             self.glided = self.keys_and_bends(settings, channel);
             self.lift_to(self.scale.position(self.semitones(settings)), settings);
             self.fresh = true;
             self.channel = *channel;
-        }
-        if !self.sounding {
             let Ok(law) = PowerLaw::new(settings.slide_kappa, settings.slide_alpha) else { return };
             let (slide, solver) = (Self::slide_params(settings), (settings.method, settings.segments));
-            if (law, slide, solver) != (self.law, self.slide, self.solver) {
-                self.rest_lifted();
-            }
             // The QSA fit spans twice the largest static push the hand and fingers can make: the
             // deepest hand press and the strongest pluck, with the resting finger.
             let y_ref = slide.reference_compression(&law, -HAND_RANGE.1, pluck_force(1.0), REST_FORCE);
@@ -534,10 +528,11 @@ impl SlideVoice {
                 return;
             }
             (self.law, self.slide, self.solver) = (law, slide, solver);
-            self.core.set_params(self.slide, [settings.finger_damping; 2], settings.block);
-            self.press(settings);
         }
         self.core.set_params(self.slide, [settings.finger_damping; 2], settings.block);
+        if from_silence {
+            self.press(settings);
+        }
         self.energy_at_pluck = self.energy();
         self.work_at_pluck = self.core.control_work();
         // Static energy of the pluck: ½F² x(L − x)/(T L) for a point force F at x, where the
