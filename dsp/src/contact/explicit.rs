@@ -63,11 +63,6 @@ impl ExplicitSolver {
         self.law = law;
     }
 
-    /// The contact law.
-    pub fn law(&self) -> &PowerLaw {
-        &self.law
-    }
-
     /// The auxiliary variable ψ at the latest half step (√J).
     pub fn psi(&self) -> f64 {
         self.psi
