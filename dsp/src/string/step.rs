@@ -93,7 +93,7 @@ impl ModalString {
     /// equilibrium (a state its update leaves where it is under those forces). Never allocates.
     pub fn rest_under(&mut self, force: impl Fn(usize) -> f64) {
         let coefficients = (&self.coef_a[..], &self.coef_b[..], &self.coef_c[..]);
-        super::bank::hold_still(coefficients, self.modes(), (&mut self.u_prev, &mut self.u_now), force);
+        hold_still(coefficients, self.modes(), (&mut self.u_prev, &mut self.u_now), force);
         self.history_ready = false;
     }
 
@@ -169,4 +169,23 @@ impl ModalString {
             self.history_ready = false;
         }
     }
+}
+
+/// The first `modes` entries of `(u^{n−1}, u^n)` held still under the static forces `force(i)`
+/// (N): the recursion `u^{n+1} = 2P_i u^n − Q_i u^{n−1} + C_i f_i`, with the coefficients
+/// `(A_i, B_i, C_i) = (2P_i, 1 + Q_i, C_i)`, leaves `u_i = C_i f_i/(B_i − A_i)` where it is. The
+/// padding beyond them is zeroed.
+pub(super) fn hold_still(
+    (a, b, c): (&[f64], &[f64], &[f64]),
+    modes: usize,
+    (u_prev, u_now): (&mut [f64], &mut [f64]),
+    force: impl Fn(usize) -> f64,
+) {
+    for i in 0..modes {
+        let u = c[i] * force(i) / (b[i] - a[i]);
+        u_prev[i] = u;
+        u_now[i] = u;
+    }
+    u_prev[modes..].fill(0.0);
+    u_now[modes..].fill(0.0);
 }
