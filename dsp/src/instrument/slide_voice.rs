@@ -997,21 +997,15 @@ mod tests {
 
     const FS: f64 = 44100.0;
 
-    /// A voice plucking key 52 at velocity 0.8 from silence under the default settings.
-    fn plucking() -> (SlideVoice, Settings, Strike) {
-        let settings = Settings { mode: crate::instrument::Mode::Slide, ..Settings::default() };
-        let mut voice = SlideVoice::new(FS, &settings);
-        let strike = Strike { channel: 0, key: 52, velocity: 0.8, shifted: false };
-        voice.play(strike, &settings, &ChannelState::default(), false, 0);
-        (voice, settings, strike)
-    }
+    /// The note the tests' voices pluck: key 52 at velocity 0.8.
+    const STRIKE: Strike = Strike { channel: 0, key: 52, velocity: 0.8, shifted: false };
 
     /// The monitor draws the string as the core reaches it: through the coupling weights, the
     /// shape at `x` is the state's projection on the weighted mode shapes there (to 1e-10 of
     /// itself), which the unweighted sum is not.
     #[test]
     fn the_string_is_drawn_through_the_cores_weights() {
-        let (mut voice, settings, _) = plucking();
+        let (mut voice, settings) = plucked(0);
         let channel = ChannelState::default();
         let mut out = [0.0; 64];
         for _ in 0..5 {
@@ -1035,7 +1029,7 @@ mod tests {
     /// bit over the 40 blocks of the pluck and after it.
     #[test]
     fn a_plucked_voice_rendered_in_any_chunks_sounds_the_same() {
-        let (mut whole, settings, _) = plucking();
+        let (mut whole, settings) = plucked(0);
         let mut chunked = whole.clone();
         let channel = ChannelState::default();
         let mut rng = Pcg64::seed_from_u64(5);
@@ -1066,7 +1060,7 @@ mod tests {
     #[test]
     fn a_note_played_again_at_a_corner_of_the_pluck_keeps_its_pieces() {
         let curvature = |split: usize| {
-            let (mut voice, settings, strike) = plucking();
+            let (mut voice, settings) = plucked(0);
             let channel = ChannelState::default();
             let mut out = vec![0.0; 64 * 10];
             for block in 0..10 {
@@ -1074,7 +1068,7 @@ mod tests {
                 let (from, to) = (64 * block, 64 * (block + 1));
                 if (from..to).contains(&split) {
                     voice.render(&mut out[from..split]);
-                    voice.play(strike, &settings, &channel, false, 0);
+                    voice.play(STRIKE, &settings, &channel, false, 0);
                     voice.render(&mut out[split..to]);
                 } else {
                     voice.render(&mut out[from..to]);
@@ -1179,13 +1173,7 @@ mod tests {
     fn plucked_on(body: SlideBody, blocks: usize) -> (SlideVoice, Settings) {
         let settings = Settings { mode: crate::instrument::Mode::Slide, slide_body: body, ..Settings::default() };
         let mut voice = SlideVoice::new(FS, &settings);
-        voice.play(
-            Strike { channel: 0, key: 52, velocity: 0.8, shifted: false },
-            &settings,
-            &ChannelState::default(),
-            false,
-            0,
-        );
+        voice.play(STRIKE, &settings, &ChannelState::default(), false, 0);
         let mut out = [0.0; 64];
         for _ in 0..blocks {
             voice.begin_block(&settings, &ChannelState::default(), 64);
@@ -1381,8 +1369,7 @@ mod tests {
                 let mode = crate::instrument::Mode::Slide;
                 let settings = Settings { mode, slide_body: body, method, hand_height, ..Settings::default() };
                 let mut voice = SlideVoice::new(FS, &settings);
-                let strike = Strike { channel: 0, key: 52, velocity: 0.8, shifted: false };
-                voice.play(strike, &settings, &ChannelState::default(), false, 0);
+                voice.play(STRIKE, &settings, &ChannelState::default(), false, 0);
                 voice.pluck = None;
                 let (y, force, _) = voice.contact();
                 let pressed = hand_height == pressing;
