@@ -990,8 +990,13 @@ fn a_released_note_on_a_lossless_hand_ends() {
 
 /// The level (dB) of the left output from `from` to `to` seconds after a slide note `key` of
 /// velocity 0.8 is plucked from silence at `fs` (Hz) with `settings`.
-fn level_between(fs: f64, settings: Settings, key: u8, (from, to): (f64, f64)) -> f64 {
-    let left = slide_note(fs, settings, key, to);
+fn level_between(fs: f64, settings: Settings, key: u8, window: (f64, f64)) -> f64 {
+    level_between_at(fs, settings, key, 0.8, window)
+}
+
+/// [`level_between`] for a note of `velocity`.
+fn level_between_at(fs: f64, settings: Settings, key: u8, velocity: f32, (from, to): (f64, f64)) -> f64 {
+    let left = slide_note_at(fs, settings, key, velocity, to);
     let window = &left[(from * fs) as usize..];
     10.0 * (window.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / window.len() as f64).log10()
 }
@@ -1116,11 +1121,7 @@ fn a_controllers_hand_sent_with_the_note_on_starts_the_note_pressed() {
 #[test]
 fn velocity_sets_a_slide_notes_loudness_as_the_plucks_force_does() {
     let linear = 20.0 * (pluck_force(1.0) / pluck_force(0.05)).log10();
-    let level = |settings: Settings, key: u8, velocity: f32| {
-        let left = slide_note_at(48_000.0, settings, key, velocity, 0.5);
-        let window = &left[960..];
-        10.0 * (window.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / window.len() as f64).log10()
-    };
+    let level = |settings, key, velocity| level_between_at(48_000.0, settings, key, velocity, (0.02, 0.5));
     for body in [SlideBody::Pickup, SlideBody::Acoustic] {
         for key in [45u8, 50, 57, 69] {
             let settings = Settings { slide_body: body, ..Settings::default() };
