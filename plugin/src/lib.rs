@@ -12,16 +12,16 @@
 //! - Notes end by note-off, or at once by a CLAP note choke (a faded stop whatever the pedals);
 //!   CLAP note-offs and chokes may address every note of a key, a channel or all of them.
 //! - MIDI: notes; CC64 sustain (continuous: half-pedalling), CC66 sostenuto, CC67 soft pedal
-//!   (una corda), CC1 mod wheel, CC120 all sound off, CC121 reset all controllers, CC123 all
-//!   notes off; pitch bend moves the slide, as far as the channel's pitch-bend sensitivity (RPN 0)
-//!   or MPE zone (RPN 6) says; channel and poly pressure can press it (per channel, so MPE
-//!   works).
+//!   (una corda), CC1 mod wheel, CC74 (MPE's third dimension), CC120 all sound off, CC121 reset
+//!   all controllers, CC123 all notes off; pitch bend moves the slide, as far as the channel's
+//!   pitch-bend sensitivity (RPN 0) or MPE zone (RPN 6) says; the mod wheel, channel and poly
+//!   pressure and CC74 can press it (per channel, so MPE works).
 //! - `reset` (each activation and start of processing) returns the engine to how it was made
 //!   ([`Instrument::reset`]): what follows is a new instance's output, to the bit.
 //! - Per note (slide mode): CLAP and VST3 tuning expressions move the note's slide, CLAP pressure
 //!   expressions (nice-plug delivers them, like MIDI poly aftertouch and VST3 poly pressure, as
-//!   `PolyPressure`) are its poly pressure, and CLAP polyphonic modulation offsets its `slide` and
-//!   `hand` ([`params`]). Notes are addressed by the host's voice id, else channel and key. Every
+//!   `PolyPressure`) are its poly pressure, CLAP brightness expressions are its own CC74, and
+//!   CLAP polyphonic modulation offsets its `slide` and `hand` ([`params`]). Notes are addressed by the host's voice id, else channel and key. Every
 //!   note's end goes back to the host as `VoiceTerminated` (CLAP note-end), which CLAP
 //!   polyphonic modulation needs to free its per-voice modulators.
 //!
@@ -87,8 +87,8 @@ fn target(voice_id: VoiceID, channel: Channel, key: Key) -> NoteTarget {
     NoteTarget { voice: voice_id.id().filter(|&v| v >= 0), channel: channel.number(), key: key.number() }
 }
 
-/// The engine event for a host note event, if it is one the engine plays.
-fn engine_event<S>(event: &NoteEvent<S>) -> Option<Event> {
+/// The engine event for a host note event from plugin API `api`, if it is one the engine plays.
+fn engine_event<S>(event: &NoteEvent<S>, api: PluginApi) -> Option<Event> {
     let note = |channel: &Channel, key: &Key| Some((channel.number().unwrap_or(0), key.number()?));
     Some(match *event {
         NoteEvent::NoteOn { voice_id: VoiceID::ID(voice), channel, key, velocity, .. } if voice >= 0 => {
@@ -125,12 +125,22 @@ fn engine_event<S>(event: &NoteEvent<S>) -> Option<Event> {
             let (param, offset) = params::poly_offset(poly_modulation_id, normalized_offset)?;
             Event::NoteModulation { note: NoteTarget::voice(voice_id), param, offset }
         }
+        // A note's brightness: CLAP's arrives as `PolyBrightness`, but nice-plug 0.4.2 reads a
+        // VST3 note's brightness (kBrightnessTypeID) as `PolyExpression` and its expression
+        // (kExpressionTypeID) as `PolyBrightness`.
+        NoteEvent::PolyBrightness { voice_id, channel, key, brightness: value, .. } if api == PluginApi::Clap => {
+            Event::NoteBrightness { note: target(voice_id, channel, key), value }
+        }
+        NoteEvent::PolyExpression { voice_id, channel, key, expression: value, .. } if api == PluginApi::Vst3 => {
+            Event::NoteBrightness { note: target(voice_id, channel, key), value }
+        }
         NoteEvent::MidiChannelPressure { channel, pressure, .. } => Event::ChannelPressure { channel, value: pressure },
         NoteEvent::MidiPitchBend { channel, value, .. } => {
             Event::PitchBend { channel, value: bend_from_normalised(value) }
         }
         NoteEvent::MidiCC { channel, cc, value, .. } => match cc {
             1 => Event::ModWheel { channel, value },
+            74 => Event::Timbre { channel, value },
             6 | 38 | 98..=101 => Event::RegisteredParameter {
                 channel,
                 controller: cc,
@@ -244,6 +254,7 @@ impl Plugin for QsaStrings {
             _ => return ProcessStatus::Normal,
         };
         let origin = engine.now();
+        let api = context.plugin_api();
         let mut done = 0;
         let mut next = context.next_event();
         while done < samples {
@@ -251,7 +262,7 @@ impl Plugin for QsaStrings {
                 if event.timing() as usize > done {
                     break;
                 }
-                if let Some(e) = engine_event(&event) {
+                if let Some(e) = engine_event(&event, api) {
                     engine.handle(e);
                     report_ended(engine, context, origin);
                 }
@@ -264,7 +275,7 @@ impl Plugin for QsaStrings {
         }
         // Events stamped at the very end of the buffer.
         while let Some(event) = next {
-            if let Some(e) = engine_event(&event) {
+            if let Some(e) = engine_event(&event, api) {
                 engine.handle(e);
                 report_ended(engine, context, origin);
             }
@@ -331,6 +342,22 @@ mod tests {
         assert!(!keeps_time(ProcessMode::Offline));
     }
 
+    /// A note's brightness reaches the engine from either plugin API, whichever event nice-plug
+    /// gives it as (CLAP's `PolyBrightness`, VST3's `PolyExpression`), and a VST3 note's
+    /// expression (nice-plug's `PolyBrightness` there) and CLAP's expression reach nothing.
+    #[test]
+    fn a_notes_brightness_reaches_the_engine_from_clap_and_from_vst3() {
+        let (voice_id, channel, key) = (VoiceID::ID(7), Channel::Number(2), Key::Number(57));
+        let brightness = NoteEvent::<()>::PolyBrightness { timing: 0, voice_id, channel, key, brightness: 0.75 };
+        let expression = NoteEvent::<()>::PolyExpression { timing: 0, voice_id, channel, key, expression: 0.75 };
+        let note = NoteTarget { voice: Some(7), channel: Some(2), key: Some(57) };
+        let engine = Some(Event::NoteBrightness { note, value: 0.75 });
+        assert_eq!(engine_event(&brightness, PluginApi::Clap), engine);
+        assert_eq!(engine_event(&expression, PluginApi::Vst3), engine);
+        assert_eq!(engine_event(&brightness, PluginApi::Vst3), None);
+        assert_eq!(engine_event(&expression, PluginApi::Clap), None);
+    }
+
     /// Every channel message becomes the same engine event through the framework's parser and
     /// this plugin's mapping as through the offline renderer's `event_from_midi`.
     #[test]
@@ -348,6 +375,8 @@ mod tests {
                 (66, 64),
                 (67, 63),
                 (67, 64),
+                (74, 0),
+                (74, 127),
                 (120, 0),
                 (123, 5),
                 (6, 48),
@@ -359,7 +388,9 @@ mod tests {
                 (0, 64),
                 (127, 63),
             ] {
-                let via_host = NoteEvent::<()>::from_midi(0, &[status, d1, d2]).ok().and_then(|e| engine_event(&e));
+                let via_host = NoteEvent::<()>::from_midi(0, &[status, d1, d2])
+                    .ok()
+                    .and_then(|e| engine_event(&e, PluginApi::Clap));
                 let offline = qsa_dsp::instrument::event_from_midi(status, d1, d2);
                 assert_eq!(via_host, offline, "status {status:#x} data {d1} {d2}");
             }

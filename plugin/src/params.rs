@@ -35,7 +35,7 @@
 //! | `glide` | Glide time | 1..=2000 ms | 50 ms | [`Settings::glide_time`] |
 //! | `bend` | Bend range | 0..=24 st | 2 st | [`Settings::bend_range`] |
 //! | `hand` | Hand height | -3..=3 mm | -1.5 mm | [`Settings::hand_height`] |
-//! | `handsrc` | Hand height from | Parameter, Mod wheel, Channel pressure, Poly pressure | Parameter | [`Settings::hand_source`] |
+//! | `handsrc` | Hand height from | Parameter, Mod wheel, Channel pressure, Poly pressure, CC74 (timbre) | Parameter | [`Settings::hand_source`] |
 //! | `smass` | Slide mass | 5..=200 g | 30 g | [`Settings::slide_mass`] |
 //! | `hstiff` | Hand stiffness | 100..=1e6 N/m | 10000 N/m | [`Settings::hand_stiffness`] |
 //! | `hdamp` | Hand damping | 0..=100 kg/s | 5 kg/s | [`Settings::hand_damping`] |
@@ -103,6 +103,10 @@ pub enum HandSourceParam {
     #[id = "polypress"]
     #[name = "Poly pressure"]
     PolyPressure,
+    /// CC74, MPE's third dimension (or a note's CLAP or VST3 brightness).
+    #[id = "cc74"]
+    #[name = "CC74 (timbre)"]
+    Timbre,
 }
 
 /// Slide guitar body parameter (the options of `sbody`).

@@ -326,7 +326,7 @@ def test_choice_parameters_name_every_value(synth):
     choices = {
         "mode": ["Piano", "Slide"],
         "solver": ["QSA", "EXP", "IMP"],
-        "hand_height_from": ["Parameter", "Mod wheel", "Channel pressure", "Poly pressure"],
+        "hand_height_from": ["Parameter", "Mod wheel", "Channel pressure", "Poly pressure", "CC74 (timbre)"],
     }
     for python_name, names in choices.items():
         p = synth.param(python_name)
@@ -385,6 +385,35 @@ def test_pitch_bend_bends_a_slide_note_by_the_bend_range(defaults):
         expected = key_hz(52 + semitones)
         segment = audio[0, int(0.3 * FS) : int(0.9 * FS)]
         assert_pitch(fundamental(segment, 0.8 * expected, 1.2 * expected), expected, f"E3 bent {bend}")
+
+
+def test_cc74_presses_a_slide_note_as_the_mod_wheel_does(defaults):
+    """CC 74 reaches the plugin through JUCE's VST3 MIDI mapping: with ``Hand height from`` set to
+    CC74, a slide D3 after CC 74 at 127 renders as after CC 1 at 127 with the mod wheel as the
+    source (to 1e-6 of the peak) and sounds at its key within 1 %; after CC 74 at 0 the slide is
+    lifted and the open A2 sounds."""
+    defaults.set(mode="Slide")
+
+    def d3(source, control, value):
+        defaults.set(hand_height_from=source)
+        messages = [
+            mido.Message("control_change", control=control, value=value, time=0.0),
+            mido.Message("note_on", note=50, velocity=90, time=0.01),
+            mido.Message("note_off", note=50, velocity=0, time=0.95),
+        ]
+        audio = defaults.render(messages, duration=1.0)
+        assert np.isfinite(audio).all()
+        return audio
+
+    timbre, wheel = d3("CC74 (timbre)", 74, 127), d3("Mod wheel", 1, 127)
+    difference = np.abs(timbre - wheel).max() / np.abs(wheel).max()
+    print(f"CC74 against the mod wheel: {difference:.1e} of the peak")
+    assert difference < 1e-6, difference
+    segment = timbre[0, int(0.3 * FS) : int(0.9 * FS)]
+    assert_pitch(fundamental(segment, 0.8 * key_hz(50), 1.2 * key_hz(50)), key_hz(50), "D3 pressed by CC74")
+    lifted = d3("CC74 (timbre)", 74, 0)[0, int(0.3 * FS) : int(0.9 * FS)]
+    assert_pitch(fundamental(lifted, 0.8 * key_hz(45), 1.2 * key_hz(45)), key_hz(45), "open A2 under CC74 at 0")
+    defaults.set(hand_height_from="Parameter")
 
 
 def component_state(vstpreset):

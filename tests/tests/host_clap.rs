@@ -7,10 +7,10 @@
 //!   persistent preset id and the samples ([`every_preset_survives_save_and_load_into_a_fresh_instance`]).
 //! - Notes sound at their pitch in both modes; host buffer sizes never change a sample;
 //!   automating `Slide position` moves the pitch as the speaking length says.
-//! - Per note: CLAP tuning and pressure expressions and polyphonic modulation of `Slide position`
-//!   and `Hand height` change the addressed note and leave the other one alone; every note's end
-//!   comes back as a note-end event. The parameters come in the editor's groups (CLAP modules),
-//!   and the choice parameters name every value.
+//! - Per note: CLAP tuning, pressure and brightness expressions and polyphonic modulation of
+//!   `Slide position` and `Hand height` change the addressed note and leave the other one alone;
+//!   every note's end comes back as a note-end event. The parameters come in the editor's groups
+//!   (CLAP modules), and the choice parameters name every value.
 //! - Bad input (non-finite and out-of-range parameter values, 10,000 random MIDI events in one
 //!   block, every channel, extreme keys, velocity 0, stray note-offs, sample rates 22.05 to
 //!   192 kHz, blocks of 1 to 8192 samples, garbage state) never panics, never gives NaN, and
@@ -993,6 +993,30 @@ fn clap_pressure_expression_presses_only_its_note() {
     assert_pitch(slide_pitch_between(&by_id, 0.15, 0.5, 220.0), 220.0, "note 2 pressed by its pressure expression");
 }
 
+/// A CLAP brightness expression is its note's own CC74 (`Hand height from` = CC74): addressed by
+/// note id it renders exactly as MIDI CC74 at 127 on the note's channel, and presses that note
+/// alone (the pair is the sum of the notes alone; more than half the rms of the note changes).
+#[test]
+fn clap_brightness_expression_presses_only_its_note() {
+    let bundle = release_bundle();
+    let setup = [param("mode", 1.0), param("handsrc", 4.0)];
+    let samples = (0.5 * FS) as usize;
+    let render = |score: &[(usize, Ev)]| Plugin::at_48k(&bundle, &setup).render_blocks(score, samples, 512);
+    let cc74 = render(&[(0, on_id(3, 57, 2)), (0, Ev::Midi([0xB3, 74, 127]))]);
+    let brightness = (0, Ev::Expr(Expression::Brightness, Target::id(2), 1.0));
+    let by_id = render(&[(0, on_id(3, 57, 2)), brightness]);
+    assert_eq!(bit_identical(&by_id, &cc74), None, "brightness by note id vs CC74");
+    let unpressed = render(&[(0, on_id(3, 57, 2))]);
+    let note_1 = render(&[(0, on_id(2, 50, 1))]);
+    let both = render(&[(0, on_id(2, 50, 1)), (0, on_id(3, 57, 2)), brightness]);
+    let error = mixture_error(&both, &note_1, &by_id);
+    let change = relative_change(&unpressed, &by_id, 7_200);
+    println!("pair vs the notes alone: {error:.2e} of the peak; without vs with brightness: {change:.2} of the rms");
+    assert!(error < 1e-6, "the brightness on note 2 reached note 1 ({error:e} of the peak)");
+    assert!(change > 0.5, "brightness changed only {change} of the rms");
+    assert_pitch(slide_pitch_between(&by_id, 0.15, 0.5, 220.0), 220.0, "note 2 pressed by its brightness");
+}
+
 /// CLAP polyphonic modulation of `Slide position` and `Hand height` offsets one note's value:
 /// +3 semitones on a slide at 6 (not following keys) renders exactly as the parameter at 9 for
 /// everyone, and sounds there; +6 mm on the hand at −1.5 mm renders exactly as the parameter at
@@ -1180,7 +1204,7 @@ fn choice_parameters_name_every_value() {
     let choices: [(&str, &[&str]); 7] = [
         ("mode", &["Piano", "Slide"]),
         ("solver", &["QSA", "EXP", "IMP"]),
-        ("handsrc", &["Parameter", "Mod wheel", "Channel pressure", "Poly pressure"]),
+        ("handsrc", &["Parameter", "Mod wheel", "Channel pressure", "Poly pressure", "CC74 (timbre)"]),
         ("sbody", &["Electric", "Acoustic"]),
         ("follow", &["Off", "On"]),
         ("limit", &["Off", "On"]),

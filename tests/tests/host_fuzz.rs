@@ -18,8 +18,8 @@
 //!   channel or of every note), the sustain, sostenuto and soft pedals (CC64, CC66, CC67), pitch
 //!   bend and the parameter-number controllers (CC101, CC100, CC99, CC98, CC6: pitch-bend
 //!   sensitivity, MPE zones, a non-registered parameter), channel and
-//!   poly pressure, the mod wheel (CC1), reset-all-controllers (CC121) and all-notes-off (CC123)
-//!   play on every channel.
+//!   poly pressure, the mod wheel (CC1), CC74, reset-all-controllers (CC121) and all-notes-off
+//!   (CC123) play on every channel.
 //!
 //! The default run is 2,000 permutations with a fixed seed; `QSA_FUZZ_PERMUTATIONS=20000` runs
 //! longer and `QSA_FUZZ_SEED=n` picks another seed. A failure names the seed, the permutation,
@@ -365,10 +365,10 @@ impl Generator {
                 score.push((t, Ev::Midi([0xA0 | c, key, value])));
                 0
             }
-            // Mod wheel.
+            // Mod wheel or CC74.
             96..=98 => {
-                let value = self.value7();
-                score.push((t, Ev::Midi([0xB0 | channel, 1, value])));
+                let (cc, value) = ([1, 74][self.rng.random_range(0..2)], self.value7());
+                score.push((t, Ev::Midi([0xB0 | channel, cc, value])));
                 0
             }
             // All notes off.

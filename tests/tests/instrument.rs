@@ -1495,7 +1495,7 @@ fn an_mpe_zone_bends_its_members_48_semitones_and_its_master_bends_them_all() {
 }
 
 /// An MPE zone's master channel speaks for its members: with the hand pressing the slide as the
-/// mod wheel (or channel pressure) says, the wheel moved on the master channel presses a member's
+/// mod wheel (or channel pressure, or CC74) says, the wheel moved on the master channel presses a member's
 /// note exactly as the same wheel on the member's own channel does, to the bit, and a member that
 /// sends its own value after the master's is heard with its own (the latest wins). The master's
 /// wheel presses the slide: the note sounds at D3 within 1 %. Without a zone, channel 1's wheel
@@ -1504,10 +1504,11 @@ fn an_mpe_zone_bends_its_members_48_semitones_and_its_master_bends_them_all() {
 fn an_mpe_zones_master_mod_wheel_and_pressure_reach_its_members_notes() {
     let zone = rpn(0, (0, 6), 3, None);
     let note = (0, Event::NoteOn { channel: 2, key: 50, velocity: 0.8 });
-    for source in [HandSource::ModWheel, HandSource::ChannelPressure] {
+    for source in [HandSource::ModWheel, HandSource::ChannelPressure, HandSource::Timbre] {
         let settings = Settings { hand_source: source, ..Default::default() };
         let control = |channel, value| match source {
             HandSource::ModWheel => Event::ModWheel { channel, value },
+            HandSource::Timbre => Event::Timbre { channel, value },
             _ => Event::ChannelPressure { channel, value },
         };
         let render = |zoned: bool, events: &[(usize, Event)]| {

@@ -1,5 +1,5 @@
-//! Per-note expression in the engine (slide mode): a note's tuning, pressure and polyphonic
-//! modulation offsets reach that note alone, addressed by the host's voice id or by channel and
+//! Per-note expression in the engine (slide mode): a note's tuning, pressure, brightness and
+//! polyphonic modulation offsets reach that note alone, addressed by the host's voice id or by channel and
 //! key; host garbage (NaN, infinities) is clamped; ended notes are reported once each; host
 //! buffer sizes change nothing.
 //!
@@ -226,8 +226,49 @@ fn a_pressure_expression_presses_only_its_note() {
     assert!(change > 0.5, "pressure changed the note by only {change} of its rms");
 }
 
+/// A note's brightness expression is its own CC74: with the hand height from CC74, brightness
+/// 1 on a note (addressed by voice id, then by channel and key) renders exactly as CC74 at 127 on
+/// its channel, presses that note alone (the pair is the sum of the notes alone; the pressed note
+/// sounds at its key), and stands for the channel's CC74 from then on: the channel's CC74 sent
+/// later no longer reaches the note, until reset-all-controllers drops both, which lifts the
+/// slide as CC74 alone reset does.
+#[test]
+fn a_brightness_expression_is_its_notes_own_cc74() {
+    let settings = Settings { hand_source: HandSource::Timbre, ..Default::default() };
+    let render = |score: &Score| play(&mut slide(settings), score, 24_000, 256);
+    let cc74 = |at: usize, value: f32| (at, Event::Timbre { channel: 2, value });
+    let reset = (4_800, Event::ResetControllers { channel: 2 });
+    let midi = render(&vec![(0, on(2, 57, 22)), cc74(0, 1.0)]);
+    for target in [NoteTarget::voice(22), NoteTarget::key(2, 57)] {
+        let brightness = (0, Event::NoteBrightness { note: target, value: 1.0 });
+        let pressed = render(&vec![(0, on(2, 57, 22)), brightness]);
+        assert!(same(&pressed, &midi), "{target:?}: the brightness differs from the channel's CC74");
+        let later = render(&vec![(0, on(2, 57, 22)), brightness, cc74(4_800, 0.0)]);
+        assert!(same(&later, &midi), "{target:?}: the channel's CC74 reached a note with its own brightness");
+        let dropped = render(&vec![(0, on(2, 57, 22)), brightness, reset]);
+        assert!(same(&dropped, &render(&vec![(0, on(2, 57, 22)), cc74(0, 1.0), reset])), "{target:?}: reset");
+        assert!(!same(&dropped, &midi), "{target:?}: reset-all-controllers lifts the slide");
+    }
+    let brightness = (0, Event::NoteBrightness { note: NoteTarget::voice(22), value: 1.0 });
+    let note_1 = render(&vec![(0, on(1, 50, 11))]);
+    let both = render(&vec![(0, on(1, 50, 11)), (0, on(2, 57, 22)), brightness]);
+    let error = mixture_error(&both, &note_1, &midi);
+    let unpressed = render(&vec![(0, on(2, 57, 22))]);
+    let f = pitch(&midi, 7_200, 24_000, 220.0);
+    let rms = |x: &[f32]| (x.iter().map(|&v| f64::from(v).powi(2)).sum::<f64>() / x.len() as f64).sqrt();
+    let diff: Vec<f32> = midi.iter().zip(&unpressed).map(|(a, b)| a - b).collect();
+    let change = rms(&diff[7_200..]) / rms(&midi[7_200..]);
+    println!(
+        "bright note 2: {f:.2} Hz (key 57: 220 Hz); unpressed differs by {change:.2} of its rms; pair error {error:.1e}"
+    );
+    assert!(error < 1e-6, "the brightness reached note 1 ({error:e} of the peak)");
+    assert!((f / 220.0 - 1.0).abs() < 0.01, "pressed: {f} Hz");
+    assert!(change > 0.5, "brightness changed the note by only {change} of its rms");
+}
+
 /// Host garbage is clamped, never played: NaN tuning and offsets are 0 (the note renders as with
-/// none), infinite ones the largest value (finite samples), pressure beyond 0..=1 is clamped.
+/// none), infinite ones the largest value (finite samples), pressure, brightness and CC74 beyond
+/// 0..=1 are clamped.
 #[test]
 fn non_finite_per_note_values_are_clamped() {
     let plain = play(&mut slide(Settings::default()), &vec![(0, on(2, 57, 22))], 9_600, 256);
@@ -246,9 +287,14 @@ fn non_finite_per_note_values_are_clamped() {
             (200, Event::NoteModulation { note: target, param: NoteParam::SlidePosition, offset: value }),
             (300, Event::NoteModulation { note: target, param: NoteParam::HandHeight, offset: value }),
             (400, Event::NotePressure { note: NoteTarget::default(), value }),
+            (500, Event::NoteBrightness { note: NoteTarget::default(), value }),
+            (600, Event::Timbre { channel: 2, value }),
         ];
-        let out = play(&mut slide(Settings { follow_key: false, ..Default::default() }), &score, 9_600, 256);
-        assert!(out.iter().all(|v| v.is_finite()), "{value}: non-finite output");
+        for hand_source in [HandSource::PolyPressure, HandSource::Timbre] {
+            let settings = Settings { follow_key: false, hand_source, ..Default::default() };
+            let out = play(&mut slide(settings), &score, 9_600, 256);
+            assert!(out.iter().all(|v| v.is_finite()), "{value}, {hand_source:?}: non-finite output");
+        }
     }
 }
 

@@ -1072,11 +1072,11 @@ fn a_slide_note_from_silence_is_as_loud_at_every_block_length() {
 
 /// A hand height from a controller counts for a note from silence when the controller comes
 /// with the note-on (a host sends a note's pressure at its note-on's time): poly pressure,
-/// per-note pressure, channel pressure or the mod wheel at full, sent right after the note-on,
-/// start the note pressed as the `Hand height` parameter at full press does (`HAND_RANGE.1`):
-/// the slide in contact from the first sample and the first 50 ms the same to rounding (within
-/// 1e-6 of the note's peak). Read only at the note-on, such a hand started lifted and came down
-/// onto the string 22 ms later, after the pluck.
+/// per-note pressure, channel pressure, the mod wheel, CC74 or a per-note brightness at full,
+/// sent right after the note-on, start the note pressed as the `Hand height` parameter at full
+/// press does (`HAND_RANGE.1`): the slide in contact from the first sample and the first 50 ms
+/// the same to rounding (within 1e-6 of the note's peak). Read only at the note-on, such a hand
+/// started lifted and came down onto the string 22 ms later, after the pluck.
 #[test]
 fn a_controllers_hand_sent_with_the_note_on_starts_the_note_pressed() {
     let fs = 48_000.0;
@@ -1102,6 +1102,8 @@ fn a_controllers_hand_sent_with_the_note_on_starts_the_note_pressed() {
         (HandSource::PolyPressure, Event::NotePressure { note: NoteTarget::key(0, 52), value: 1.0 }),
         (HandSource::ChannelPressure, Event::ChannelPressure { channel: 0, value: 1.0 }),
         (HandSource::ModWheel, Event::ModWheel { channel: 0, value: 1.0 }),
+        (HandSource::Timbre, Event::Timbre { channel: 0, value: 1.0 }),
+        (HandSource::Timbre, Event::NoteBrightness { note: NoteTarget::key(0, 52), value: 1.0 }),
     ] {
         let (left, touching) = first_50_ms(source, 0.0, Some(event));
         let worst = left.iter().zip(&reference).fold(0.0f32, |m, (a, b)| m.max((a - b).abs())) / peak;

@@ -24,7 +24,7 @@ pub fn bend_from_normalised(normalised: f32) -> f32 {
 
 /// The engine event for a channel message `status, data1, data2`, if the engine plays it
 /// (notes, poly and channel pressure, pitch bend, CC1, the parameter-number controllers CC6,
-/// CC38 and CC98–101, CC64, CC66, CC67, CC120, CC121, CC123).
+/// CC38 and CC98–101, CC64, CC66, CC67, CC74, CC120, CC121, CC123).
 pub fn event_from_midi(status: u8, data1: u8, data2: u8) -> Option<Event> {
     let channel = status & 0x0f;
     let (key, value) = (data1 & 0x7f, data2 & 0x7f);
@@ -45,6 +45,7 @@ pub fn event_from_midi(status: u8, data1: u8, data2: u8) -> Option<Event> {
             64 => Event::Sustain { channel, depth: unit(value) },
             66 => Event::Sostenuto { channel, down: unit(value) >= 0.5 },
             67 => Event::SoftPedal { channel, down: unit(value) >= 0.5 },
+            74 => Event::Timbre { channel, value: unit(value) },
             120 => Event::AllSoundOff,
             121 => Event::ResetControllers { channel },
             123 => Event::AllNotesOff,

@@ -39,9 +39,9 @@
 //! Hosts that address single notes (CLAP note expressions and polyphonic modulation, VST3 note
 //! expressions) reach a voice by the voice id given at note-on ([`Event::NoteOnWithId`]) or by
 //! channel and key ([`NoteTarget`]). In slide mode a note's tuning moves its slide
-//! ([`Event::NoteTuning`]), its pressure is its poly pressure ([`Event::NotePressure`]), and
-//! polyphonic modulation offsets its `slide_position` and `hand_height` ([`Event::NoteModulation`]);
-//! see [`SlideVoice`]. Piano mode ignores them: a struck string keeps its tuning. Whatever the
+//! ([`Event::NoteTuning`]), its pressure is its poly pressure ([`Event::NotePressure`]), its
+//! brightness is its own CC74 ([`Event::NoteBrightness`]), and polyphonic modulation offsets its
+//! `slide_position` and `hand_height` ([`Event::NoteModulation`]); see [`SlideVoice`]. Piano mode ignores them: a struck string keeps its tuning. Whatever the
 //! mode, every note's end is queued for the host ([`Instrument::drain_ended`]).
 //!
 //! # Voices
@@ -281,6 +281,14 @@ pub enum Event {
         /// Position, 0..=1.
         value: f32,
     },
+    /// CC74, MPE's third dimension (a key surface's forward position, "timbre" or "slide"),
+    /// 0..=1.
+    Timbre {
+        /// MIDI channel, 0..=15.
+        channel: u8,
+        /// Value, 0..=1.
+        value: f32,
+    },
     /// Key pressed, with the host's voice (note) id, which per-note events can address. Velocity
     /// 0 is a note-off, and the note ends at once, never played.
     NoteOnWithId {
@@ -306,6 +314,14 @@ pub enum Event {
         /// The notes.
         note: NoteTarget,
         /// Pressure, 0..=1.
+        value: f32,
+    },
+    /// Brightness of the addressed notes, 0..=1: their own CC74 (their channel's no longer
+    /// reaches them).
+    NoteBrightness {
+        /// The notes.
+        note: NoteTarget,
+        /// Brightness, 0..=1.
         value: f32,
     },
     /// Polyphonic modulation: an offset of a slide setting for the addressed notes, in the
@@ -639,6 +655,10 @@ impl Instrument {
                 let value = unit(value, 0.0);
                 self.bends.spoken_for(channel).for_each(|c| self.channels[c].mod_wheel = value);
             }
+            Event::Timbre { channel, value } => {
+                let value = unit(value, 0.0);
+                self.bends.spoken_for(channel).for_each(|c| self.channels[c].timbre = value);
+            }
             Event::PolyPressure { channel, key, value } => {
                 let value = unit(value, 0.0);
                 self.pressed[usize::from(channel & 15)][usize::from(key & 127)].pressure = value;
@@ -647,6 +667,10 @@ impl Instrument {
             Event::NotePressure { note, value } => {
                 let value = unit(value, 0.0);
                 self.each_slide(note, |v, _| v.poly_pressure = value);
+            }
+            Event::NoteBrightness { note, value } => {
+                let value = unit(value, 0.0);
+                self.each_slide(note, |v, _| v.brightness = Some(value));
             }
             Event::NoteTuning { note, semitones } => {
                 let semitones = notes::sanitize_tuning(semitones);
@@ -667,7 +691,10 @@ impl Instrument {
                 self.sustain[c] = 0.0;
                 self.soft[c] = false;
                 self.sostenuto(channel, false);
-                self.slides.iter_mut().filter(|v| v.strike.channel == channel).for_each(|v| v.poly_pressure = 0.0);
+                self.slides.iter_mut().filter(|v| v.strike.channel == channel).for_each(|v| {
+                    v.poly_pressure = 0.0;
+                    v.brightness = None;
+                });
                 self.pressed[c].iter_mut().for_each(|press| press.pressure = 0.0);
             }
             Event::RegisteredParameter { channel, controller, value } => {

@@ -139,8 +139,13 @@ const MODES: [Mode; 2] = [Mode::Piano, Mode::Slide];
 const SOLVERS: [Method; 3] = [Method::Qsa, Method::Exp, Method::Imp];
 
 /// The hand-height sources of `handsrc`, in option order.
-const HAND_SOURCES: [HandSource; 4] =
-    [HandSource::Parameter, HandSource::ModWheel, HandSource::ChannelPressure, HandSource::PolyPressure];
+const HAND_SOURCES: [HandSource; 5] = [
+    HandSource::Parameter,
+    HandSource::ModWheel,
+    HandSource::ChannelPressure,
+    HandSource::PolyPressure,
+    HandSource::Timbre,
+];
 
 /// The slide guitar's bodies of `sbody`, in option order.
 const SLIDE_BODIES: [SlideBody; 2] = [SlideBody::Pickup, SlideBody::Acoustic];
@@ -417,6 +422,7 @@ pub const PARAMETERS: [ParamSpec; 35] = [
                 ("modwheel", "Mod wheel"),
                 ("chanpress", "Channel pressure"),
                 ("polypress", "Poly pressure"),
+                ("cc74", "CC74 (timbre)"),
             ],
             default: 0,
         },
@@ -886,8 +892,9 @@ impl ParamValues {
 
     /// Set parameter `id` from text ([`ParamSpec::parse`]): numbers in the parameter's unit
     /// (`gain` in dB, like the plugin shows it), `on`/`off` for switches, option ids for the
-    /// choices (`piano`/`slide`, `qsa`/`exp`/`imp`, `param`/`modwheel`/`chanpress`/`polypress`,
-    /// `electric`/`acoustic`); a number outside the parameter's range is refused, naming it.
+    /// choices (`piano`/`slide`, `qsa`/`exp`/`imp`, `param`/`modwheel`/`chanpress`/`polypress`/
+    /// `cc74`, `electric`/`acoustic`); a number outside the parameter's range is refused, naming
+    /// it.
     pub fn set(&mut self, id: &str, value: &str) -> Result<(), ParamError> {
         let spec = param_spec(id).ok_or_else(|| ParamError::UnknownId(id.to_owned()))?;
         let shown = spec.parse(value).map_err(|expected| ParamError::BadValue {
@@ -1095,7 +1102,7 @@ mod tests {
         assert!(p.set("hard", "nan").is_err());
         assert_eq!(p.set("mode", "banjo").unwrap_err().to_string(), "mode: cannot use \"banjo\" (piano or slide)");
         let expected = p.set("handsrc", "foot").unwrap_err().to_string();
-        assert_eq!(expected, "handsrc: cannot use \"foot\" (param, modwheel, chanpress or polypress)");
+        assert_eq!(expected, "handsrc: cannot use \"foot\" (param, modwheel, chanpress, polypress or cc74)");
     }
 
     /// `plain` knows every id, reads back what `set` stored (gain linear, choices as indices) and

@@ -32,6 +32,10 @@ pub enum HandSource {
     ChannelPressure,
     /// Poly pressure of the note's key.
     PolyPressure,
+    /// CC74 of the note's channel, MPE's third dimension (per note with MPE; the master channel's,
+    /// sent later, reaches every note of its zone), or the note's own brightness where the host
+    /// sent one.
+    Timbre,
 }
 
 /// What the slide guitar's listener hears.

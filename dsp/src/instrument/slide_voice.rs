@@ -314,6 +314,8 @@ pub struct ChannelState {
     pub pressure: f64,
     /// Mod wheel, 0..=1.
     pub mod_wheel: f64,
+    /// CC74 (MPE's third dimension), 0..=1.
+    pub timbre: f64,
     /// Semitones of slide travel of a full bend, if the channel's pitch-bend sensitivity was set
     /// (RPN 0, or an MPE zone); else the `bend_range` setting.
     pub bend_range: Option<f64>,
@@ -341,6 +343,8 @@ pub struct SlideVoice {
     pub started: u64,
     /// Poly pressure of its key, 0..=1.
     pub poly_pressure: f64,
+    /// The note's brightness, 0..=1, once the host sent one: it stands for its channel's CC74.
+    pub brightness: Option<f64>,
     /// The note's tuning (semitones), added to the slide position.
     tuning: f64,
     /// The note's offset of the `slide_position` setting (semitones).
@@ -442,6 +446,7 @@ impl SlideVoice {
             channel: ChannelState::default(),
             started: 0,
             poly_pressure: 0.0,
+            brightness: None,
             tuning: 0.0,
             slide_offset: 0.0,
             hand_offset: 0.0,
@@ -602,9 +607,11 @@ impl SlideVoice {
         self.start_expression(pressure);
     }
 
-    /// A new note's expression: poly pressure `pressure`, no tuning, no offsets.
+    /// A new note's expression: poly pressure `pressure`, no brightness of its own, no tuning, no
+    /// offsets.
     fn start_expression(&mut self, pressure: f64) {
         (self.poly_pressure, self.tuning, self.slide_offset, self.hand_offset) = (pressure, 0.0, 0.0, 0.0);
+        self.brightness = None;
     }
 
     /// Release the key.
@@ -708,6 +715,7 @@ impl SlideVoice {
             HandSource::ModWheel => pressed(channel.mod_wheel),
             HandSource::ChannelPressure => pressed(channel.pressure),
             HandSource::PolyPressure => pressed(self.poly_pressure),
+            HandSource::Timbre => pressed(self.brightness.unwrap_or(channel.timbre)),
         }
     }
 

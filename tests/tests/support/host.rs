@@ -118,6 +118,8 @@ pub enum Expression {
     Tuning,
     /// Pressure, 0..=1.
     Pressure,
+    /// Brightness, 0..=1.
+    Brightness,
 }
 
 /// The notes a CLAP note event addresses: note id, channel and key, each a wildcard when `None`.
@@ -383,6 +385,7 @@ pub fn push_event(buffer: &mut EventBuffer, time: u32, ev: Ev) {
             let kind = match expression {
                 Expression::Tuning => NoteExpressionType::Tuning,
                 Expression::Pressure => NoteExpressionType::Pressure,
+                Expression::Brightness => NoteExpressionType::Brightness,
             };
             buffer.push(&NoteExpressionEvent::new(time, target.pckn(), kind, value));
         }
