@@ -729,6 +729,40 @@ fn shedding_fades_out_the_stillest_slide_voices_without_a_click() {
     assert!(level > 1e-4, "the new note sounds (rms {level:.2e})");
 }
 
+/// A note that takes the only slide voice while it fades out after a choke turns the voice back
+/// up from where the fade had got to, over the fade's own 5 ms, rather than at once: its string is
+/// still moving. A note 0.9 plucked on one voice is choked after 1 s, and another note plucked 40
+/// to 250 samples later (the fade is 240 samples; at 244 and 250 it has reached silence, not yet
+/// ended), on both guitars. The largest change between two samples in the 5 ms from the new
+/// note-on (its pluck still rising) stays below the largest in the 10 ms before the choke
+/// (measured 0.12 to 0.86 of it). Set back to full gain at once, the output jumped by up to 3.5
+/// (electric) and 5.6 (acoustic) times that.
+#[test]
+fn a_note_on_a_slide_voice_being_shed_turns_it_back_up_without_a_step() {
+    let choke = 48_000;
+    for body in [SlideBody::Pickup, SlideBody::Acoustic] {
+        for delay in [40usize, 120, 200, 244, 250] {
+            let settings = Settings { mode: Mode::Slide, slide_body: body, ..Default::default() };
+            let mut p = Instrument::new(FS, 1, settings);
+            let latency = p.latency();
+            let score: Score = vec![
+                (0, Event::NoteOnWithId { channel: 0, key: 57, velocity: 0.9, voice: 1 }),
+                (choke, Event::Choke { note: NoteTarget::voice(1) }),
+                (choke + delay, Event::NoteOn { channel: 0, key: 50, velocity: 0.3 }),
+            ];
+            let out = wide(&play(&mut p, &score, choke + 9_600, || 64));
+            let largest_step = |from: usize, to: usize| {
+                (from..to).map(|i| (out[i + latency] - out[i + latency - 1]).abs()).fold(0.0f64, f64::max)
+            };
+            let playing = largest_step(choke - 480, choke);
+            let at_note = largest_step(choke + delay, choke + delay + 240);
+            let ratio = at_note / playing;
+            println!("{body:?}, the note {delay} samples after the choke: {ratio:.2} of the note's own largest step");
+            assert!(ratio < 1.0, "{body:?}, {delay} samples after the choke: {ratio:.2}");
+        }
+    }
+}
+
 /// A damper landing while the hammer is still on the string (note-off 0.5 ms after note-on, the
 /// felt in contact for about 1 to 4 ms) and dampers landing on ringing strings do not click,
 /// across the keyboard and from pianissimo to fortissimo.

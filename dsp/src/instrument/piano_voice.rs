@@ -92,14 +92,24 @@ pub const GUARD_FACTOR: f64 = 10.0;
 /// control block (no step in the output), then brought to rest at the next block.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct GuardFade {
-    /// While fading: the gain now and its decrease per sample.
+    /// While fading: the gain now and its decrease per sample (negative while turning back up).
     fade: Option<(f64, f64)>,
 }
 
 impl GuardFade {
     /// Start fading out over the next `samples` samples.
     pub fn start(&mut self, samples: usize) {
-        self.fade = Some((1.0, 1.0 / samples.max(1) as f64));
+        // From the gain a fade turned back up had reached, not from full gain at once.
+        let gain = self.fade.map_or(1.0, |(gain, _)| gain);
+        self.fade = Some((gain, gain.max(f64::MIN_POSITIVE) / samples.max(1) as f64));
+    }
+
+    /// Turn a fade under way back up to full gain over `samples` samples, from the gain it has
+    /// reached (no step in the output); nothing when not fading.
+    pub fn resume(&mut self, samples: usize) {
+        if let Some((gain, step)) = &mut self.fade {
+            *step = -(1.0 - *gain) / samples.max(1) as f64;
+        }
     }
 
     /// Forget the fade (the voice has been silenced).
@@ -107,14 +117,14 @@ impl GuardFade {
         self.fade = None;
     }
 
-    /// Whether a fade has started.
+    /// Whether it is fading out.
     pub fn is_fading(&self) -> bool {
-        self.fade.is_some()
+        self.fade.is_some_and(|(_, step)| step > 0.0)
     }
 
     /// Whether a fade has reached silence.
     pub fn is_silent(&self) -> bool {
-        self.fade.is_some_and(|(gain, _)| gain <= 0.0)
+        self.fade.is_some_and(|(gain, step)| step > 0.0 && gain <= 0.0)
     }
 
     /// Apply the fade to a rendered block (no change when not fading).
@@ -130,7 +140,10 @@ impl GuardFade {
                 for out in outs.iter_mut() {
                     out[i] *= *gain;
                 }
-                *gain = (*gain - *step).max(0.0);
+                *gain = (*gain - *step).clamp(0.0, 1.0);
+            }
+            if *step <= 0.0 && *gain >= 1.0 {
+                self.fade = None;
             }
         }
     }

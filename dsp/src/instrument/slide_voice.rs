@@ -72,7 +72,9 @@
 //!
 //! When the host's audio thread cannot keep up, the plugin has the voices whose strings move
 //! least fall silent ([`SlideVoice::shed`]): the output fades linearly over
-//! [`STEAL_TIME`], then the string comes to rest with the slide lifted, and the note ends.
+//! [`STEAL_TIME`], then the string comes to rest with the slide lifted, and the note ends. A note
+//! that takes a voice being shed (or choked) turns its output back up over the same time, from
+//! where the fade had got to: its string still moves.
 
 use crate::body::BodyParams;
 use crate::contact::{Method, PowerLaw};
@@ -505,8 +507,10 @@ impl SlideVoice {
     pub fn play(&mut self, strike: Strike, settings: &Settings, channel: &ChannelState, legato: bool, now: u64) {
         self.strike = strike;
         self.key_down = true;
-        // A voice taken while it was being shed sounds again.
-        self.shed_fade.clear();
+        // A voice taken while it was being shed sounds again: its output turns back up over
+        // `STEAL_TIME` from where the fade had got to, not in one step.
+        let fs = self.core.string().sample_rate();
+        self.shed_fade.resume((STEAL_TIME * fs).ceil() as usize);
         self.start_expression(0.0);
         if self.sounding {
             self.follow(settings);
