@@ -547,6 +547,40 @@ fn a_note_struck_while_every_voice_fades_takes_the_voice_whose_next_note_came_fi
     assert_eq!(p.steals(), 3);
 }
 
+/// A key struck again and again while the voice it stole still fades sounds: on two voices
+/// holding C3 and G3, C5 struck 40 times every 2, 4, 5 or 6 ms (velocities 1/127 and 1 in turn)
+/// takes a voice whose steal fade lasts 5 ms. The strikes that come while that fade goes on
+/// replace its waiting note without beginning the fade again, so the hammer reaches the strings
+/// within a fade and a block of the first strike (measured 258 samples), and again after nearly
+/// every strike (38 to 40 of the 40). Begun again at every strike, the fade never ended at 5 ms
+/// and faster, and no hammer touched the strings.
+#[test]
+fn a_key_repeated_faster_than_a_steal_fade_still_sounds() {
+    for ms in [2usize, 4, 5, 6] {
+        let mut p = piano(2);
+        play(&mut p, &vec![(0, on(48, 0.8)), (0, on(55, 0.8))], 4_800, || 64);
+        let step = ms * 48;
+        let mut touched = 0;
+        let mut first = None;
+        for i in 0..40 {
+            p.handle(on(72, if i % 2 == 0 { 1.0 / 127.0 } else { 1.0 }));
+            let mut contact = false;
+            for t in 0..step {
+                play(&mut p, &Vec::new(), 1, || 1);
+                if p.in_contact() > 0 {
+                    contact = true;
+                    first.get_or_insert(i * step + t);
+                }
+            }
+            touched += usize::from(contact);
+        }
+        println!("every {ms} ms: the hammer touched after {touched} of 40 strikes, first {first:?} samples in");
+        let fade = (STEAL_TIME * FS).ceil() as usize;
+        assert!(first.is_some_and(|t| t <= fade + 64), "every {ms} ms: first contact {first:?}");
+        assert!(touched >= 36, "every {ms} ms: {touched} of 40 strikes touched");
+    }
+}
+
 /// Every note ends exactly once, whatever happens to it: in random sessions of 1,000 events on
 /// four channels (notes with voice ids on 1, 3 and 8 voices, so that voices are stolen, often
 /// while fading already, some at velocity 0, a note-off; note-offs, chokes and releases by key, channel and id; the three

@@ -765,13 +765,19 @@ impl PianoVoice {
         self.damper_shape.resize(self.core.modes(), last);
     }
 
-    /// Fade out over [`STEAL_TIME`], then play `strike` (a stolen voice).
+    /// Fade out over [`STEAL_TIME`], then play `strike` (a stolen voice). A voice fading out
+    /// already keeps its fade, which has been taking its modes down at [`STEAL_RATE`] since it
+    /// began: begun again, a key struck faster than the fade lasts would put its note off at every
+    /// strike, and never sound.
     pub fn steal(&mut self, strike: Strike, sample_rate: f64, now: u64) {
+        let fading = self.fading();
         self.pending = Some(strike);
         self.pending_released = false;
         self.shedding = false;
         self.started = now;
-        self.fade_out(sample_rate);
+        if !fading {
+            self.fade_out(sample_rate);
+        }
     }
 
     /// Fade out over [`STEAL_TIME`] and fall silent, the note ending: a sounding voice given up to
