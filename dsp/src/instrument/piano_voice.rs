@@ -88,6 +88,30 @@ pub const RELEASE_ENERGY: f64 = 1e-10;
 /// energy for a piano voice, the energy at the pluck plus the controls' work for a slide voice.
 pub const GUARD_FACTOR: f64 = 10.0;
 
+/// A key struck again while it rings: the strings' energy (J) and the voicing gain before the
+/// strike, and the gain of the strike's level ([`super::voicing_gain`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Restruck {
+    energy: f64,
+    voicing: f64,
+    gain: f64,
+}
+
+impl Restruck {
+    /// The one gain that serves the ringing and `added` joules more from the strike, their powers
+    /// weighted by their energies: `√((E g² + ΔE g_new²) / (E + ΔE))`. A strike that takes energy
+    /// from the strings (meeting them as they move away) adds none.
+    fn voicing_with(&self, added: f64) -> f64 {
+        let added = added.max(0.0);
+        let total = self.energy + added;
+        if total > 0.0 {
+            ((self.energy * self.voicing * self.voicing + added * self.gain * self.gain) / total).sqrt()
+        } else {
+            self.gain
+        }
+    }
+}
+
 /// The guard's fade-out: a voice caught over its bound is faded linearly to silence across one
 /// control block (no step in the output), then brought to rest at the next block.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -441,6 +465,8 @@ pub struct PianoVoice {
     pub voicing: f64,
     /// Output gain now: moves to `voicing` after a re-strike at another level.
     pub voiced: f64,
+    /// A re-strike whose hammer has not left yet: what it added is weighed once it has.
+    restruck: Option<Restruck>,
     /// Left and right gains now ([`super::pan_gains`]): they move to the key's when the stereo
     /// width changes.
     pub pan: [f64; 2],
@@ -525,6 +551,7 @@ impl PianoVoice {
             started: 0,
             voicing: 1.0,
             voiced: 1.0,
+            restruck: None,
             pan: [1.0; 2],
             damper: 0.0,
             applied: 0.0,
@@ -596,6 +623,7 @@ impl PianoVoice {
         let gain = super::voicing_gain(strike.key, strike.velocity);
         let strings = note.strings as f64;
         if !restrike {
+            self.restruck = None;
             self.voicing = gain;
             self.voiced = gain;
             self.pan = super::pan_gains(strike.key, settings.stereo_width);
@@ -616,12 +644,14 @@ impl PianoVoice {
         if restrike {
             // The voicing is the gain a strike at its level is heard with: it belongs to what the
             // new strike adds, not to the sound already ringing, which keeps its own. One gain
-            // serves both, their powers weighted by their energies (the strings' now, the
-            // hammer's coming), so that a soft note repeated into a loud one's ringing does not
-            // turn that ringing down, nor a loud one into a soft one's turn it up.
-            let added = hammer.kinetic_energy();
-            let power = string_energy * self.voicing * self.voicing + added * gain * gain;
-            self.voicing = if string_energy + added > 0.0 { (power / (string_energy + added)).sqrt() } else { gain };
+            // serves both, their powers weighted by their energies (`Restruck`). What the strike
+            // adds is known once its hammer has left; until then the voicing moves only down,
+            // to the blend with the hammer's whole energy, so that a loud strike into a soft
+            // note's ringing is not heard at the soft note's gain.
+            self.settle_voicing();
+            let before = Restruck { energy: string_energy, voicing: self.voicing, gain };
+            self.voicing = self.voicing.min(before.voicing_with(hammer.kinetic_energy()));
+            self.restruck = Some(before);
             // A key going down lifts its damper half-way through its travel, well before the
             // hammer arrives: a key struck again while its damper falls meets free strings.
             if self.applied != 0.0 {
@@ -765,6 +795,13 @@ impl PianoVoice {
         self.damper_shape.resize(self.core.modes(), last);
     }
 
+    /// Weigh a re-strike's voicing by what its strikes added to the strings' energy.
+    fn settle_voicing(&mut self) {
+        if let Some(restruck) = self.restruck.take() {
+            self.voicing = restruck.voicing_with(self.core.own_energy() - restruck.energy);
+        }
+    }
+
     /// Fade out over [`STEAL_TIME`], then play `strike` (a stolen voice). A voice fading out
     /// already keeps its fade, which has been taking its modes down at [`STEAL_RATE`] since it
     /// began: begun again, a key struck faster than the fade lasts would put its note off at every
@@ -891,6 +928,7 @@ impl PianoVoice {
         self.core.reset();
         self.sounding = false;
         self.key_down = false;
+        self.restruck = None;
         self.pending = None;
         self.shedding = false;
         self.fade_left = 0;
@@ -962,6 +1000,9 @@ impl PianoVoice {
         if self.fading() {
             self.fade_left = self.fade_left.saturating_sub(len);
             return;
+        }
+        if self.restruck.is_some() && self.core.hammer_leaving() {
+            self.settle_voicing();
         }
         // Not while the felt may touch: the contact's coefficients would change under the solver.
         let lifted = dampers.lifted();
