@@ -118,9 +118,9 @@ pub use presets::{
 pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody, hammer_speed};
 pub use slide_scale::SlideScale;
 pub use slide_voice::{
-    BRAKING, ChannelState, HAND_ACCELERATION, HAND_SPEED, LANDING_SPEED, MUTE_HAND_DAMPING, MUTE_TIME, OPEN_KEY,
-    PICKUP_APERTURE, PLUCK_RELEASE, PLUCK_TIME, REST_FORCE, SLIDE_ACCELERATION, SLIDE_SPEED, SlideVoice, TRAIL,
-    hand_reach, pluck_force,
+    BRAKING, ChannelState, HAND_ACCELERATION, HAND_SPEED, LANDING_SPEED, MUTE_HAND_DAMPING, MUTE_TIME, MUTED_LIMIT,
+    OPEN_KEY, PICKUP_APERTURE, PLUCK_RELEASE, PLUCK_TIME, REST_FORCE, SLIDE_ACCELERATION, SLIDE_SPEED, SlideVoice,
+    TRAIL, hand_reach, pluck_force,
 };
 pub use solvers::Solvers;
 pub use voicing::{VOICING_DB, VOICING_VELOCITIES, voicing_gain};

@@ -115,6 +115,13 @@ pub const REST_FORCE: f64 = 0.3;
 /// pushes the string aside at once, a thump under the pickup however quiet the note has become.
 pub const MUTE_TIME: f64 = 0.02;
 
+/// The longest a muted string sounds (s): a voice still sounding this long after its finger
+/// began to mute it is faded out as a shed one is, and its note ends. Muted, a note falls silent
+/// within about a second with QSA and IMP whatever the settings; EXP's pressed contact, stiff
+/// beyond its stability (`κ` of 1e11 N/m^α and more at 22.05 kHz), can keep the string moving
+/// for ever, inaudibly or as a drone.
+pub const MUTED_LIMIT: f64 = 5.0;
+
 /// The least damping (kg/s) of the hand holding the slide once its note is let go, reached as
 /// the muting finger lands: the hand stills the slide as the finger mutes the string (the
 /// default `Hand damping`). A slide on a hand without damping bobs on its spring for ever, and,
@@ -364,7 +371,7 @@ pub struct SlideVoice {
     /// The plucking finger along the string (m), within [`SLIDE_REACH`]: it mutes where it
     /// plucks, and a finger pressing the string dragged along it in one block would thump.
     right: Motion,
-    /// How far the muting finger has landed, from 0 (off) to 1 (at [`REST_FORCE`]).
+    /// How long the finger has been muting the string (s): it lands over [`MUTE_TIME`].
     mute: f64,
     /// Whether the slide follows the played key (else the `slide_position` setting), as the
     /// voice last rendered.
@@ -796,6 +803,9 @@ impl SlideVoice {
             self.silence();
             return;
         }
+        if self.mute >= MUTED_LIMIT {
+            self.shed(self.core.string().sample_rate());
+        }
         // A note from silence not rendered yet starts where the channel and the note ask for the
         // hand now: pressure and controllers arrive with the note-on or right after it.
         if self.fresh && self.hand_height(settings, channel) != self.hand.position {
@@ -832,8 +842,8 @@ impl SlideVoice {
             }
             None if self.key_down => 0.0,
             None => {
-                self.mute = (self.mute + span / MUTE_TIME).min(1.0);
-                let landed = 0.5 * (1.0 - (std::f64::consts::PI * self.mute).cos());
+                self.mute += span;
+                let landed = 0.5 * (1.0 - (std::f64::consts::PI * (self.mute / MUTE_TIME).min(1.0)).cos());
                 slide.damping = slide.damping.max(MUTE_HAND_DAMPING * landed);
                 REST_FORCE * landed
             }
