@@ -514,6 +514,7 @@ impl SlideVoice {
     pub fn play(&mut self, strike: Strike, settings: &Settings, channel: &ChannelState, legato: bool, now: u64) {
         self.strike = strike;
         self.key_down = true;
+        self.mute = 0.0;
         // A voice taken while it was being shed sounds again: its output turns back up over
         // `STEAL_TIME` from where the fade had got to, not in one step.
         let fs = self.core.string().sample_rate();
@@ -803,7 +804,8 @@ impl SlideVoice {
             self.silence();
             return;
         }
-        if self.mute >= MUTED_LIMIT {
+        // A note let go only: a note played since on this voice is not muted.
+        if !self.key_down && self.mute >= MUTED_LIMIT {
             self.shed(self.core.string().sample_rate());
         }
         // A note from silence not rendered yet starts where the channel and the note ask for the
