@@ -20,10 +20,11 @@
 //!   ([`Instrument::reset`]): what follows is a new instance's output, to the bit.
 //! - Per note (slide mode): CLAP and VST3 tuning expressions move the note's slide, CLAP pressure
 //!   expressions (nice-plug delivers them, like MIDI poly aftertouch and VST3 poly pressure, as
-//!   `PolyPressure`) are its poly pressure, CLAP brightness expressions are its own CC74, and
-//!   CLAP polyphonic modulation offsets its `slide` and `hand` ([`params`]). Notes are addressed by the host's voice id, else channel and key. Every
-//!   note's end goes back to the host as `VoiceTerminated` (CLAP note-end), which CLAP
-//!   polyphonic modulation needs to free its per-voice modulators.
+//!   `PolyPressure`) are its poly pressure, CLAP and VST3 brightness expressions are its own
+//!   CC74, and CLAP polyphonic modulation offsets its `slide` and `hand` ([`params`]). Notes are
+//!   addressed by the host's voice id, else channel and key. Every note's end goes back to the
+//!   host as `VoiceTerminated` (CLAP note-end), which CLAP polyphonic modulation needs to free
+//!   its per-voice modulators.
 //!
 //! - When the audio thread cannot keep up in real-time processing, the least audible voices fade
 //!   out ([`overload`]) rather than the host dropping buffers.

@@ -30,8 +30,8 @@
 //! key (legato notes glide, and letting go of the key played glides back to the latest key still
 //! held on its channel; the key played, struck again, plucks again) or the `slide_position`
 //! setting, plus pitch bend (as far as the channel's pitch-bend sensitivity or MPE zone says,
-//! `bend`); the hand height comes from the setting or from the mod wheel, channel pressure or
-//! poly pressure. Bend and pressure are kept per channel, so with MPE (a channel per note) every
+//! `bend`); the hand height comes from the setting or from the mod wheel, channel pressure,
+//! poly pressure or CC74 (or the note's brightness). Bend and pressure are kept per channel, so with MPE (a channel per note) every
 //! voice glides on its own.
 //!
 //! # Per-note expression
@@ -214,8 +214,9 @@ pub enum Event {
         down: bool,
     },
     /// Reset all controllers of a channel (CC121): its pitch bend to the centre, its channel
-    /// and poly pressures and the mod wheel to 0, its three pedals up (MIDI RP-015). The notes
-    /// play on.
+    /// and poly pressures and the mod wheel to 0, its three pedals up (MIDI RP-015). CC74, a
+    /// sound controller, keeps its value, as RP-015 asks, and so do the notes' brightness
+    /// expressions. The notes play on.
     ResetControllers {
         /// MIDI channel, 0..=15.
         channel: u8,
@@ -686,15 +687,12 @@ impl Instrument {
             Event::ResetControllers { channel } => {
                 let channel = channel & 15;
                 let c = usize::from(channel);
-                self.channels[c] = ChannelState::default();
+                self.channels[c] = ChannelState { timbre: self.channels[c].timbre, ..ChannelState::default() };
                 self.bends.reset_controllers(channel);
                 self.sustain[c] = 0.0;
                 self.soft[c] = false;
                 self.sostenuto(channel, false);
-                self.slides.iter_mut().filter(|v| v.strike.channel == channel).for_each(|v| {
-                    v.poly_pressure = 0.0;
-                    v.brightness = None;
-                });
+                self.slides.iter_mut().filter(|v| v.strike.channel == channel).for_each(|v| v.poly_pressure = 0.0);
                 self.pressed[c].iter_mut().for_each(|press| press.pressure = 0.0);
             }
             Event::RegisteredParameter { channel, controller, value } => {
