@@ -31,8 +31,8 @@
 //! held on its channel; the key played, struck again, plucks again) or the `slide_position`
 //! setting, plus pitch bend (as far as the channel's pitch-bend sensitivity or MPE zone says,
 //! `bend`); the hand height comes from the setting or from the mod wheel, channel pressure,
-//! poly pressure or CC74 (or the note's brightness). Bend and pressure are kept per channel, so with MPE (a channel per note) every
-//! voice glides on its own.
+//! poly pressure or CC74 (or the note's brightness). Bend and pressure are kept per channel, so
+//! with MPE (a channel per note) every voice glides on its own.
 //!
 //! # Per-note expression
 //!
@@ -41,8 +41,9 @@
 //! channel and key ([`NoteTarget`]). In slide mode a note's tuning moves its slide
 //! ([`Event::NoteTuning`]), its pressure is its poly pressure ([`Event::NotePressure`]), its
 //! brightness is its own CC74 ([`Event::NoteBrightness`]), and polyphonic modulation offsets its
-//! `slide_position` and `hand_height` ([`Event::NoteModulation`]); see [`SlideVoice`]. Piano mode ignores them: a struck string keeps its tuning. Whatever the
-//! mode, every note's end is queued for the host ([`Instrument::drain_ended`]).
+//! `slide_position` and `hand_height` ([`Event::NoteModulation`]); see [`SlideVoice`]. Piano
+//! mode ignores them: a struck string keeps its tuning. Whatever the mode, every note's end is
+//! queued for the host ([`Instrument::drain_ended`]).
 //!
 //! # Voices
 //!
