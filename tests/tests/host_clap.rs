@@ -972,25 +972,43 @@ fn clap_tuning_expression_moves_only_its_note() {
 /// notes alone.
 #[test]
 fn clap_pressure_expression_presses_only_its_note() {
-    let bundle = release_bundle();
-    let setup = [param("mode", 1.0), param("handsrc", 3.0)];
-    let samples = (0.5 * FS) as usize;
-    let render = |score: &[(usize, Ev)]| Plugin::at_48k(&bundle, &setup).render_blocks(score, samples, 512);
+    let render = slide_notes(3.0);
     let aftertouch = render(&[(0, on_id(3, 57, 2)), (0, Ev::Midi([0xA3, 57, 127]))]);
     let by_key = render(&[(0, on_id(3, 57, 2)), (0, Ev::Expr(Expression::Pressure, Target::key(3, 57), 1.0))]);
     let pressure = (0, Ev::Expr(Expression::Pressure, Target::id(2), 1.0));
     let by_id = render(&[(0, on_id(3, 57, 2)), pressure]);
     assert_eq!(bit_identical(&by_key, &aftertouch), None, "pressure by channel and key vs poly aftertouch");
     assert_eq!(bit_identical(&by_id, &aftertouch), None, "pressure by note id vs poly aftertouch");
+    presses_only_its_note(render, &by_id, pressure, "pressure");
+}
+
+/// Renders of 0.5 s in slide mode with `Hand height from` at option `hand_source`, in buffers of
+/// 512 samples, each on a new instance.
+fn slide_notes(hand_source: f64) -> impl Fn(&[(usize, Ev)]) -> Audio {
+    let bundle = release_bundle();
+    let setup = [param("mode", 1.0), param("handsrc", hand_source)];
+    move |score| Plugin::at_48k(&bundle, &setup).render_blocks(score, (0.5 * FS) as usize, 512)
+}
+
+/// Note 2 (key 57, note id 2, channel 4) pressed by `expression` renders as `pressed`: it sounds
+/// at its key (220 Hz), more than half its rms differs from the note unpressed, and with note 1
+/// (key 50, note id 1, channel 3) the pair is the sum of the notes alone, within 1e-6 of its
+/// peak: the expression reaches note 2 alone.
+fn presses_only_its_note(
+    render: impl Fn(&[(usize, Ev)]) -> Audio,
+    pressed: &Audio,
+    expression: (usize, Ev),
+    what: &str,
+) {
     let unpressed = render(&[(0, on_id(3, 57, 2))]);
     let note_1 = render(&[(0, on_id(2, 50, 1))]);
-    let both = render(&[(0, on_id(2, 50, 1)), (0, on_id(3, 57, 2)), pressure]);
-    let error = mixture_error(&both, &note_1, &by_id);
-    let change = relative_change(&unpressed, &by_id, 7_200);
-    println!("pair vs the notes alone: {error:.2e} of the peak; unpressed vs pressed: {change:.2} of the rms");
-    assert!(error < 1e-6, "the pressure on note 2 reached note 1 ({error:e} of the peak)");
-    assert!(change > 0.5, "pressure changed only {change} of the rms");
-    assert_pitch(slide_pitch_between(&by_id, 0.15, 0.5, 220.0), 220.0, "note 2 pressed by its pressure expression");
+    let both = render(&[(0, on_id(2, 50, 1)), (0, on_id(3, 57, 2)), expression]);
+    let error = mixture_error(&both, &note_1, pressed);
+    let change = relative_change(&unpressed, pressed, 7_200);
+    println!("{what}: pair vs the notes alone {error:.2e} of the peak; unpressed vs pressed {change:.2} of the rms");
+    assert!(error < 1e-6, "the {what} on note 2 reached note 1 ({error:e} of the peak)");
+    assert!(change > 0.5, "{what} changed only {change} of the rms");
+    assert_pitch(slide_pitch_between(pressed, 0.15, 0.5, 220.0), 220.0, &format!("note 2 pressed by its {what}"));
 }
 
 /// A CLAP brightness expression is its note's own CC74 (`Hand height from` = CC74): addressed by
@@ -998,23 +1016,12 @@ fn clap_pressure_expression_presses_only_its_note() {
 /// alone (the pair is the sum of the notes alone; more than half the rms of the note changes).
 #[test]
 fn clap_brightness_expression_presses_only_its_note() {
-    let bundle = release_bundle();
-    let setup = [param("mode", 1.0), param("handsrc", 4.0)];
-    let samples = (0.5 * FS) as usize;
-    let render = |score: &[(usize, Ev)]| Plugin::at_48k(&bundle, &setup).render_blocks(score, samples, 512);
+    let render = slide_notes(4.0);
     let cc74 = render(&[(0, on_id(3, 57, 2)), (0, Ev::Midi([0xB3, 74, 127]))]);
     let brightness = (0, Ev::Expr(Expression::Brightness, Target::id(2), 1.0));
     let by_id = render(&[(0, on_id(3, 57, 2)), brightness]);
     assert_eq!(bit_identical(&by_id, &cc74), None, "brightness by note id vs CC74");
-    let unpressed = render(&[(0, on_id(3, 57, 2))]);
-    let note_1 = render(&[(0, on_id(2, 50, 1))]);
-    let both = render(&[(0, on_id(2, 50, 1)), (0, on_id(3, 57, 2)), brightness]);
-    let error = mixture_error(&both, &note_1, &by_id);
-    let change = relative_change(&unpressed, &by_id, 7_200);
-    println!("pair vs the notes alone: {error:.2e} of the peak; without vs with brightness: {change:.2} of the rms");
-    assert!(error < 1e-6, "the brightness on note 2 reached note 1 ({error:e} of the peak)");
-    assert!(change > 0.5, "brightness changed only {change} of the rms");
-    assert_pitch(slide_pitch_between(&by_id, 0.15, 0.5, 220.0), 220.0, "note 2 pressed by its brightness");
+    presses_only_its_note(render, &by_id, brightness, "brightness");
 }
 
 /// CLAP polyphonic modulation of `Slide position` and `Hand height` offsets one note's value:
