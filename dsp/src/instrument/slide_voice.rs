@@ -839,7 +839,6 @@ impl SlideVoice {
         let right_force = match plucked {
             Some(t) => {
                 self.pluck = Some(t + len).filter(|&n| n < corners[1]);
-                self.mute = 0.0;
                 full * pluck_share(t + len, corners)
             }
             None if self.key_down => 0.0,
