@@ -835,6 +835,20 @@ fn a_note_on_a_slide_voice_being_shed_turns_it_back_up_without_a_step() {
     }
 }
 
+/// Slide mode with `method` on a hand of 1e6 N/m with a linear contact of κ = 1e13 N/m, in
+/// control blocks of 256 samples: where EXP's pressed contact is stiff beyond its stability.
+fn stiff_slide(method: Method) -> Settings {
+    Settings {
+        mode: Mode::Slide,
+        method,
+        slide_kappa: 1e13,
+        slide_alpha: 1.0,
+        hand_stiffness: 1e6,
+        block: 256,
+        ..Default::default()
+    }
+}
+
 /// Every slide note ends once let go, whatever the solver: D3 held 1 s and released, on a hand
 /// of 1e6 N/m with a linear contact of κ = 1e13 N/m, at 22.05 and 48 kHz with control blocks of
 /// 256 samples. With QSA and IMP the muted string falls silent by itself (measured 0.9 to 1.0 s
@@ -845,16 +859,7 @@ fn a_note_on_a_slide_voice_being_shed_turns_it_back_up_without_a_step() {
 fn every_slide_note_ends_once_let_go_whatever_the_solver() {
     for fs in [22_050.0, 48_000.0] {
         for method in [Method::Qsa, Method::Imp, Method::Exp] {
-            let settings = Settings {
-                mode: Mode::Slide,
-                method,
-                slide_kappa: 1e13,
-                slide_alpha: 1.0,
-                hand_stiffness: 1e6,
-                block: 256,
-                ..Default::default()
-            };
-            let mut p = Instrument::new(fs, 1, settings);
+            let mut p = Instrument::new(fs, 1, stiff_slide(method));
             let release = fs as usize;
             let score: Score = vec![
                 (0, Event::NoteOn { channel: 0, key: 50, velocity: 0.8 }),
@@ -886,15 +891,7 @@ fn every_slide_note_ends_once_let_go_whatever_the_solver() {
 #[test]
 fn a_note_on_a_voice_muted_past_the_limit_sounds() {
     let fs = 48_000.0;
-    let settings = Settings {
-        mode: Mode::Slide,
-        method: Method::Exp,
-        slide_kappa: 1e13,
-        slide_alpha: 1.0,
-        hand_stiffness: 1e6,
-        block: 256,
-        ..Default::default()
-    };
+    let settings = stiff_slide(Method::Exp);
     let release = fs as usize;
     let limit = release + (MUTED_LIMIT * fs) as usize;
     for offset in [-1024i64, -256, 0, 50, 100, 200, 300] {

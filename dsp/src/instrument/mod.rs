@@ -649,18 +649,9 @@ impl Instrument {
                 self.choke(note);
             }
             Event::PitchBend { channel, value } => self.channels[usize::from(channel & 15)].bend = unit(value, -1.0),
-            Event::ChannelPressure { channel, value } => {
-                let value = unit(value, 0.0);
-                self.bends.spoken_for(channel).for_each(|c| self.channels[c].pressure = value);
-            }
-            Event::ModWheel { channel, value } => {
-                let value = unit(value, 0.0);
-                self.bends.spoken_for(channel).for_each(|c| self.channels[c].mod_wheel = value);
-            }
-            Event::Timbre { channel, value } => {
-                let value = unit(value, 0.0);
-                self.bends.spoken_for(channel).for_each(|c| self.channels[c].timbre = value);
-            }
+            Event::ChannelPressure { channel, value } => self.set_controller(channel, value, |c| &mut c.pressure),
+            Event::ModWheel { channel, value } => self.set_controller(channel, value, |c| &mut c.mod_wheel),
+            Event::Timbre { channel, value } => self.set_controller(channel, value, |c| &mut c.timbre),
             Event::PolyPressure { channel, key, value } => {
                 let value = unit(value, 0.0);
                 self.pressed[usize::from(channel & 15)][usize::from(key & 127)].pressure = value;
@@ -816,6 +807,13 @@ impl Instrument {
                 }
             }
         }
+    }
+
+    /// Set a channel controller (0..=1, NaN is 0) that `field` picks, on `channel` and on the
+    /// channels it speaks for (an MPE zone's master channel speaks for its members).
+    fn set_controller(&mut self, channel: u8, value: f32, field: fn(&mut ChannelState) -> &mut f64) {
+        let value = unit(value, 0.0);
+        self.bends.spoken_for(channel).for_each(|c| *field(&mut self.channels[c]) = value);
     }
 
     /// Apply `f` (with the latest settings, those a note struck now takes) to the slide voices
