@@ -169,6 +169,67 @@ impl Ramp {
     }
 }
 
+/// A parabola across a span, from `from` to `to`, passing `sag` below the straight line between
+/// them halfway along: `from + (to − from)·a − 4·sag·a(1 − a)` a fraction `a` of the way.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Bow {
+    /// Value at the span's start.
+    pub from: f64,
+    /// Value at its end.
+    pub to: f64,
+    /// How far below the straight line it passes halfway along.
+    pub sag: f64,
+}
+
+impl Bow {
+    /// Standing at `value`.
+    pub fn flat(value: f64) -> Self {
+        Self { from: value, to: value, sag: 0.0 }
+    }
+
+    /// The value a fraction `a` of the way along.
+    #[inline]
+    pub fn at(&self, a: f64) -> f64 {
+        self.from + (self.to - self.from) * a - 4.0 * self.sag * a * (1.0 - a)
+    }
+
+    /// The sag of a part of it a fraction `share` of its length long: the part has the same
+    /// curvature, so `sag·share²`.
+    #[inline]
+    pub fn sag_of_part(&self, share: f64) -> f64 {
+        self.sag * share * share
+    }
+}
+
+/// A ramp across one block bowed into a parabola: value `start + slope·k − bow·k·(N − k)` at
+/// sample `k` of a block of `N` samples, which passes `sag` below the straight ramp at mid-block.
+/// Unbowed (`sag = 0`) it is the [`Ramp`] to the bit.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Bowed {
+    ramp: Ramp,
+    /// `4·sag/N²` (per sample²).
+    bow: f64,
+    /// The block's length `N` (samples).
+    len: f64,
+}
+
+impl Bowed {
+    /// A parabola from `from` (at the block's first sample) to `to` (at the next block's first
+    /// sample) over `len` samples, `sag` below the straight line between them at mid-block.
+    #[inline]
+    pub fn new(from: f64, to: f64, len: usize, sag: f64) -> Self {
+        let n = len as f64;
+        Self { ramp: Ramp::new(from, to, len), bow: 4.0 * sag / (n * n), len: n }
+    }
+
+    /// Value at sample `k` of the block (`k = len` gives the end value).
+    #[inline]
+    pub fn at(&self, k: usize) -> f64 {
+        let k = k as f64;
+        self.ramp.start + self.ramp.slope * k - self.bow * k * (self.len - k)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -203,6 +264,33 @@ mod tests {
             let ramp = Ramp::new(from, to, 1);
             assert_eq!(ramp.at(1).to_bits(), (from + (to - from) / 1.0 * 1.0).to_bits());
             assert_eq!(ramp.at(0), from);
+        }
+    }
+
+    /// Unbowed, a bowed ramp is the straight one to the bit; bowed, it keeps its ends, passes
+    /// `sag` below the line at mid-block, and its slope changes by the same amount every sample
+    /// (a constant second difference `2·bow`).
+    #[test]
+    fn a_bowed_ramp_keeps_its_ends_and_sags_by_its_sag_mid_block() {
+        for (from, to, len) in [(0.1, 0.3, 1), (-1.5e-3, 3e-3, 64), (0.2, 0.2, 7), (2e-3, -1.5e-3, 256)] {
+            let (ramp, flat) = (Ramp::new(from, to, len), Bowed::new(from, to, len, 0.0));
+            for k in 0..=len {
+                assert_eq!(flat.at(k).to_bits(), ramp.at(k).to_bits(), "({from}, {to}, {len}) at {k}");
+            }
+            let sag = 1e-4;
+            let bowed = Bowed::new(from, to, len, sag);
+            let scale = from.abs().max(to.abs()).max(sag);
+            assert!((bowed.at(0) - from).abs() <= 4.0 * f64::EPSILON * scale);
+            assert!((bowed.at(len) - to).abs() <= 4.0 * f64::EPSILON * scale * len as f64);
+            if len % 2 == 0 {
+                let middle = ramp.at(len / 2) - bowed.at(len / 2);
+                assert!((middle - sag).abs() <= 8.0 * f64::EPSILON * scale, "({from}, {to}, {len}): {middle}");
+            }
+            let second = 8.0 * sag / (len * len) as f64;
+            for k in 1..len {
+                let d2 = bowed.at(k + 1) - 2.0 * bowed.at(k) + bowed.at(k - 1);
+                assert!((d2 - second).abs() <= 16.0 * f64::EPSILON * scale, "({from}, {to}, {len}) at {k}: {d2}");
+            }
         }
     }
 
