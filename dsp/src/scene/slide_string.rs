@@ -30,7 +30,8 @@
 //!
 //! Slide position `x_o`, hand height `w_H`, finger positions and finger forces come from a
 //! [`ControlSource`] sampled at block boundaries every `N_b` samples and moved linearly inside
-//! the block: the hand height and finger forces by ramps, and every contact vector by
+//! the block: the hand height and finger forces by ramps (the hand's bent into a parabola where
+//! the instrument asks, [`SlideCore::bow_hand`]), and every contact vector by
 //! interpolating between the exact vectors at the block's two ends,
 //! `ĥ_ζ = (1 − a) h_ζ(x_ζ^start) + a h_ζ(x_ζ^end)` at fraction `a = k/N_b` of the block. A step
 //! then projects `z̃` on both end vectors and spreads each force along both, and
@@ -46,7 +47,8 @@
 //! is heard at multiples of `fs/N_b` (a vibrato's buzz). So the instrument's voices
 //! ([`SlideCore::cut_blocks`]) cut a block whose touching contacts travel further than
 //! [`PIECE_TURN`] allows the highest mode into equal pieces (at most [`MAX_PIECES`]), each planned
-//! as a block of its own from the controls at its ends (which lie on the block's ramps): the
+//! as a block of its own from the controls at its ends (which lie on the block's ramps, the
+//! hand's on its parabola): the
 //! vectors are then made at the pieces' ends, and the scheme, and its energy balance, is the same
 //! as a shorter block's. The scenes keep the seed's blocks whole (§6.7), as the report's
 //! control-block study measures them.
@@ -107,7 +109,7 @@
 
 use crate::body::{BodyParams, RadiatingMode, Side};
 use crate::contact::{ContactProblem, ContactSolution, ContactSolver};
-use crate::control::{ControlSource, Ramp};
+use crate::control::{Bow, Bowed, ControlSource, Ramp};
 use crate::exciter::{FingerParams, HandMotion, SlideHand, SlideParams, finger};
 use crate::scene::{Frame, OutputKind, Pickup, Scene};
 use crate::string::{GramVector, ModalBank, ModalString, StringEnergy, StringParams};
@@ -718,7 +720,12 @@ pub struct SlideCore {
     /// Controls at the start of the current block and at the start of the next.
     start: SlideControls,
     target: SlideControls,
-    hand: Ramp,
+    hand: Bowed,
+    /// The hand's path across the current whole block: from its height at the block's start to
+    /// its height at the end, bowed as [`bow_hand`](Self::bow_hand) asked.
+    hand_bow: Bow,
+    /// The sag (m) of the hand's path across the next block ([`bow_hand`](Self::bow_hand)).
+    next_hand_sag: f64,
     left_force: Ramp,
     right_force: Ramp,
     /// `w_H^{n−1}` (m).
@@ -784,7 +791,9 @@ impl SlideCore {
             k: 0,
             start,
             target,
-            hand: Ramp::new(start.hand_height, target.hand_height, block),
+            hand: Bowed::new(start.hand_height, target.hand_height, block, 0.0),
+            hand_bow: Bow { from: start.hand_height, to: target.hand_height, sag: 0.0 },
+            next_hand_sag: 0.0,
             left_force: Ramp::new(start.left_force, target.left_force, block),
             right_force: Ramp::new(start.right_force, target.right_force, block),
             hand_prev: start.hand_height,
@@ -829,7 +838,8 @@ impl SlideCore {
         self.sho.rest(controls.hand_height);
         self.start = controls;
         self.target = controls;
-        self.hand = Ramp::new(controls.hand_height, controls.hand_height, self.block);
+        self.hand = Bowed::new(controls.hand_height, controls.hand_height, self.block, 0.0);
+        (self.hand_bow, self.next_hand_sag) = (Bow::flat(controls.hand_height), 0.0);
         self.left_force = Ramp::new(controls.left_force, controls.left_force, self.block);
         self.right_force = Ramp::new(controls.right_force, controls.right_force, self.block);
         self.hand_prev = controls.hand_height;
@@ -1052,6 +1062,16 @@ impl SlideCore {
     /// whole, as made.
     pub fn cut_blocks(&mut self, turn: f64) {
         self.piece_turn = turn;
+    }
+
+    /// Bow the hand's path across the next control block (the one [`start_block`](Self::start_block)
+    /// begins, or else the next the controls begin) into a parabola passing `sag` (m) below the
+    /// straight line between the block's end heights halfway along; the block after is straight
+    /// again unless bowed anew. Pieces of the block ([`cut_blocks`](Self::cut_blocks)) follow the
+    /// parabola. The instrument's voices pull the hand along a path whose speed ramps within each
+    /// block rather than jumping at its boundaries (`instrument::slide_voice::HandPath`).
+    pub fn bow_hand(&mut self, sag: f64) {
+        self.next_hand_sag = sag;
     }
 
     /// Couple the string's end to the attached body (`on`) or hold it still, and bring string,
@@ -1277,6 +1297,8 @@ impl SlideCore {
     /// first.
     fn begin_block<C: ControlSource<SlideControls>>(&mut self, controls: &mut C) {
         let (start, end, len) = (self.target, controls.at(self.n + self.block as u64), self.block);
+        let sag = std::mem::take(&mut self.next_hand_sag);
+        self.hand_bow = Bow { from: start.hand_height, to: end.hand_height, sag };
         // The slide always touches; a finger only while it presses at either end of the block.
         let touching = [
             true,
@@ -1293,7 +1315,8 @@ impl SlideCore {
     }
 
     /// Begin the block's next piece: steps `len·j/m` to `len·(j+1)/m` of the block, from where
-    /// the last one ended to the controls there (linear across the block, as the ramps are),
+    /// the last one ended to the controls there (linear across the block, as the ramps are, but
+    /// for the hand, which keeps to the block's parabola),
     /// and plan its vectors.
     fn begin_piece(&mut self) {
         let (j, m, len) = (self.piece, self.pieces, self.whole_len);
@@ -1306,8 +1329,13 @@ impl SlideCore {
         };
         self.block = to - from;
         self.inv_block = 1.0 / self.block as f64;
+        let bow = &self.hand_bow;
+        if bow.sag != 0.0 && j + 1 < m {
+            self.target.hand_height = bow.at(to as f64 / len as f64);
+        }
+        let sag = bow.sag_of_part(self.block as f64 / len as f64);
         let (s, t, len) = (&self.start, &self.target, self.block);
-        self.hand = Ramp::new(s.hand_height, t.hand_height, len);
+        self.hand = Bowed::new(s.hand_height, t.hand_height, len, sag);
         self.left_force = Ramp::new(s.left_force, t.left_force, len);
         self.right_force = Ramp::new(s.right_force, t.right_force, len);
         self.plan_block();
