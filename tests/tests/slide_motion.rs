@@ -185,6 +185,51 @@ fn a_slide_vibrato_adds_no_buzz_at_the_block_rate() {
     assert!(excess <= BUZZ_DB, "{body:?}: {excess:+.2} dB at {at:.0} Hz");
 }
 
+/// A hand wavering under a pressed slide (pressure under a player's fingers, drawn as automation
+/// of `Hand height`) adds no buzz at the block rate: the slide pressed 1 mm in on the open A2, the
+/// hand moving ±0.5 mm at 6 Hz from 0.5 s, at control blocks of 64 and 256 samples on both
+/// guitars. The hand pulls the slide along a path whose speed ramps within each block
+/// (`HandPath`), so the force the hand's damping passes on never steps; in no band at a multiple
+/// of `fs/N_b` does the second second's output exceed the per-sample render's by 1 dB (measured
+/// at most 0.02 dB). Along straight ramps, its speed stepping at each block's end, the acoustic
+/// guitar buzzed 8.4 dB over it at 172 Hz with blocks of 256 samples, the electric one 1.3 dB.
+#[test]
+fn a_hand_wavering_under_a_pressed_slide_adds_no_buzz_at_the_block_rate() {
+    const BUZZ_DB: f64 = 1.0;
+    for body in [SlideBody::Pickup, SlideBody::Acoustic] {
+        let render = |block: usize| {
+            let base = Settings {
+                mode: Mode::Slide,
+                follow_key: false,
+                slide_position: 5.0,
+                hand_height: -1e-3,
+                block,
+                slide_body: body,
+                ..Default::default()
+            };
+            let mut instrument = Instrument::new(FS, 2, base);
+            instrument.handle(Event::NoteOn { channel: 0, key: 45, velocity: 0.8 });
+            let n = (2.0 * FS) as usize;
+            let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
+            for t in (0..n).step_by(block) {
+                let s = t as f64 / FS;
+                let waver = if s >= 0.5 { 0.5e-3 * (std::f64::consts::TAU * 6.0 * (s - 0.5)).sin() } else { 0.0 };
+                instrument.set_settings(&Settings { hand_height: -1e-3 + waver, ..base });
+                let m = block.min(n - t);
+                instrument.process(&mut left[t..t + m], &mut right[t..t + m]);
+            }
+            assert_eq!(instrument.guard_trips(), 0, "the guard never fires");
+            left[FS as usize..].iter().map(|&v| f64::from(v)).collect::<Vec<f64>>()
+        };
+        let reference = render(1);
+        for block in [64, 256] {
+            let (excess, at) = worst_band_excess(&render(block), &reference, FS, FS / block as f64, 20_000.0);
+            println!("{body:?}, block {block}: worst block-rate band {excess:+.2} dB at {at:.0} Hz");
+            assert!(excess <= BUZZ_DB, "{body:?}, block {block}: {excess:+.2} dB at {at:.0} Hz");
+        }
+    }
+}
+
 /// The worst `|H + losses − work − H0|` over the run, relative to the largest energy.
 fn balance_drift(frames: &[Frame], e0: f64) -> f64 {
     let scale = frames.iter().fold(e0.abs(), |m, f| m.max(f.energy.abs()));
