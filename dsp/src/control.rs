@@ -201,16 +201,17 @@ impl Bow {
     }
 }
 
-/// A ramp across one block bowed into a parabola: value `start + slope·k − bow·k·(N − k)` at
-/// sample `k` of a block of `N` samples, which passes `sag` below the straight ramp at mid-block.
-/// Unbowed (`sag = 0`) it is the [`Ramp`] to the bit.
+/// A ramp across one block bowed into a parabola: value `start + k·(slope + curve·k)` at sample
+/// `k` of a block of `N` samples, passing `sag` below the straight ramp at mid-block
+/// (`curve = 4·sag/N²`, and `slope` the straight ramp's less `curve·N`). Unbowed (`sag = 0`) it
+/// is the [`Ramp`] to the bit.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Bowed {
-    ramp: Ramp,
-    /// `4·sag/N²` (per sample²).
-    bow: f64,
-    /// The block's length `N` (samples).
-    len: f64,
+    start: f64,
+    /// Per sample.
+    slope: f64,
+    /// Per sample².
+    curve: f64,
 }
 
 impl Bowed {
@@ -219,14 +220,15 @@ impl Bowed {
     #[inline]
     pub fn new(from: f64, to: f64, len: usize, sag: f64) -> Self {
         let n = len as f64;
-        Self { ramp: Ramp::new(from, to, len), bow: 4.0 * sag / (n * n), len: n }
+        let (ramp, curve) = (Ramp::new(from, to, len), 4.0 * sag / (n * n));
+        Self { start: ramp.start, slope: ramp.slope - curve * n, curve }
     }
 
     /// Value at sample `k` of the block (`k = len` gives the end value).
     #[inline]
     pub fn at(&self, k: usize) -> f64 {
         let k = k as f64;
-        self.ramp.start + self.ramp.slope * k - self.bow * k * (self.len - k)
+        self.start + k * (self.slope + self.curve * k)
     }
 }
 
