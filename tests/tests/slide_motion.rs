@@ -164,25 +164,33 @@ fn a_slide_vibrato_adds_no_buzz_at_the_block_rate() {
             slide_body: body,
             ..Default::default()
         };
-        let mut instrument = Instrument::new(FS, 2, base);
-        instrument.handle(Event::NoteOn { channel: 0, key: 45, velocity: 0.8 });
-        let n = (2.0 * FS) as usize;
-        let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
-        for t in (0..n).step_by(block) {
-            let s = t as f64 / FS;
+        open_a2_with_settings_every_block(base, |s| {
             let vibrato = if s >= 0.5 { 0.3 * (2.0 * std::f64::consts::PI * 8.0 * (s - 0.5)).sin() } else { 0.0 };
-            instrument.set_settings(&Settings { slide_position: 5.0 + vibrato, ..base });
-            let m = block.min(n - t);
-            instrument.process(&mut left[t..t + m], &mut right[t..t + m]);
-        }
-        assert_eq!(instrument.guard_trips(), 0, "the guard never fires");
-        left[FS as usize..].iter().map(|&v| f64::from(v)).collect::<Vec<f64>>()
+            Settings { slide_position: 5.0 + vibrato, ..base }
+        })
     };
     let body = SlideBody::Pickup;
     let reference = render(body, 1);
     let (excess, at) = worst_band_excess(&render(body, 64), &reference, FS, FS / 64.0, 20_000.0);
     println!("{body:?}: worst block-rate band {excess:+.2} dB at {at:.0} Hz");
     assert!(excess <= BUZZ_DB, "{body:?}: {excess:+.2} dB at {at:.0} Hz");
+}
+
+/// The open A2 plucked at velocity 0.8 on an instrument made with `base`, for 2 s, its settings
+/// set to `at(t)` (`t` in seconds) at the start of every control block; the left channel's
+/// second second.
+fn open_a2_with_settings_every_block(base: Settings, at: impl Fn(f64) -> Settings) -> Vec<f64> {
+    let mut instrument = Instrument::new(FS, 2, base);
+    instrument.handle(Event::NoteOn { channel: 0, key: 45, velocity: 0.8 });
+    let n = (2.0 * FS) as usize;
+    let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
+    for t in (0..n).step_by(base.block) {
+        instrument.set_settings(&at(t as f64 / FS));
+        let m = base.block.min(n - t);
+        instrument.process(&mut left[t..t + m], &mut right[t..t + m]);
+    }
+    assert_eq!(instrument.guard_trips(), 0, "the guard never fires");
+    left[FS as usize..].iter().map(|&v| f64::from(v)).collect()
 }
 
 /// A hand wavering under a pressed slide (pressure under a player's fingers, drawn as automation
@@ -207,19 +215,10 @@ fn a_hand_wavering_under_a_pressed_slide_adds_no_buzz_at_the_block_rate() {
                 slide_body: body,
                 ..Default::default()
             };
-            let mut instrument = Instrument::new(FS, 2, base);
-            instrument.handle(Event::NoteOn { channel: 0, key: 45, velocity: 0.8 });
-            let n = (2.0 * FS) as usize;
-            let (mut left, mut right) = (vec![0.0f32; n], vec![0.0f32; n]);
-            for t in (0..n).step_by(block) {
-                let s = t as f64 / FS;
+            open_a2_with_settings_every_block(base, |s| {
                 let waver = if s >= 0.5 { 0.5e-3 * (std::f64::consts::TAU * 6.0 * (s - 0.5)).sin() } else { 0.0 };
-                instrument.set_settings(&Settings { hand_height: -1e-3 + waver, ..base });
-                let m = block.min(n - t);
-                instrument.process(&mut left[t..t + m], &mut right[t..t + m]);
-            }
-            assert_eq!(instrument.guard_trips(), 0, "the guard never fires");
-            left[FS as usize..].iter().map(|&v| f64::from(v)).collect::<Vec<f64>>()
+                Settings { hand_height: -1e-3 + waver, ..base }
+            })
         };
         let reference = render(1);
         for block in [64, 256] {
