@@ -316,9 +316,9 @@ impl HandPath {
     /// path across the block. The average, from `h_a` at speed `u` with the plan's speed `v` and
     /// midpoint `m` over the block, ends at `h_a + T(u + v)/2`, which is `m` while the blocks
     /// are equal; what it misses by goes to the offset, which then moves back towards none within
-    /// `reach` (the plan's, so that it lands no faster than the plan does). The
-    /// path is the average's parabola, `(v − u)T/8` below the straight line between its ends
-    /// halfway along, plus the offset's straight move.
+    /// `reach` (the plan's: near the string, the landing's limits). The path is the average's
+    /// parabola, `(v − u)T/8` below the straight line between its ends halfway along, plus the
+    /// offset's straight move.
     pub fn follow(&mut self, planned: f64, span: f64, reach: Reach) -> Bow {
         let speed = (planned - self.planned) / span;
         let middle = 0.5 * (self.planned + planned);

@@ -48,9 +48,8 @@
 //! ([`SlideCore::cut_blocks`]) cut a block whose touching contacts travel further than
 //! [`PIECE_TURN`] allows the highest mode into equal pieces (at most [`MAX_PIECES`]), each planned
 //! as a block of its own from the controls at its ends (which lie on the block's ramps, the
-//! hand's on its parabola): the
-//! vectors are then made at the pieces' ends, and the scheme, and its energy balance, is the same
-//! as a shorter block's. The scenes keep the seed's blocks whole (§6.7), as the report's
+//! hand's on its parabola): the vectors are then made at the pieces' ends, and the scheme, and
+//! its energy balance, is the same as a shorter block's. The scenes keep the seed's blocks whole (§6.7), as the report's
 //! control-block study measures them.
 //!
 //! A force meets mode `i` through the scheme's static stiffness `K̂_i`, which exceeds the
