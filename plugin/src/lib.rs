@@ -15,14 +15,16 @@
 //!   (una corda), CC1 mod wheel, CC74 (MPE's third dimension), CC120 all sound off, CC121 reset
 //!   all controllers, CC123 all notes off; pitch bend moves the slide, as far as the channel's
 //!   pitch-bend sensitivity (RPN 0) or MPE zone (RPN 6) says; the mod wheel, channel and poly
-//!   pressure and CC74 can press it (per channel, so MPE works).
+//!   pressure and CC74 can press it (per channel, so MPE works); in piano mode CC74 voices the
+//!   felt of the hammers struck on its channel.
 //! - `reset` (each activation and start of processing) returns the engine to how it was made
 //!   ([`Instrument::reset`]): what follows is a new instance's output, to the bit.
 //! - Per note (slide mode): CLAP and VST3 tuning expressions move the note's slide, CLAP pressure
 //!   expressions (nice-plug delivers them, like MIDI poly aftertouch and VST3 poly pressure, as
 //!   `PolyPressure`) are its poly pressure, CLAP and VST3 brightness expressions are its own
-//!   CC74, and CLAP polyphonic modulation offsets its `slide` and `hand` ([`params`]). Notes are
-//!   addressed by the host's voice id, else channel and key. Every note's end goes back to the
+//!   CC74 (in piano mode too, sent with the note-on), and CLAP polyphonic modulation offsets its
+//!   `slide` and `hand` ([`params`]). Notes are addressed by the host's voice id, else channel
+//!   and key. Every note's end goes back to the
 //!   host as `VoiceTerminated` (CLAP note-end), which CLAP polyphonic modulation needs to free
 //!   its per-voice modulators.
 //!

@@ -1024,6 +1024,26 @@ fn clap_brightness_expression_presses_only_its_note() {
     presses_only_its_note(render, &by_id, brightness, "brightness");
 }
 
+/// In piano mode a CLAP brightness expression sent with its note-on voices that note's hammer
+/// felt: by note id it renders exactly as MIDI CC74 at the same value sent on the note's channel
+/// before the note-on, and at 1.0 (four times as stiff a felt) more than a tenth of the note's rms
+/// differs from the note without it. Sent 64 samples later, once the hammer is thrown, it changes
+/// nothing.
+#[test]
+fn clap_brightness_expression_voices_a_piano_notes_felt_at_its_note_on() {
+    let bundle = release_bundle();
+    let render = |score: &[(usize, Ev)]| Plugin::at_48k(&bundle, &[]).render_blocks(score, (0.5 * FS) as usize, 512);
+    let cc74 = render(&[(0, Ev::Midi([0xB3, 74, 127])), (0, on_id(3, 60, 2))]);
+    let by_id = render(&[(0, on_id(3, 60, 2)), (0, Ev::Expr(Expression::Brightness, Target::id(2), 1.0))]);
+    let plain = render(&[(0, on_id(3, 60, 2))]);
+    let late = render(&[(0, on_id(3, 60, 2)), (64, Ev::Expr(Expression::Brightness, Target::id(2), 1.0))]);
+    let change = relative_change(&plain, &by_id, 0);
+    println!("piano brightness: {change:.2} of the rms changed");
+    assert_eq!(bit_identical(&by_id, &cc74), None, "brightness by note id vs CC74 before the note-on");
+    assert!(change > 0.1, "the brightness changed only {change} of the rms");
+    assert_eq!(bit_identical(&late, &plain), None, "a brightness after the strike changed the note");
+}
+
 /// CLAP polyphonic modulation of `Slide position` and `Hand height` offsets one note's value:
 /// +3 semitones on a slide at 6 (not following keys) renders exactly as the parameter at 9 for
 /// everyone, and sounds there; +6 mm on the hand at −1.5 mm renders exactly as the parameter at

@@ -408,7 +408,7 @@ fn strings_alone(key: u8, strikes: &[(usize, f64)], samples: usize) -> Vec<f32> 
     let mut out = vec![0.0; samples];
     for (t, block) in out.chunks_mut(64).enumerate() {
         for &(at, velocity) in strikes.iter().filter(|s| s.0 == t * 64) {
-            voice.play(Strike { channel: 0, key, velocity, shifted: false }, &settings, at as u64);
+            voice.play(Strike { channel: 0, key, velocity, shifted: false, timbre: None }, &settings, at as u64);
         }
         voice.begin_block(&settings, Dampers::default(), 64, (t * 64) as u64, None, &mut 0);
         voice.render(block);

@@ -1,7 +1,8 @@
-//! Per-note expression in the engine (slide mode): a note's tuning, pressure, brightness and
-//! polyphonic modulation offsets reach that note alone, addressed by the host's voice id or by channel and
-//! key; host garbage (NaN, infinities) is clamped; ended notes are reported once each; host
-//! buffer sizes change nothing.
+//! Per-note expression in the engine. In slide mode a note's tuning, pressure, brightness and
+//! polyphonic modulation offsets reach that note alone, addressed by the host's voice id or by
+//! channel and key; in piano mode its CC74 or brightness voices its hammer's felt. Host garbage
+//! (NaN, infinities) is clamped; ended notes are reported once each; host buffer sizes change
+//! nothing.
 //!
 //! References come from the engine itself without per-note events: a note whose tuning or offset
 //! arrives with its note-on must render exactly as the note the offset describes (another key, or
@@ -12,6 +13,7 @@
 use qsa_dsp::instrument::{Event, HandSource, Instrument, Mode, NoteParam, NoteTarget, Settings};
 use qsa_dsp::preset::key_frequency;
 use qsa_tests::fundamental;
+use rustfft::{FftPlanner, num_complex::Complex};
 
 const FS: f64 = 48_000.0;
 
@@ -345,4 +347,108 @@ fn ended_notes_are_reported_once() {
     p.handle(Event::AllSoundOff);
     let silenced: Vec<_> = p.drain_ended().map(|e| e.note.voice).collect();
     assert_eq!(silenced, [Some(8)]);
+}
+
+// Piano mode: a note's CC74 voices its hammer's felt.
+
+/// A piano of 2 voices under `settings`.
+fn piano(settings: Settings) -> Instrument {
+    Instrument::new(FS, 2, Settings { mode: Mode::Piano, ..settings })
+}
+
+/// Share of `x`'s power above `from` (Hz), in dB, Hann-windowed.
+fn upper_share_db(x: &[f32], from: f64) -> f64 {
+    let n = x.len();
+    let hann = |i: usize| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / n as f64).cos();
+    let mut buffer: Vec<Complex<f64>> =
+        x.iter().enumerate().map(|(i, &v)| Complex::new(f64::from(v) * hann(i), 0.0)).collect();
+    FftPlanner::new().plan_fft_forward(n).process(&mut buffer);
+    let (mut upper, mut total) = (0.0, 0.0);
+    for (k, c) in buffer.iter().take(n / 2 + 1).enumerate() {
+        if k as f64 * FS / n as f64 >= from {
+            upper += c.norm_sqr();
+        }
+        total += c.norm_sqr();
+    }
+    10.0 * (upper / total).log10()
+}
+
+/// CC74 on a piano note's channel before its note-on voices the hammer's felt exactly as the
+/// `Hardness` setting does: CC 0, 32, 64, 96 and 127 sound as the hardness `2^((CC − 64)/32)`
+/// (a quarter, a half, 1, 2 and 3.9) with no CC74, to f32 rounding of the output. The harder felt
+/// is brighter: the share of C4's power above 2 kHz over its first 0.3 s rises by more than 2 dB
+/// with each doubling of the felt's stiffness (measured 2.7 to 7.2 dB, 17.7 dB from CC 0 to 127:
+/// a shorter contact reaches higher partials). A key struck on a
+/// channel that never had CC74 keeps the setting; a hardness near the top of its range, pushed
+/// further by CC74, stops at the range's top (10).
+#[test]
+fn a_piano_notes_cc74_voices_its_hammers_felt_as_the_hardness_setting_does() {
+    let strike = |settings: Settings, score: Score| play(&mut piano(settings), &score, 14_400, 256);
+    let note = (0, Event::NoteOn { channel: 3, key: 60, velocity: 0.5 });
+    let cc74 = |value: f32| (0, Event::Timbre { channel: 3, value });
+    let plain = strike(Settings::default(), vec![note]);
+    let mut uppers = Vec::new();
+    for cc in [0u8, 32, 64, 96, 127] {
+        let voiced = strike(Settings::default(), vec![cc74(f32::from(cc) / 127.0), note]);
+        let hardness = 2f64.powf((f64::from(cc) - 64.0) / 32.0);
+        let reference = strike(Settings { hardness, ..Default::default() }, vec![note]);
+        let error = mixture_error(&voiced, &reference, &vec![0.0; reference.len()]);
+        uppers.push(upper_share_db(&voiced, 2_000.0));
+        println!(
+            "CC74 {cc:3}: hardness {hardness:.3}, error {error:.1e}, above 2 kHz {:.1} dB",
+            uppers.last().unwrap()
+        );
+        assert!(error < 1e-6, "CC74 {cc} differs from the hardness {hardness} by {error:.1e} of the peak");
+        if cc != 64 {
+            assert!(mixture_error(&voiced, &plain, &vec![0.0; plain.len()]) > 1e-3, "CC74 {cc} changed nothing");
+        }
+    }
+    assert!(uppers.windows(2).all(|w| w[1] > w[0] + 2.0), "the upper partials do not rise with CC74: {uppers:?}");
+    let other_channel = strike(Settings::default(), vec![(0, Event::Timbre { channel: 4, value: 1.0 }), note]);
+    assert!(same(&other_channel, &plain), "another channel's CC74 reached the note");
+    let top = Settings { hardness: 8.0, ..Default::default() };
+    let clamped = strike(top, vec![cc74(1.0), note]);
+    let at_top = strike(Settings { hardness: 10.0, ..Default::default() }, vec![note]);
+    assert!(mixture_error(&clamped, &at_top, &vec![0.0; at_top.len()]) < 1e-6, "hardness 8 at CC74 127 is not 10");
+}
+
+/// A piano note's brightness sent with its note-on (the same sample, as hosts send a note's
+/// expressions) voices its felt exactly as its channel's CC74 before the note-on would, on a free
+/// voice, on a voice struck again and on a voice stolen (the strike waiting for the steal's
+/// fade). Sent a sample later, once the hammer has been thrown, or CC74 sent then, it leaves the
+/// note as it was; the channel's next note takes the CC74. Host buffers of any size give the same
+/// samples.
+#[test]
+fn a_piano_notes_brightness_at_its_note_on_voices_its_felt_and_later_changes_nothing() {
+    let strike = |score: &Score, chunk: usize| play(&mut piano(Settings::default()), score, 9_600, chunk);
+    let on_at = |at: usize, key: u8, voice: i32| (at, Event::NoteOnWithId { channel: 3, key, velocity: 0.5, voice });
+    let bright = |at: usize, voice: i32| (at, Event::NoteBrightness { note: NoteTarget::voice(voice), value: 0.9 });
+    let cc74 = |at: usize| (at, Event::Timbre { channel: 3, value: 0.9 });
+    // A free voice; the same key struck again; a third key stealing one of the two voices.
+    let scores: [(Score, Score); 3] = [
+        (vec![on_at(0, 60, 1), bright(0, 1)], vec![cc74(0), on_at(0, 60, 1)]),
+        (
+            vec![on_at(0, 60, 1), on_at(2_400, 60, 2), bright(2_400, 2)],
+            vec![on_at(0, 60, 1), cc74(2_400), on_at(2_400, 60, 2)],
+        ),
+        (
+            vec![on_at(0, 60, 1), on_at(10, 64, 2), on_at(2_400, 67, 3), bright(2_400, 3)],
+            vec![on_at(0, 60, 1), on_at(10, 64, 2), cc74(2_400), on_at(2_400, 67, 3)],
+        ),
+    ];
+    for (case, (expression, midi)) in scores.iter().enumerate() {
+        let reference = strike(midi, 256);
+        for chunk in [1, 7, 64, 4096] {
+            assert!(same(&strike(expression, chunk), &reference), "case {case}, chunks of {chunk}: not its CC74");
+        }
+        let plain: Score =
+            expression.iter().copied().filter(|(_, e)| !matches!(e, Event::NoteBrightness { .. })).collect();
+        assert!(!same(&reference, &strike(&plain, 256)), "case {case}: the brightness changed nothing");
+    }
+    let plain = strike(&vec![on_at(0, 60, 1)], 256);
+    assert!(same(&strike(&vec![on_at(0, 60, 1), bright(1, 1)], 256), &plain), "a brightness after the strike");
+    assert!(same(&strike(&vec![on_at(0, 60, 1), cc74(1)], 256), &plain), "CC74 after the strike");
+    let next = strike(&vec![on_at(0, 60, 1), cc74(1), on_at(2_400, 60, 2)], 256);
+    let voiced = strike(&vec![on_at(0, 60, 1), cc74(2_400), on_at(2_400, 60, 2)], 256);
+    assert!(same(&next, &voiced), "the next strike did not take the CC74 sent during the note before it");
 }

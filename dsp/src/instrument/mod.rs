@@ -10,6 +10,10 @@
 //! - Note velocity sets the hammer speed: `v = 0.5 · 12^velocity` m/s (0.5 to 6 m/s,
 //!   [`hammer_speed`]); the voicing ([`voicing_gain`]) evens the loudness of the keys at every
 //!   velocity.
+//! - CC74 (MPE's third dimension, a note's timbre) voices the felt of the hammers it meets: the
+//!   channel's value at the note-on (or the note's own brightness, sent with it) makes the felt
+//!   stiffer or softer than the hardness setting, twice as stiff every 32 steps above the middle
+//!   ([`felt_hardness`]). A key struck with no CC74 sent on its channel keeps the setting.
 //! - Note-off lets the damper down: a felt pad whose extra decay rises towards `damper_rate` (at
 //!   the fundamental, faster for higher modes) with time constant `damper_time`, changing how fast
 //!   the string decays, never its state. The sustain pedal (CC64 on the note's channel, or on an
@@ -41,9 +45,11 @@
 //! channel and key ([`NoteTarget`]). In slide mode a note's tuning moves its slide
 //! ([`Event::NoteTuning`]), its pressure is its poly pressure ([`Event::NotePressure`]), its
 //! brightness is its own CC74 ([`Event::NoteBrightness`]), and polyphonic modulation offsets its
-//! `slide_position` and `hand_height` ([`Event::NoteModulation`]); see [`SlideVoice`]. Piano
-//! mode ignores them: a struck string keeps its tuning. Whatever the mode, every note's end is
-//! queued for the host ([`Instrument::drain_ended`]).
+//! `slide_position` and `hand_height` ([`Event::NoteModulation`]); see [`SlideVoice`]. In piano
+//! mode a note's brightness sent with its note-on (at the same sample, before the hammer moves)
+//! voices its felt as CC74 does; the rest is ignored: a struck string keeps its tuning, and a
+//! thrown hammer its felt. Whatever the mode, every note's end is queued for the host
+//! ([`Instrument::drain_ended`]).
 //!
 //! # Voices
 //!
@@ -110,13 +116,15 @@ pub use partners::{
 };
 pub use piano_voice::{
     DAMPER_UPDATE, DAMPER_WIDTH, Dampers, Elsewhere, FIRST_UNDAMPED_KEY, GUARD_FACTOR, HOVER_LIFTS, PianoVoice,
-    RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike, contact_share, damper_lift, damper_shares, has_damper,
-    struck_strings,
+    RELEASE_ENERGY, STEAL_RATE, STEAL_TIME, Strike, TIMBRE_CENTRE, TIMBRE_HARDNESS_STEP, contact_share, damper_lift,
+    damper_shares, felt_hardness, has_damper, struck_strings,
 };
 pub use presets::{
     CATEGORIES, FACTORY_PRESETS, Preset, PresetError, factory_presets, find_preset, load_factory_presets, parse_preset,
 };
-pub use settings::{HAND_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody, hammer_speed};
+pub use settings::{
+    HAND_RANGE, HARDNESS_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody, hammer_speed,
+};
 pub use slide_scale::SlideScale;
 pub use slide_voice::{
     BRAKING, ChannelState, HAND_ACCELERATION, HAND_SPEED, LANDING_SPEED, MUTE_HAND_DAMPING, MUTE_TIME, MUTED_LIMIT,
@@ -651,7 +659,10 @@ impl Instrument {
             Event::PitchBend { channel, value } => self.channels[usize::from(channel & 15)].bend = unit(value, -1.0),
             Event::ChannelPressure { channel, value } => self.set_controller(channel, value, |c| &mut c.pressure),
             Event::ModWheel { channel, value } => self.set_controller(channel, value, |c| &mut c.mod_wheel),
-            Event::Timbre { channel, value } => self.set_controller(channel, value, |c| &mut c.timbre),
+            Event::Timbre { channel, value } => {
+                let value = unit(value, 0.0);
+                self.bends.spoken_for(channel).for_each(|c| self.channels[c].timbre = Some(value));
+            }
             Event::PolyPressure { channel, key, value } => {
                 let value = unit(value, 0.0);
                 self.pressed[usize::from(channel & 15)][usize::from(key & 127)].pressure = value;
@@ -664,6 +675,12 @@ impl Instrument {
             Event::NoteBrightness { note, value } => {
                 let value = unit(value, 0.0);
                 self.each_slide(note, |v, _| v.brightness = Some(value));
+                let (now, settings) = (self.now, self.note_settings());
+                for (i, _) in self.notes.addressed(note) {
+                    if let Some(v) = self.voices.get_mut(i) {
+                        v.set_brightness(value, &settings, now);
+                    }
+                }
             }
             Event::NoteTuning { note, semitones } => {
                 let semitones = notes::sanitize_tuning(semitones);
@@ -718,7 +735,8 @@ impl Instrument {
     fn play(&mut self, channel: u8, key: u8, velocity: f32, voice: Option<i32>) {
         let channel = channel & 15;
         let shifted = for_channel(&self.soft, channel, |a, b| a | b);
-        let strike = Strike { channel, key: key & 127, velocity: f64::from(velocity.min(1.0)), shifted };
+        let timbre = self.channels[usize::from(channel)].timbre;
+        let strike = Strike { channel, key: key & 127, velocity: f64::from(velocity.min(1.0)), shifted, timbre };
         self.keys_down[usize::from(strike.channel)] |= 1 << strike.key;
         self.presses += 1;
         self.pressed[usize::from(strike.channel)][usize::from(strike.key)] =

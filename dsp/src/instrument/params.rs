@@ -15,7 +15,7 @@
 use crate::contact::Method;
 use crate::instrument::MAX_VOICES;
 use crate::instrument::notes::NoteParam;
-use crate::instrument::settings::{HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody};
+use crate::instrument::settings::{HARDNESS_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody};
 
 /// The editor section (host group: VST3 unit, CLAP module) that shows a parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -254,7 +254,7 @@ pub const PARAMETERS: [ParamSpec; 35] = [
         id: "hard",
         name: "Hardness",
         group: Group::Piano,
-        kind: ratio(0.1, 10.0, Scale::Skewed(-1.5)),
+        kind: ratio(HARDNESS_RANGE.0 as f32, HARDNESS_RANGE.1 as f32, Scale::Skewed(-1.5)),
         maps_to: "[`Settings::hardness`]",
         get: |v| v.hardness,
         put: |v, x| v.hardness = x,

@@ -72,7 +72,7 @@ use crate::contact::{Method, PowerLaw};
 use crate::exciter::HammerParams;
 use crate::instrument::memo::{ENERGY_INTERVAL, Memo};
 use crate::instrument::partners::PartnerTable;
-use crate::instrument::settings::{Settings, hammer_speed};
+use crate::instrument::settings::{HARDNESS_RANGE, Settings, hammer_speed};
 use crate::instrument::solvers::Solvers;
 use crate::preset::{piano_note, stretch_cents, strike_position};
 use crate::scene::{MAX_PARTNERS, Shared, UnisonCore, UnisonParams, Watch};
@@ -359,8 +359,8 @@ pub const DAMPER_UPDATE: f64 = 0.000_7;
 /// second, and each update is a pass of exponentials over the modes.
 pub const HOVER_UPDATE: f64 = 0.004;
 
-/// A note to play: MIDI channel (0..16), key (0..128), velocity (0, 1], and whether the soft
-/// pedal shifts the hammer.
+/// A note to play: MIDI channel (0..16), key (0..128), velocity (0, 1], whether the soft pedal
+/// shifts the hammer, and the note's CC74.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Strike {
     /// MIDI channel, 0..=15.
@@ -372,6 +372,27 @@ pub struct Strike {
     /// The soft pedal (una corda) is down: the hammer misses one string of a bichord or
     /// trichord ([`struck_strings`]). The slide guitar ignores it.
     pub shifted: bool,
+    /// The note's CC74 (its own brightness, else its channel's), 0..=1, if one was sent: it
+    /// voices the piano hammer's felt ([`felt_hardness`]). The slide guitar reads its channel's
+    /// when it is asked to.
+    pub timbre: Option<f64>,
+}
+
+/// CC74's middle, 64 of 0..=127: the felt as the `Hardness` setting has it.
+pub const TIMBRE_CENTRE: f64 = 64.0 / 127.0;
+
+/// How many times stiffer the felt is for every 32 steps of CC74 above its middle (softer below).
+pub const TIMBRE_HARDNESS_STEP: f64 = 2.0;
+
+/// The felt's stiffness relative to the per-note rule for a hammer set to `hardness` (the
+/// setting) and voiced by the note's CC74 `timbre`: `hardness · 2^((127·timbre − 64)/32)`,
+/// from a quarter at CC 0 to four times at 127, clamped to the setting's range (0.1–10), as a
+/// technician hardens or softens a hammer by needling or ironing its felt. No CC74 leaves the
+/// setting alone.
+pub fn felt_hardness(hardness: f64, timbre: Option<f64>) -> f64 {
+    let Some(t) = timbre.filter(|t| t.is_finite()) else { return hardness };
+    let steps = 127.0 * (t.clamp(0.0, 1.0) - TIMBRE_CENTRE);
+    (hardness * TIMBRE_HARDNESS_STEP.powf(steps / 32.0)).clamp(HARDNESS_RANGE.0, HARDNESS_RANGE.1)
 }
 
 /// How many strings of a unison of `strings` the hammer meets: one fewer when the una corda
@@ -545,7 +566,7 @@ impl PianoVoice {
             extra: per_mode(),
             core,
             solvers: Solvers::new(law),
-            strike: Strike { channel: 0, key: 60, velocity: 0.0, shifted: false },
+            strike: Strike { channel: 0, key: 60, velocity: 0.0, shifted: false, timbre: None },
             sounding: false,
             key_down: false,
             started: 0,
@@ -664,15 +685,13 @@ impl PianoVoice {
         self.core.set_background(elsewhere.motion, elsewhere.reach);
         self.core.strike(&hammer);
         self.position = position;
-        let Ok(law) = PowerLaw::new(note.kappa * settings.hardness * met as f64, note.alpha) else { return };
         // All the energy there is: the hammer's and the string's (a re-strike meets a moving
         // string), and what the strings' motion elsewhere can bring: with `E` that motion's
         // energy, the key's copy holds at most `(√(E_hammer + E_string + E) + √E)²`, the copies'
         // sum and the motion elsewhere each bounded in the energy's norm.
         let carried = hammer.kinetic_energy() + string_energy + elsewhere.energy;
         self.reference_energy = (carried.sqrt() + elsewhere.energy.sqrt()).powi(2).max(f64::MIN_POSITIVE);
-        let y_ref = law.compression_at_energy(self.reference_energy);
-        if !self.solvers.restart(settings.method, law, y_ref, settings.segments, self.core.compressions()) {
+        if !self.fit_felt(&strike, settings) {
             return;
         }
         self.strike = strike;
@@ -680,6 +699,32 @@ impl PianoVoice {
         self.key_down = true;
         self.started = now;
         self.heard.struck();
+    }
+
+    /// Give the hammer `strike`'s felt under `settings` ([`felt_hardness`]) and fit the solvers
+    /// to it over the strike's reference energy; whether the felt law was valid.
+    fn fit_felt(&mut self, strike: &Strike, settings: &Settings) -> bool {
+        let note = piano_note(strike.key);
+        let met = struck_strings(note.strings, strike.shifted);
+        let stiffness = note.kappa * felt_hardness(settings.hardness, strike.timbre) * met as f64;
+        let Ok(law) = PowerLaw::new(stiffness, note.alpha) else { return false };
+        let y_ref = law.compression_at_energy(self.reference_energy);
+        self.solvers.restart(settings.method, law, y_ref, settings.segments, self.core.compressions())
+    }
+
+    /// Set the note's brightness, its own CC74 (0..=1), under `settings`. It voices the felt of a
+    /// strike still to come: one waiting for a steal fade, or one struck at this very sample
+    /// (`now`), whose hammer has not moved yet, as a host sends a note's expressions just after
+    /// its note-on. A hammer already thrown keeps its felt.
+    pub fn set_brightness(&mut self, value: f64, settings: &Settings, now: u64) {
+        if let Some(pending) = &mut self.pending {
+            pending.timbre = Some(value);
+        } else if self.sounding && self.started == now {
+            let strike = Strike { timbre: Some(value), ..self.strike };
+            if self.fit_felt(&strike, settings) {
+                self.strike = strike;
+            }
+        }
     }
 
     /// Tune the strings to `key` under `settings`, struck at `position` (fraction of the length),
@@ -1175,7 +1220,7 @@ mod tests {
     fn struck(blocks: usize) -> (PianoVoice, Settings) {
         let settings = Settings::default();
         let mut voice = PianoVoice::new(200, FS);
-        voice.play(Strike { channel: 0, key: 60, velocity: 0.7, shifted: false }, &settings, 0);
+        voice.play(Strike { channel: 0, key: 60, velocity: 0.7, shifted: false, timbre: None }, &settings, 0);
         let mut out = [0.0; 64];
         for _ in 0..blocks {
             voice.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
@@ -1230,7 +1275,7 @@ mod tests {
         let mut fresh = PianoVoice::new(200, FS);
         let (mut heard, mut expected) = ([0.0; 64], [0.0; 64]);
         for (v, out) in [(&mut voice, &mut heard), (&mut fresh, &mut expected)] {
-            v.play(Strike { channel: 0, key: 60, velocity: 0.7, shifted: false }, &settings, 0);
+            v.play(Strike { channel: 0, key: 60, velocity: 0.7, shifted: false, timbre: None }, &settings, 0);
             for _ in 0..4 {
                 v.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
                 v.render(out);
@@ -1244,7 +1289,7 @@ mod tests {
     /// `voice`'s output for `key` struck at velocity 0.7, held for 20 blocks of 64 samples and let
     /// go for 20 more (the damper landing on the strings).
     fn played(voice: &mut PianoVoice, key: u8, settings: &Settings) -> Vec<f64> {
-        voice.play(Strike { channel: 0, key, velocity: 0.7, shifted: false }, settings, 0);
+        voice.play(Strike { channel: 0, key, velocity: 0.7, shifted: false, timbre: None }, settings, 0);
         let (mut all, mut out) = (Vec::new(), [0.0; 64]);
         for block in 0..40 {
             if block == 20 {
@@ -1285,7 +1330,7 @@ mod tests {
         let settings = Settings::default();
         let mut table = PartnerTable::new(FS, &settings);
         let mut voice = PianoVoice::new(1000, FS);
-        let strike = Strike { channel: 0, key: 60, velocity: 0.7, shifted: false };
+        let strike = Strike { channel: 0, key: 60, velocity: 0.7, shifted: false, timbre: None };
         voice.play_with(strike, &settings, 0, Some((table.ready(), Dampers::default())));
         let at_strike = voice.core.partners();
         let half = Dampers { lift: damper_lift(0.5, &settings), ..Dampers::default() };
@@ -1323,7 +1368,7 @@ mod tests {
         let pedal = Dampers::PEDAL_DOWN;
         let play = |voice: &mut PianoVoice, table: &mut PartnerTable| {
             voice.play_with(
-                Strike { channel: 0, key: 60, velocity: 0.7, shifted: false },
+                Strike { channel: 0, key: 60, velocity: 0.7, shifted: false, timbre: None },
                 &settings,
                 0,
                 Some((table.ready(), pedal)),

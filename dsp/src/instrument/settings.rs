@@ -8,6 +8,10 @@ pub const MAX_SEGMENTS: usize = 64;
 /// Longest control block N_b (samples).
 pub const MAX_BLOCK: usize = 256;
 
+/// The felt's stiffness the instrument allows, relative to the per-note rule (×): the
+/// `Hardness` setting's range, which a note's CC74 stays within too.
+pub const HARDNESS_RANGE: (f64, f64) = (0.1, 10.0);
+
 /// Which instrument the engine is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Mode {
@@ -201,7 +205,7 @@ impl Settings {
             segments: self.segments.clamp(1, MAX_SEGMENTS),
             block: self.block.clamp(1, MAX_BLOCK),
             max_frequency: clamp(self.max_frequency, 1_000.0, 24_000.0, d.max_frequency),
-            hardness: clamp(self.hardness, 0.1, 10.0, d.hardness),
+            hardness: clamp(self.hardness, HARDNESS_RANGE.0, HARDNESS_RANGE.1, d.hardness),
             hammer_mass: clamp(self.hammer_mass, 0.25, 4.0, d.hammer_mass),
             strike_position: clamp(self.strike_position, 0.25, 2.5, d.strike_position),
             damping: clamp(self.damping, 0.1, 20.0, d.damping),

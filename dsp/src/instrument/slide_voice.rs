@@ -395,8 +395,8 @@ pub struct ChannelState {
     pub pressure: f64,
     /// Mod wheel, 0..=1.
     pub mod_wheel: f64,
-    /// CC74 (MPE's third dimension), 0..=1.
-    pub timbre: f64,
+    /// CC74 (MPE's third dimension), 0..=1, once one was sent.
+    pub timbre: Option<f64>,
     /// Semitones of slide travel of a full bend, if the channel's pitch-bend sensitivity was set
     /// (RPN 0, or an MPE zone); else the `bend_range` setting.
     pub bend_range: Option<f64>,
@@ -524,7 +524,7 @@ impl SlideVoice {
             solvers: Solvers::new(law),
             live: Live(rest),
             length,
-            strike: Strike { channel: 0, key: OPEN_KEY, velocity: 0.0, shifted: false },
+            strike: Strike { channel: 0, key: OPEN_KEY, velocity: 0.0, shifted: false, timbre: None },
             sounding: false,
             key_down: false,
             channel: ChannelState::default(),
@@ -803,7 +803,7 @@ impl SlideVoice {
             HandSource::ModWheel => pressed(channel.mod_wheel),
             HandSource::ChannelPressure => pressed(channel.pressure),
             HandSource::PolyPressure => pressed(self.poly_pressure),
-            HandSource::Timbre => pressed(self.brightness.unwrap_or(channel.timbre)),
+            HandSource::Timbre => pressed(self.brightness.or(channel.timbre).unwrap_or(0.0)),
         }
     }
 
@@ -1117,7 +1117,7 @@ mod tests {
     const FS: f64 = 44100.0;
 
     /// The note the tests' voices pluck: key 52 at velocity 0.8.
-    const STRIKE: Strike = Strike { channel: 0, key: 52, velocity: 0.8, shifted: false };
+    const STRIKE: Strike = Strike { channel: 0, key: 52, velocity: 0.8, shifted: false, timbre: None };
 
     /// The monitor draws the string as the core reaches it: through the coupling weights, the
     /// shape at `x` is the state's projection on the weighted mode shapes there (to 1e-10 of
@@ -1439,7 +1439,7 @@ mod tests {
         voice.render(&mut out);
         voice.silence();
         voice.play(
-            Strike { channel: 0, key: 50, velocity: 0.8, shifted: false },
+            Strike { channel: 0, key: 50, velocity: 0.8, shifted: false, timbre: None },
             &settings,
             &ChannelState::default(),
             false,
