@@ -19,11 +19,11 @@
 //!   felt of the hammers struck on its channel.
 //! - `reset` (each activation and start of processing) returns the engine to how it was made
 //!   ([`Instrument::reset`]): what follows is a new instance's output, to the bit.
-//! - Per note (slide mode): CLAP and VST3 tuning expressions move the note's slide, CLAP pressure
-//!   expressions (nice-plug delivers them, like MIDI poly aftertouch and VST3 poly pressure, as
-//!   `PolyPressure`) are its poly pressure, CLAP and VST3 brightness expressions are its own
-//!   CC74 (in piano mode too, sent with the note-on), and CLAP polyphonic modulation offsets its
-//!   `slide` and `hand` ([`params`]). Notes are addressed by the host's voice id, else channel
+//! - Per note: in slide mode CLAP and VST3 tuning expressions move the note's slide, CLAP
+//!   pressure expressions (nice-plug delivers them, like MIDI poly aftertouch and VST3 poly
+//!   pressure, as `PolyPressure`) are its poly pressure, CLAP and VST3 brightness expressions are
+//!   its own CC74, and CLAP polyphonic modulation offsets its `slide` and `hand` ([`params`]); in
+//!   piano mode a brightness expression sent with the note-on voices its hammer's felt. Notes are addressed by the host's voice id, else channel
 //!   and key. Every note's end goes back to the
 //!   host as `VoiceTerminated` (CLAP note-end), which CLAP polyphonic modulation needs to free
 //!   its per-voice modulators.

@@ -10,6 +10,7 @@
 //! the sum of the two notes rendered alone (to f32 rounding; the output stage is linear below its
 //! ceiling, and these mezzo-piano notes peak far below it).
 
+use qsa_dsp::contact::Method;
 use qsa_dsp::instrument::{Event, HandSource, Instrument, Mode, NoteParam, NoteTarget, Settings};
 use qsa_dsp::preset::key_frequency;
 use qsa_tests::fundamental;
@@ -415,40 +416,76 @@ fn a_piano_notes_cc74_voices_its_hammers_felt_as_the_hardness_setting_does() {
 /// A piano note's brightness sent with its note-on (the same sample, as hosts send a note's
 /// expressions) voices its felt exactly as its channel's CC74 before the note-on would, on a free
 /// voice, on a voice struck again and on a voice stolen (the strike waiting for the steal's
-/// fade). Sent a sample later, once the hammer has been thrown, or CC74 sent then, it leaves the
-/// note as it was; the channel's next note takes the CC74. Host buffers of any size give the same
-/// samples.
+/// fade), under each solver (the felt fitted twice in one sample is fitted once); so does the
+/// channel's CC74 sent just after the note-on, unless the note has a brightness of its own. Sent
+/// a sample later, once the hammer has been thrown, either leaves the note as it was; the
+/// channel's next note takes the CC74. A NaN brightness or CC74 voices nothing. Host buffers of
+/// any size give the same samples.
 #[test]
 fn a_piano_notes_brightness_at_its_note_on_voices_its_felt_and_later_changes_nothing() {
-    let strike = |score: &Score, chunk: usize| play(&mut piano(Settings::default()), score, 9_600, chunk);
     let on_at = |at: usize, key: u8, voice: i32| (at, Event::NoteOnWithId { channel: 3, key, velocity: 0.5, voice });
     let bright = |at: usize, voice: i32| (at, Event::NoteBrightness { note: NoteTarget::voice(voice), value: 0.9 });
     let cc74 = |at: usize| (at, Event::Timbre { channel: 3, value: 0.9 });
-    // A free voice; the same key struck again; a third key stealing one of the two voices.
-    let scores: [(Score, Score); 3] = [
-        (vec![on_at(0, 60, 1), bright(0, 1)], vec![cc74(0), on_at(0, 60, 1)]),
-        (
-            vec![on_at(0, 60, 1), on_at(2_400, 60, 2), bright(2_400, 2)],
-            vec![on_at(0, 60, 1), cc74(2_400), on_at(2_400, 60, 2)],
-        ),
-        (
-            vec![on_at(0, 60, 1), on_at(10, 64, 2), on_at(2_400, 67, 3), bright(2_400, 3)],
-            vec![on_at(0, 60, 1), on_at(10, 64, 2), cc74(2_400), on_at(2_400, 67, 3)],
-        ),
-    ];
-    for (case, (expression, midi)) in scores.iter().enumerate() {
-        let reference = strike(midi, 256);
-        for chunk in [1, 7, 64, 4096] {
-            assert!(same(&strike(expression, chunk), &reference), "case {case}, chunks of {chunk}: not its CC74");
+    for method in [Method::Qsa, Method::Exp, Method::Imp] {
+        let settings = Settings { method, ..Default::default() };
+        let strike = |score: &Score, chunk: usize| play(&mut piano(settings), score, 9_600, chunk);
+        // A free voice; the same key struck again; a third key stealing one of the two voices.
+        let scores: [(Score, Score); 3] = [
+            (vec![on_at(0, 60, 1), bright(0, 1)], vec![cc74(0), on_at(0, 60, 1)]),
+            (
+                vec![on_at(0, 60, 1), on_at(2_400, 60, 2), bright(2_400, 2)],
+                vec![on_at(0, 60, 1), cc74(2_400), on_at(2_400, 60, 2)],
+            ),
+            (
+                vec![on_at(0, 60, 1), on_at(10, 64, 2), on_at(2_400, 67, 3), bright(2_400, 3)],
+                vec![on_at(0, 60, 1), on_at(10, 64, 2), cc74(2_400), on_at(2_400, 67, 3)],
+            ),
+        ];
+        for (case, (expression, midi)) in scores.iter().enumerate() {
+            let reference = strike(midi, 256);
+            for chunk in [1, 7, 64, 4096] {
+                let voiced = strike(expression, chunk);
+                assert!(same(&voiced, &reference), "{method:?}, case {case}, chunks of {chunk}: not its CC74");
+            }
+            let by_brightness = |e: &(usize, Event)| matches!(e.1, Event::NoteBrightness { .. });
+            let plain: Score = expression.iter().copied().filter(|e| !by_brightness(e)).collect();
+            assert!(!same(&reference, &strike(&plain, 256)), "{method:?}, case {case}: the brightness did nothing");
+            // The channel's CC74 just after the note-on counts as well, but not over the note's own.
+            let after: Score = plain.iter().copied().chain([cc74(plain.last().unwrap().0)]).collect();
+            assert!(same(&strike(&after, 256), &reference), "{method:?}, case {case}: CC74 after the note-on");
+            let darker = (plain.last().unwrap().0, Event::Timbre { channel: 3, value: 0.1 });
+            let both: Score = expression.iter().copied().chain([darker]).collect();
+            assert!(same(&strike(&both, 256), &reference), "{method:?}, case {case}: CC74 over the brightness");
         }
-        let plain: Score =
-            expression.iter().copied().filter(|(_, e)| !matches!(e, Event::NoteBrightness { .. })).collect();
-        assert!(!same(&reference, &strike(&plain, 256)), "case {case}: the brightness changed nothing");
     }
-    let plain = strike(&vec![on_at(0, 60, 1)], 256);
-    assert!(same(&strike(&vec![on_at(0, 60, 1), bright(1, 1)], 256), &plain), "a brightness after the strike");
-    assert!(same(&strike(&vec![on_at(0, 60, 1), cc74(1)], 256), &plain), "CC74 after the strike");
-    let next = strike(&vec![on_at(0, 60, 1), cc74(1), on_at(2_400, 60, 2)], 256);
-    let voiced = strike(&vec![on_at(0, 60, 1), cc74(2_400), on_at(2_400, 60, 2)], 256);
+    let strike = |score: &Score| play(&mut piano(Settings::default()), score, 9_600, 256);
+    let plain = strike(&vec![on_at(0, 60, 1)]);
+    assert!(same(&strike(&vec![on_at(0, 60, 1), bright(1, 1)]), &plain), "a brightness after the strike");
+    assert!(same(&strike(&vec![on_at(0, 60, 1), cc74(1)]), &plain), "CC74 after the strike");
+    let next = strike(&vec![on_at(0, 60, 1), cc74(1), on_at(2_400, 60, 2)]);
+    let voiced = strike(&vec![on_at(0, 60, 1), cc74(2_400), on_at(2_400, 60, 2)]);
     assert!(same(&next, &voiced), "the next strike did not take the CC74 sent during the note before it");
+    let nan_brightness = (0, Event::NoteBrightness { note: NoteTarget::voice(1), value: f32::NAN });
+    assert!(same(&strike(&vec![on_at(0, 60, 1), nan_brightness]), &plain), "a NaN brightness voiced the felt");
+    let nan_cc74 = (0, Event::Timbre { channel: 3, value: f32::NAN });
+    assert!(same(&strike(&vec![cc74(0), nan_cc74, on_at(0, 60, 1)]), &plain), "a NaN CC74 is none");
+}
+
+/// An MPE zone's master channel speaks for its members' hammers as for their slides: CC74 on
+/// channel 1, with a lower zone set up (RPN 6 on channel 1), voices the felt of a note on member
+/// channel 3 exactly as the member's own CC74 does; without a zone, channel 1's CC74 leaves the
+/// note alone.
+#[test]
+fn an_mpe_zones_master_cc74_voices_its_members_hammers() {
+    let zone: Score = [(101, 0), (100, 6), (6, 3)]
+        .map(|(controller, value)| (0, Event::RegisteredParameter { channel: 0, controller, value }))
+        .to_vec();
+    let note = (0, Event::NoteOn { channel: 2, key: 60, velocity: 0.5 });
+    let cc74 = |channel| (0, Event::Timbre { channel, value: 0.9 });
+    let strike = |score: Score| play(&mut piano(Settings::default()), &score, 9_600, 256);
+    let own = strike([zone.clone(), vec![cc74(2), note]].concat());
+    let master = strike([zone.clone(), vec![cc74(0), note]].concat());
+    assert!(same(&master, &own), "the master's CC74 did not reach the member's hammer");
+    assert!(!same(&own, &strike([zone, vec![note]].concat())), "the member's CC74 did nothing");
+    assert!(same(&strike(vec![cc74(0), note]), &strike(vec![note])), "without a zone, channel 1 speaks for itself");
 }

@@ -11,9 +11,11 @@
 //!   [`hammer_speed`]); the voicing ([`voicing_gain`]) evens the loudness of the keys at every
 //!   velocity.
 //! - CC74 (MPE's third dimension, a note's timbre) voices the felt of the hammers it meets: the
-//!   channel's value at the note-on (or the note's own brightness, sent with it) makes the felt
-//!   stiffer or softer than the hardness setting, twice as stiff every 32 steps above the middle
-//!   ([`felt_hardness`]). A key struck with no CC74 sent on its channel keeps the setting.
+//!   channel's latest value when the hammer is thrown (sent before the note-on or at its sample,
+//!   or while the note waits for a steal fade; an MPE zone's master channel speaks for its
+//!   members), or the note's own brightness sent with it, makes the felt stiffer or softer than
+//!   the hardness setting, twice as stiff every 32 steps above the middle ([`felt_hardness`]). A
+//!   key struck with no CC74 sent on its channel keeps the setting.
 //! - Note-off lets the damper down: a felt pad whose extra decay rises towards `damper_rate` (at
 //!   the fundamental, faster for higher modes) with time constant `damper_time`, changing how fast
 //!   the string decays, never its state. The sustain pedal (CC64 on the note's channel, or on an
@@ -660,8 +662,20 @@ impl Instrument {
             Event::ChannelPressure { channel, value } => self.set_controller(channel, value, |c| &mut c.pressure),
             Event::ModWheel { channel, value } => self.set_controller(channel, value, |c| &mut c.mod_wheel),
             Event::Timbre { channel, value } => {
-                let value = unit(value, 0.0);
-                self.bends.spoken_for(channel).for_each(|c| self.channels[c].timbre = Some(value));
+                // NaN is no CC74: the slide reads 0, the piano's felt keeps the setting.
+                let value = (!value.is_nan()).then(|| unit(value, 0.0));
+                let mut channels = 0u16;
+                for c in self.bends.spoken_for(channel) {
+                    self.channels[c].timbre = value;
+                    channels |= 1 << c;
+                }
+                // A strike still to come on those channels takes it too.
+                let (now, settings, pianos) = (self.now, self.note_settings(), self.pools().0);
+                if let Some(value) = value {
+                    for i in self.notes.live_in(pianos) {
+                        self.voices[i].set_channel_timbre(channels, value, &settings, now);
+                    }
+                }
             }
             Event::PolyPressure { channel, key, value } => {
                 let value = unit(value, 0.0);
@@ -672,11 +686,12 @@ impl Instrument {
                 let value = unit(value, 0.0);
                 self.each_slide(note, |v, _| v.poly_pressure = value);
             }
-            Event::NoteBrightness { note, value } => {
-                let value = unit(value, 0.0);
+            Event::NoteBrightness { note, value: raw } => {
+                let value = unit(raw, 0.0);
                 self.each_slide(note, |v, _| v.brightness = Some(value));
+                // NaN voices no felt.
                 let (now, settings) = (self.now, self.note_settings());
-                for (i, _) in self.notes.addressed(note) {
+                for (i, _) in self.notes.addressed(note).filter(|_| !raw.is_nan()) {
                     if let Some(v) = self.voices.get_mut(i) {
                         v.set_brightness(value, &settings, now);
                     }

@@ -386,12 +386,16 @@ pub const TIMBRE_HARDNESS_STEP: f64 = 2.0;
 
 /// The felt's stiffness relative to the per-note rule for a hammer set to `hardness` (the
 /// setting) and voiced by the note's CC74 `timbre`: `hardness · 2^((127·timbre − 64)/32)`,
-/// from a quarter at CC 0 to four times at 127, clamped to the setting's range (0.1–10), as a
-/// technician hardens or softens a hammer by needling or ironing its felt. No CC74 leaves the
-/// setting alone.
+/// from a quarter at CC 0 to 3.9 times at 127, clamped to the setting's range (0.1–10), as a
+/// technician hardens or softens a hammer by needling or ironing its felt. No CC74, or CC 64
+/// (within a thousandth of a step, which a value passed as an `f32` fraction misses by 4·10⁻⁷),
+/// leaves the setting exactly as it is.
 pub fn felt_hardness(hardness: f64, timbre: Option<f64>) -> f64 {
     let Some(t) = timbre.filter(|t| t.is_finite()) else { return hardness };
     let steps = 127.0 * (t.clamp(0.0, 1.0) - TIMBRE_CENTRE);
+    if steps.abs() < 1e-3 {
+        return hardness;
+    }
     (hardness * TIMBRE_HARDNESS_STEP.powf(steps / 32.0)).clamp(HARDNESS_RANGE.0, HARDNESS_RANGE.1)
 }
 
@@ -540,6 +544,9 @@ pub struct PianoVoice {
     pending: Option<Strike>,
     /// Whether the pending note's key was released while it waited.
     pending_released: bool,
+    /// Whether the note (or the pending one) has a brightness of its own, which its channel's
+    /// CC74 no longer overrides.
+    own_brightness: bool,
     /// Fading out with no note to follow (shed to lighten the load).
     shedding: bool,
     /// How loud it has been lately.
@@ -594,6 +601,7 @@ impl PianoVoice {
             fade_left: 0,
             pending: None,
             pending_released: false,
+            own_brightness: false,
             shedding: false,
             heard: Heard::SILENT,
             guard_fade: GuardFade::default(),
@@ -641,6 +649,7 @@ impl PianoVoice {
         let note = piano_note(strike.key);
         let position = Self::striking_point(strike.key, settings);
         let restrike = self.sounding && self.strike.key == strike.key && self.pending.is_none();
+        self.own_brightness = false;
         let gain = super::voicing_gain(strike.key, strike.velocity);
         let strings = note.strings as f64;
         if !restrike {
@@ -715,16 +724,40 @@ impl PianoVoice {
     /// Set the note's brightness, its own CC74 (0..=1), under `settings`. It voices the felt of a
     /// strike still to come: one waiting for a steal fade, or one struck at this very sample
     /// (`now`), whose hammer has not moved yet, as a host sends a note's expressions just after
-    /// its note-on. A hammer already thrown keeps its felt.
+    /// its note-on. A hammer already thrown keeps its felt. From then on the channel's CC74 no
+    /// longer reaches the note ([`set_channel_timbre`](Self::set_channel_timbre)).
     pub fn set_brightness(&mut self, value: f64, settings: &Settings, now: u64) {
+        if self.voice_felt(value, settings, now) {
+            self.own_brightness = true;
+        }
+    }
+
+    /// The CC74 of the channels `channels` (one bit per MIDI channel) changed to `value` (0..=1):
+    /// as [`set_brightness`](Self::set_brightness) for a strike still to come on one of them,
+    /// unless the note has a brightness of its own, so that a CC74 sent at the note-on's sample
+    /// counts whether it comes before the note-on or after it.
+    pub fn set_channel_timbre(&mut self, channels: u16, value: f64, settings: &Settings, now: u64) {
+        let note = self.pending.unwrap_or(self.strike);
+        if channels >> (note.channel & 15) & 1 == 1 && !self.own_brightness {
+            self.voice_felt(value, settings, now);
+        }
+    }
+
+    /// Voice the felt of a strike still to come with the CC74 `value` (see
+    /// [`set_brightness`](Self::set_brightness)); whether there was one.
+    fn voice_felt(&mut self, value: f64, settings: &Settings, now: u64) -> bool {
         if let Some(pending) = &mut self.pending {
             pending.timbre = Some(value);
-        } else if self.sounding && self.started == now {
-            let strike = Strike { timbre: Some(value), ..self.strike };
-            if self.fit_felt(&strike, settings) {
-                self.strike = strike;
-            }
+            return true;
         }
+        if !(self.sounding && self.started == now) {
+            return false;
+        }
+        let strike = Strike { timbre: Some(value), ..self.strike };
+        if self.fit_felt(&strike, settings) {
+            self.strike = strike;
+        }
+        true
     }
 
     /// Tune the strings to `key` under `settings`, struck at `position` (fraction of the length),
@@ -855,6 +888,7 @@ impl PianoVoice {
         let fading = self.fading();
         self.pending = Some(strike);
         self.pending_released = false;
+        self.own_brightness = false;
         self.shedding = false;
         self.started = now;
         if !fading {
