@@ -4,7 +4,7 @@
 //!
 //! The audio thread never waits for the editor: it publishes snapshots and the load through
 //! [`crate::meter::Shared`] (a lock-free queue and atomics) and sets the repaint flag, which the
-//! editor's window polls. The editor drains the queue each frame into its own [`History`].
+//! editor's window polls. The editor drains the queue each frame into its own `History`.
 
 mod presets;
 #[cfg(test)]

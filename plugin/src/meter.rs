@@ -1,14 +1,14 @@
 //! The data path from the audio thread to the editor, lock-free and allocation-free on the audio
 //! side.
 //!
-//! - **DSP load**: each `process` call is timed with [`Instant`]; the load is the time taken over
+//! - **DSP load**: each `process` call is timed with [`Instant`](std::time::Instant); the load is the time taken over
 //!   the buffer's duration (1.0 = the whole real-time budget). The audio thread keeps a smoothed
 //!   value (time constant [`LOAD_TIME_CONSTANT`]) and a peak; both go to the editor through
 //!   [`AtomicF32`]s. The editor takes the peak with a swap, so it sees the worst call since its
 //!   last frame.
 //! - **Monitor**: every [`SNAPSHOT_PERIOD`] seconds of audio (counted in samples, so it does not
 //!   depend on the host's buffer size) the audio thread takes the engine's
-//!   [`Monitor`](qsa_dsp::instrument::Monitor) and `force_push`es it into a fixed-capacity
+//!   [`Monitor`] and `force_push`es it into a fixed-capacity
 //!   [`ArrayQueue`]: when the editor falls behind, the oldest snapshot is dropped, never the audio
 //!   thread blocked. Then it asks the editor to repaint ([`RepaintNotifier`] is one atomic store).
 //!

@@ -2,7 +2,7 @@
 //!
 //! - `render`: render a scene file offline to a WAV (and a CSV of per-sample signals) and print a
 //!   one-line JSON summary. See [`render`].
-//! - `bench`: real-time factors of whole voices, one JSON line per case. See [`bench`].
+//! - `bench`: real-time factors of whole voices, one JSON line per case. See [`bench`](mod@bench).
 //! - `report`: the error-against-run-time and stability report in `docs/report/`, or with
 //!   `--quick` the CI check of its error figures. See [`report`].
 //! - `presets`: list the factory presets (id, category, name, description), and write them as

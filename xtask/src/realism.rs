@@ -456,7 +456,7 @@ fn una_corda(path: &Path) -> Result<Vec<Shifted>, String> {
     Ok(rows)
 }
 
-/// How far down the sustain pedal is in [`half_pedal`]'s renders: up, three points of its
+/// How far down the sustain pedal is in `half_pedal`'s renders: up, three points of its
 /// half-way zone (the dampers hovering) and down.
 pub const HALF_PEDALS: [f32; 5] = [0.0, 0.4, 0.5, 0.6, 1.0];
 

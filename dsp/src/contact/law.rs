@@ -12,7 +12,7 @@
 //!
 //! The explicit (EXP) scheme quadratises the potential: `ψ = √(2V)` and its gradient
 //! `g = dψ/dy = √(κ(α+1)/2) · [y]+^((α−1)/2)`. (The seed prints the exponent of `g` as α−1,
-//! a misprint: ψ·g must equal V' = κ[y]+^α, which needs (α−1)/2.)
+//! a misprint: ψ·g must equal `V' = κ[y]+^α`, which needs (α−1)/2.)
 //!
 //! # Discrete gradient without cancellation (docs/physics.md §5.1)
 //!

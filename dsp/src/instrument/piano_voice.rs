@@ -1031,7 +1031,7 @@ impl PianoVoice {
     }
 
     /// How loud the voice is now, what stealing and shedding rank voices by: the mean square of
-    /// its output (bridge force, N²) over its latest window (see [`LOUDNESS_WINDOW`]) times the
+    /// its output (bridge force, N²) over its latest window (at least `LOUDNESS_WINDOW`) times the
     /// square of its voicing gain, the share of it that reaches the output (the voicing evens the
     /// keys' loudness, up to 20 dB apart in bridge force); infinite for a note struck since that
     /// window closed, not heard yet.

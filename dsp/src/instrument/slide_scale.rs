@@ -94,7 +94,7 @@ impl SlideScale {
     }
 
     /// Slide position `x_o` (m) that sounds `semitones` above the open string, between
-    /// [`NEAREST_NUT`] and [`REACH`] of the length.
+    /// `NEAREST_NUT` and `REACH` of the length.
     pub fn position(&self, semitones: f64) -> f64 {
         let ideal = self.length * (1.0 - 2f64.powf(-semitones / 12.0));
         (ideal - self.end_correction(ideal)).clamp(NEAREST_NUT, REACH * self.length)

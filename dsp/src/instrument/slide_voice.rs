@@ -183,11 +183,11 @@ pub const LANDING_ACCELERATION: f64 = HAND_ACCELERATION / 4.0;
 pub const LANDING_MARGIN: f64 = 0.5e-3;
 
 /// The reach of `hand` towards `target` (m) with the slide `gap` (m) above the string under it:
-/// lowering the slide, the hand speeds up and slows down at most at [`LANDING_ACCELERATION`]
+/// lowering the slide, the hand speeds up and slows down at most at `LANDING_ACCELERATION`
 /// `a_l`, slowing down as the slide nears the string, `v ≤ v_land + √(2·a_l·(gap − margin))`
-/// ([`LANDING_SPEED`], [`LANDING_MARGIN`]), and presses it further in at `v_land`; a hand too
+/// ([`LANDING_SPEED`], `LANDING_MARGIN`), and presses it further in at `v_land`; a hand too
 /// fast to stop on its target at `a_l` (turned back from lifting)
-/// brakes within [`HAND_REACH`]. Lifting, it moves within [`HAND_REACH`].
+/// brakes within `HAND_REACH`. Lifting, it moves within `HAND_REACH`.
 pub fn hand_reach(hand: &Motion, target: f64, gap: f64) -> Reach {
     if target >= hand.position {
         return HAND_REACH;

@@ -5,7 +5,7 @@
 //!   slide held by the hand through the slide–hand oscillator ([`SlideHand`]);
 //! - the left finger (trailing the slide, damping the dead part of the string) and the right
 //!   finger (plucking), each a force `F_φe` spread over a half-cosine window with damping
-//!   `F_φR = −r|F_φe| δ_t· u_φ` ([`finger`](crate::exciter::finger)).
+//!   `F_φR = −r|F_φe| δ_t· u_φ` ([`finger`]).
 //!
 //! # One step (seed eqs. 65, 72–74; docs/physics.md §7.3)
 //!

@@ -104,7 +104,7 @@ impl CaseScene {
     }
 
     /// The set-up as a scene description at the base rate; its solver is QSA at the case's
-    /// V_ref, and [`Self::build`] names the solver of each run.
+    /// V_ref, and `Self::build` names the solver of each run.
     pub fn description(&self) -> SceneDescription {
         let common = Common {
             sample_rate: self.sample_rate,

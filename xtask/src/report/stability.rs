@@ -12,7 +12,7 @@
 //!   `MAX_SCENE_SEGMENTS`) in the other half;
 //! - sample rate fs ∈ [8, 384] kHz (whole Hz);
 //! - strings: a preset's, or in half of the `hammer-string`, `slide-string` and `hammer-ringing`
-//!   sets a random one ([`random_string`]: L ∈ [0.05, 2] m, T ∈ [50, 2000] N, ρA ∈ [2e-4, 0.2]
+//!   sets a random one (`random_string`: L ∈ [0.05, 2] m, T ∈ [50, 2000] N, ρA ∈ [2e-4, 0.2]
 //!   kg/m, EI ∈ [1e-7, 0.2] N·m², fundamental in [20, 5000] Hz, damping `σ_i = b1 + b3 ω0_i²`
 //!   with b1 ∈ [0.05, 20] 1/s, b3 ∈ [1e-11, 1e-7] s);
 //! - `mass-barrier`: mass ∈ [0.1 g, 1 kg], approach speed v0 ∈ [1e-3, 50] m/s, reaching the barrier
@@ -32,7 +32,7 @@
 //!   travel above the string to a press depth of min(v·T/2, 10 mm) (T the run length) and holds;
 //!   between 64 samples and `min(1500, 3e5 / modes)`. Positions are fixed;
 //! - `slide-gesture`: the slide in motion, a random control trajectory per set
-//!   ([`Trajectory`](super::gestures::Trajectory): κ 1e2–1e16, α 1–4, slide mass 0.1 g–1 kg,
+//!   ([`Trajectory`]: κ 1e2–1e16, α 1–4, slide mass 0.1 g–1 kg,
 //!   k_H 1e2–1e6 N/m, hand and finger damping from 0 to beyond the plugin's, N_b 1–256,
 //!   fs 22.05–192 kHz; the slide travelling at up to 5 m/s with a vibrato of up to ±5 mm at up
 //!   to 10 Hz, the hand pressing, rattling and lifting, the fingers' forces switching on and
@@ -86,7 +86,7 @@
 //! - excess (moving kinds) `max_n (H^{n+1/2} − H^{−1/2} − W^n)⁺ / scale`;
 //! - compression ratio `max_n y^n / y_ref`, with `y_ref` from the scene's default V_ref (for
 //!   re-strikes, the first strike's fit);
-//! - energy bounds (see [`energy_bounds`]): `max_n y^n / y_max^n` with `y_max^n` the compression
+//! - energy bounds (see `energy_bounds`): `max_n y^n / y_max^n` with `y_max^n` the compression
 //!   at which the method's potential (QSA: the fit in force, its last quadratic extended beyond
 //!   the last knot; IMP and EXP: the law) stores twice the energy available,
 //!   `H^{−1/2} + W^n + ENERGY_LIMIT·scale`, `max_n |v^{n+1/2}| / √(2·that/M)` for the
@@ -906,7 +906,7 @@ pub struct Measure {
     pub excess: f64,
     /// Largest compression / y_ref.
     pub compression_ratio: f64,
-    /// Largest compression over its energy bound, `max_n y^n / y_max^n` (see [`energy_bounds`]).
+    /// Largest compression over its energy bound, `max_n y^n / y_max^n` (see `energy_bounds`).
     pub compression_bound: f64,
     /// Largest exciter speed over its energy bound, `max_n |v^{n+1/2}| / v_max^n`.
     pub velocity_bound: f64,
