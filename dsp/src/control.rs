@@ -182,11 +182,6 @@ pub struct Bow {
 }
 
 impl Bow {
-    /// Standing at `value`.
-    pub fn flat(value: f64) -> Self {
-        Self { from: value, to: value, sag: 0.0 }
-    }
-
     /// The value a fraction `a` of the way along.
     #[inline]
     pub fn at(&self, a: f64) -> f64 {

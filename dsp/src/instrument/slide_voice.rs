@@ -322,8 +322,9 @@ impl HandPath {
     pub fn follow(&mut self, planned: f64, span: f64, reach: Reach) -> Bow {
         let speed = (planned - self.planned) / span;
         let middle = 0.5 * (self.planned + planned);
-        let average = self.height - self.offset.position;
-        let taken = self.offset.position + (average + 0.5 * span * (self.average_speed + speed) - middle);
+        // The path is the average plus its offset, so the offset with what the average misses
+        // the midpoint by is where the path would end, less the midpoint.
+        let taken = self.height + 0.5 * span * (self.average_speed + speed) - middle;
         self.offset.position = taken;
         self.offset.approach(0.0, span, reach);
         let path = Bow {

@@ -720,9 +720,11 @@ pub struct SlideCore {
     start: SlideControls,
     target: SlideControls,
     hand: Bowed,
-    /// The hand's path across the current whole block: from its height at the block's start to
-    /// its height at the end, bowed as [`bow_hand`](Self::bow_hand) asked.
-    hand_bow: Bow,
+    /// The hand's height at the current whole block's start (m) and the sag of its path across
+    /// the block that [`bow_hand`](Self::bow_hand) asked for (m): with the height at its end,
+    /// `whole_end`'s, the path ([`whole_hand`](Self::whole_hand)).
+    hand_from: f64,
+    hand_sag: f64,
     /// The sag (m) of the hand's path across the next block ([`bow_hand`](Self::bow_hand)).
     next_hand_sag: f64,
     left_force: Ramp,
@@ -791,7 +793,8 @@ impl SlideCore {
             start,
             target,
             hand: Bowed::new(start.hand_height, target.hand_height, block, 0.0),
-            hand_bow: Bow { from: start.hand_height, to: target.hand_height, sag: 0.0 },
+            hand_from: start.hand_height,
+            hand_sag: 0.0,
             next_hand_sag: 0.0,
             left_force: Ramp::new(start.left_force, target.left_force, block),
             right_force: Ramp::new(start.right_force, target.right_force, block),
@@ -838,7 +841,8 @@ impl SlideCore {
         self.start = controls;
         self.target = controls;
         self.hand = Bowed::new(controls.hand_height, controls.hand_height, self.block, 0.0);
-        (self.hand_bow, self.next_hand_sag) = (Bow::flat(controls.hand_height), 0.0);
+        (self.hand_from, self.hand_sag, self.next_hand_sag) = (controls.hand_height, 0.0, 0.0);
+        self.whole_end = controls;
         self.left_force = Ramp::new(controls.left_force, controls.left_force, self.block);
         self.right_force = Ramp::new(controls.right_force, controls.right_force, self.block);
         self.hand_prev = controls.hand_height;
@@ -1296,8 +1300,7 @@ impl SlideCore {
     /// first.
     fn begin_block<C: ControlSource<SlideControls>>(&mut self, controls: &mut C) {
         let (start, end, len) = (self.target, controls.at(self.n + self.block as u64), self.block);
-        let sag = std::mem::take(&mut self.next_hand_sag);
-        self.hand_bow = Bow { from: start.hand_height, to: end.hand_height, sag };
+        (self.hand_from, self.hand_sag) = (start.hand_height, std::mem::take(&mut self.next_hand_sag));
         // The slide always touches; a finger only while it presses at either end of the block.
         let touching = [
             true,
@@ -1311,6 +1314,12 @@ impl SlideCore {
         self.pieces = if pieces > 1.0 { (pieces as usize).min(len).min(MAX_PIECES) } else { 1 };
         self.piece = 0;
         self.begin_piece();
+    }
+
+    /// The hand's path across the current whole block: from its height at the block's start to
+    /// its height at the end, bowed as [`bow_hand`](Self::bow_hand) asked.
+    fn whole_hand(&self) -> Bow {
+        Bow { from: self.hand_from, to: self.whole_end.hand_height, sag: self.hand_sag }
     }
 
     /// Begin the block's next piece: steps `len·j/m` to `len·(j+1)/m` of the block, from where
@@ -1328,7 +1337,7 @@ impl SlideCore {
         };
         self.block = to - from;
         self.inv_block = 1.0 / self.block as f64;
-        let bow = &self.hand_bow;
+        let bow = self.whole_hand();
         if bow.sag != 0.0 && j + 1 < m {
             self.target.hand_height = bow.at(to as f64 / len as f64);
         }
