@@ -23,8 +23,8 @@
 //!   pressure expressions (nice-plug delivers them, like MIDI poly aftertouch and VST3 poly
 //!   pressure, as `PolyPressure`) are its poly pressure, CLAP and VST3 brightness expressions are
 //!   its own CC74, and CLAP polyphonic modulation offsets its `slide` and `hand` ([`params`]); in
-//!   piano mode a brightness expression sent with the note-on voices its hammer's felt. Notes are addressed by the host's voice id, else channel
-//!   and key. Every note's end goes back to the
+//!   piano mode a brightness expression sent with the note-on voices its hammer's felt. Notes are
+//!   addressed by the host's voice id, else channel and key. Every note's end goes back to the
 //!   host as `VoiceTerminated` (CLAP note-end), which CLAP polyphonic modulation needs to free
 //!   its per-voice modulators.
 //!

@@ -1,8 +1,8 @@
 //! The data path from the audio thread to the editor, lock-free and allocation-free on the audio
 //! side.
 //!
-//! - **DSP load**: each `process` call is timed with [`Instant`](std::time::Instant); the load is the time taken over
-//!   the buffer's duration (1.0 = the whole real-time budget). The audio thread keeps a smoothed
+//! - **DSP load**: each `process` call is timed with [`Instant`](std::time::Instant); the load is
+//!   the time taken over the buffer's duration (1.0 = the whole real-time budget). The audio thread keeps a smoothed
 //!   value (time constant [`LOAD_TIME_CONSTANT`]) and a peak; both go to the editor through
 //!   [`AtomicF32`]s. The editor takes the peak with a swap, so it sees the worst call since its
 //!   last frame.

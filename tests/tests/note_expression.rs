@@ -469,23 +469,35 @@ fn a_piano_notes_brightness_at_its_note_on_voices_its_felt_and_later_changes_not
     assert!(same(&strike(&vec![on_at(0, 60, 1), nan_brightness]), &plain), "a NaN brightness voiced the felt");
     let nan_cc74 = (0, Event::Timbre { channel: 3, value: f32::NAN });
     assert!(same(&strike(&vec![cc74(0), nan_cc74, on_at(0, 60, 1)]), &plain), "a NaN CC74 is none");
+    assert!(same(&strike(&vec![cc74(0), on_at(0, 60, 1), nan_cc74]), &plain), "a NaN CC74 after the note-on");
 }
 
 /// An MPE zone's master channel speaks for its members' hammers as for their slides: CC74 on
 /// channel 1, with a lower zone set up (RPN 6 on channel 1), voices the felt of a note on member
-/// channel 3 exactly as the member's own CC74 does; without a zone, channel 1's CC74 leaves the
-/// note alone.
+/// channel 3 exactly as the member's own CC74 does, sent before the note-on, just after it, or
+/// while the note waits for a stolen voice's fade (a pool of two voices); without a zone,
+/// channel 1's CC74 leaves the note alone.
 #[test]
 fn an_mpe_zones_master_cc74_voices_its_members_hammers() {
     let zone: Score = [(101, 0), (100, 6), (6, 3)]
         .map(|(controller, value)| (0, Event::RegisteredParameter { channel: 0, controller, value }))
         .to_vec();
-    let note = (0, Event::NoteOn { channel: 2, key: 60, velocity: 0.5 });
-    let cc74 = |channel| (0, Event::Timbre { channel, value: 0.9 });
+    let cc74 = |at, channel| (at, Event::Timbre { channel, value: 0.9 });
     let strike = |score: Score| play(&mut piano(Settings::default()), &score, 9_600, 256);
-    let own = strike([zone.clone(), vec![cc74(2), note]].concat());
-    let master = strike([zone.clone(), vec![cc74(0), note]].concat());
-    assert!(same(&master, &own), "the master's CC74 did not reach the member's hammer");
-    assert!(!same(&own, &strike([zone, vec![note]].concat())), "the member's CC74 did nothing");
-    assert!(same(&strike(vec![cc74(0), note]), &strike(vec![note])), "without a zone, channel 1 speaks for itself");
+    // A free voice, and a third note stealing one of two (C4 and E4 on channel 5, outside the
+    // zone of channels 2 to 4).
+    let earlier = vec![
+        (0, Event::NoteOn { channel: 4, key: 60, velocity: 0.5 }),
+        (10, Event::NoteOn { channel: 4, key: 64, velocity: 0.5 }),
+    ];
+    for (at, before) in [(0, vec![]), (2_400, earlier)] {
+        let note = (at, Event::NoteOn { channel: 2, key: 67, velocity: 0.5 });
+        let with = |events: Vec<(usize, Event)>| strike([zone.clone(), before.clone(), events].concat());
+        let own = with(vec![cc74(at, 2), note]);
+        assert!(same(&with(vec![cc74(at, 0), note]), &own), "at {at}: the master's CC74 before the note-on");
+        assert!(same(&with(vec![note, cc74(at, 0)]), &own), "at {at}: the master's CC74 after the note-on");
+        assert!(!same(&own, &with(vec![note])), "at {at}: the member's CC74 did nothing");
+    }
+    let note = (0, Event::NoteOn { channel: 2, key: 67, velocity: 0.5 });
+    assert!(same(&strike(vec![cc74(0, 0), note]), &strike(vec![note])), "without a zone, channel 1 speaks for itself");
 }

@@ -49,8 +49,8 @@ pub struct Showcase {
     pub seconds: f64,
 }
 
-/// The showcases: every category's, in [`CATEGORIES`](qsa_dsp::instrument::CATEGORIES) order (the slide's electric and acoustic
-/// guitar).
+/// The showcases: every category's, in [`CATEGORIES`](qsa_dsp::instrument::CATEGORIES) order
+/// (the slide's electric and acoustic guitar).
 pub const SHOWCASES: [Showcase; 5] = [
     Showcase { category: "Paper", preset: "slide-phrase", midi: "slide-phrase.mid", seconds: 3.4 },
     Showcase { category: "Piano", preset: "concert-grand", midi: "piano-phrase.mid", seconds: 3.4 },

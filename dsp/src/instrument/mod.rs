@@ -671,10 +671,8 @@ impl Instrument {
                 }
                 // A strike still to come on those channels takes it too.
                 let (now, settings, pianos) = (self.now, self.note_settings(), self.pools().0);
-                if let Some(value) = value {
-                    for i in self.notes.live_in(pianos) {
-                        self.voices[i].set_channel_timbre(channels, value, &settings, now);
-                    }
+                for i in self.notes.live_in(pianos) {
+                    self.voices[i].set_channel_timbre(channels, value, &settings, now);
                 }
             }
             Event::PolyPressure { channel, key, value } => {

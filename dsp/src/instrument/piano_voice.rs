@@ -388,7 +388,7 @@ pub const TIMBRE_HARDNESS_STEP: f64 = 2.0;
 /// setting) and voiced by the note's CC74 `timbre`: `hardness · 2^((127·timbre − 64)/32)`,
 /// from a quarter at CC 0 to 3.9 times at 127, clamped to the setting's range (0.1–10), as a
 /// technician hardens or softens a hammer by needling or ironing its felt. No CC74, or CC 64
-/// (within a thousandth of a step, which a value passed as an `f32` fraction misses by 4·10⁻⁷),
+/// (within a thousandth of a step, which a value passed as an `f32` fraction misses by 2.4·10⁻⁷),
 /// leaves the setting exactly as it is.
 pub fn felt_hardness(hardness: f64, timbre: Option<f64>) -> f64 {
     let Some(t) = timbre.filter(|t| t.is_finite()) else { return hardness };
@@ -727,16 +727,16 @@ impl PianoVoice {
     /// its note-on. A hammer already thrown keeps its felt. From then on the channel's CC74 no
     /// longer reaches the note ([`set_channel_timbre`](Self::set_channel_timbre)).
     pub fn set_brightness(&mut self, value: f64, settings: &Settings, now: u64) {
-        if self.voice_felt(value, settings, now) {
+        if self.voice_felt(Some(value), settings, now) {
             self.own_brightness = true;
         }
     }
 
-    /// The CC74 of the channels `channels` (one bit per MIDI channel) changed to `value` (0..=1):
-    /// as [`set_brightness`](Self::set_brightness) for a strike still to come on one of them,
-    /// unless the note has a brightness of its own, so that a CC74 sent at the note-on's sample
-    /// counts whether it comes before the note-on or after it.
-    pub fn set_channel_timbre(&mut self, channels: u16, value: f64, settings: &Settings, now: u64) {
+    /// The CC74 of the channels `channels` (one bit per MIDI channel) changed to `value` (0..=1,
+    /// `None` for none): as [`set_brightness`](Self::set_brightness) for a strike still to come on
+    /// one of them, unless the note has a brightness of its own, so that a CC74 sent at the
+    /// note-on's sample counts whether it comes before the note-on or after it.
+    pub fn set_channel_timbre(&mut self, channels: u16, value: Option<f64>, settings: &Settings, now: u64) {
         let note = self.pending.unwrap_or(self.strike);
         if channels >> (note.channel & 15) & 1 == 1 && !self.own_brightness {
             self.voice_felt(value, settings, now);
@@ -744,16 +744,18 @@ impl PianoVoice {
     }
 
     /// Voice the felt of a strike still to come with the CC74 `value` (see
-    /// [`set_brightness`](Self::set_brightness)); whether there was one.
-    fn voice_felt(&mut self, value: f64, settings: &Settings, now: u64) -> bool {
+    /// [`set_brightness`](Self::set_brightness)); whether there was one. A voice fading out with
+    /// no note to follow (shed or choked) has none, though it may have begun to fade at this
+    /// sample.
+    fn voice_felt(&mut self, value: Option<f64>, settings: &Settings, now: u64) -> bool {
         if let Some(pending) = &mut self.pending {
-            pending.timbre = Some(value);
+            pending.timbre = value;
             return true;
         }
-        if !(self.sounding && self.started == now) {
+        if !(self.sounding && !self.shedding && self.started == now) {
             return false;
         }
-        let strike = Strike { timbre: Some(value), ..self.strike };
+        let strike = Strike { timbre: value, ..self.strike };
         if self.fit_felt(&strike, settings) {
             self.strike = strike;
         }
