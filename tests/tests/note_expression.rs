@@ -419,8 +419,9 @@ fn a_piano_notes_cc74_voices_its_hammers_felt_as_the_hardness_setting_does() {
 /// fade), under each solver (the felt fitted twice in one sample is fitted once); so does the
 /// channel's CC74 sent just after the note-on, unless the note has a brightness of its own. Sent
 /// a sample later, once the hammer has been thrown, either leaves the note as it was; the
-/// channel's next note takes the CC74. A NaN brightness or CC74 voices nothing. Host buffers of
-/// any size give the same samples.
+/// channel's next note takes the CC74, and a stolen note fading out, its hammer still on the
+/// strings (its successor choked at once), keeps its felt. A NaN brightness voices nothing, and a NaN CC74 is none. Host buffers
+/// of any size give the same samples.
 #[test]
 fn a_piano_notes_brightness_at_its_note_on_voices_its_felt_and_later_changes_nothing() {
     let on_at = |at: usize, key: u8, voice: i32| (at, Event::NoteOnWithId { channel: 3, key, velocity: 0.5, voice });
@@ -470,6 +471,12 @@ fn a_piano_notes_brightness_at_its_note_on_voices_its_felt_and_later_changes_not
     let nan_cc74 = (0, Event::Timbre { channel: 3, value: f32::NAN });
     assert!(same(&strike(&vec![cc74(0), nan_cc74, on_at(0, 60, 1)]), &plain), "a NaN CC74 is none");
     assert!(same(&strike(&vec![cc74(0), on_at(0, 60, 1), nan_cc74]), &plain), "a NaN CC74 after the note-on");
+    // A note stealing a voice whose hammer still touches its strings, and choked at once, leaves
+    // the stolen note fading with its felt.
+    let choked: Score =
+        vec![on_at(0, 60, 1), on_at(10, 64, 2), on_at(20, 67, 3), (20, Event::Choke { note: NoteTarget::voice(3) })];
+    let with_cc74: Score = choked.iter().copied().chain([cc74(20)]).collect();
+    assert!(same(&strike(&with_cc74), &strike(&choked)), "CC74 re-voiced a stolen note's thrown hammer");
 }
 
 /// An MPE zone's master channel speaks for its members' hammers as for their slides: CC74 on
