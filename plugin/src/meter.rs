@@ -2,10 +2,10 @@
 //! side.
 //!
 //! - **DSP load**: each `process` call is timed with [`Instant`](std::time::Instant); the load is
-//!   the time taken over the buffer's duration (1.0 = the whole real-time budget). The audio thread keeps a smoothed
-//!   value (time constant [`LOAD_TIME_CONSTANT`]) and a peak; both go to the editor through
-//!   [`AtomicF32`]s. The editor takes the peak with a swap, so it sees the worst call since its
-//!   last frame.
+//!   the time taken over the buffer's duration (1.0 = the whole real-time budget). The audio
+//!   thread keeps a smoothed value (time constant [`LOAD_TIME_CONSTANT`]) and a peak; both go to
+//!   the editor through [`AtomicF32`]s. The editor takes the peak with a swap, so it sees the
+//!   worst call since its last frame.
 //! - **Monitor**: every [`SNAPSHOT_PERIOD`] seconds of audio (counted in samples, so it does not
 //!   depend on the host's buffer size) the audio thread takes the engine's
 //!   [`Monitor`] and `force_push`es it into a fixed-capacity

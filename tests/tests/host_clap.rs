@@ -1027,8 +1027,8 @@ fn clap_brightness_expression_presses_only_its_note() {
 /// In piano mode a CLAP brightness expression sent with its note-on voices that note's hammer
 /// felt: by note id it renders exactly as MIDI CC74 at the same value sent on the note's channel
 /// before the note-on, and at 1.0 (a felt 3.9 times as stiff) more than a tenth of the note's rms
-/// differs from the note without it (measured 0.26). Sent 64 samples later, once the hammer is thrown, it changes
-/// nothing.
+/// differs from the note without it (measured 0.26). Sent 64 samples later, once the hammer is
+/// thrown, it changes nothing.
 #[test]
 fn clap_brightness_expression_voices_a_piano_notes_felt_at_its_note_on() {
     let bundle = release_bundle();

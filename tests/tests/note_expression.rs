@@ -420,8 +420,8 @@ fn a_piano_notes_cc74_voices_its_hammers_felt_as_the_hardness_setting_does() {
 /// channel's CC74 sent just after the note-on, unless the note has a brightness of its own. Sent
 /// a sample later, once the hammer has been thrown, either leaves the note as it was; the
 /// channel's next note takes the CC74, and a stolen note fading out, its hammer still on the
-/// strings (its successor choked at once), keeps its felt. A NaN brightness voices nothing, and a NaN CC74 is none. Host buffers
-/// of any size give the same samples.
+/// strings (its successor choked at once), keeps its felt. A NaN brightness voices nothing, and
+/// a NaN CC74 is none. Host buffers of any size give the same samples.
 #[test]
 fn a_piano_notes_brightness_at_its_note_on_voices_its_felt_and_later_changes_nothing() {
     let on_at = |at: usize, key: u8, voice: i32| (at, Event::NoteOnWithId { channel: 3, key, velocity: 0.5, voice });
