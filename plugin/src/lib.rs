@@ -233,6 +233,9 @@ impl Plugin for QsaStrings {
 
     fn reset(&mut self) {
         if let Some(engine) = &mut self.engine {
+            // Parameters set while the plugin was not processing (a state loaded, a host's flush
+            // while stopped) count from the reset's first sample, as on a new instance.
+            engine.set_settings(&self.params.settings());
             engine.reset();
         }
         self.guard.reset();

@@ -775,6 +775,50 @@ fn a_new_sample_rate_from_the_host_sounds_as_a_fresh_instance_at_that_rate() {
     }
 }
 
+/// Parameters set while the host has the plugin stopped (a flush between stop and start, or a
+/// state loaded then, as when a project is restored or an edit made while the transport stood)
+/// sound from the first sample once it starts again, as on a fresh instance made with them, to
+/// the bit: nothing glides from the values before the stop. The gain goes from +12 to −36 dB
+/// (the limiter off), and in slide mode the pickup and its resonance move across their ranges,
+/// with notes ringing when the host stops.
+#[test]
+fn parameters_set_while_stopped_sound_from_the_first_sample_after_the_restart() {
+    let bundle = release_bundle();
+    for mode in [0.0, 1.0] {
+        let before =
+            [param("mode", mode), param("limit", 0.0), param("gain", 1.0), param("pickup", 0.0), param("ptone", 1.0)];
+        let after =
+            [param("mode", mode), param("limit", 0.0), param("gain", 0.0), param("pickup", 1.0), param("ptone", 0.0)];
+        let held: Score = [48u8, 55, 64].iter().enumerate().map(|(i, &k)| (100 * i, Ev::On(0, k, 0.9))).collect();
+        let score: Score = vec![(0, Ev::On(0, 57, 0.9)), (4_800, Ev::Off(0, 57))];
+        let samples = 14_400;
+        let fresh = Plugin::at_48k(&bundle, &after).render_blocks(&score, samples, 512);
+        assert!(fresh.peak() > 1e-4, "mode {mode}: the fresh instance is silent");
+        let state = Plugin::at_48k(&bundle, &after).save();
+        for by_state in [false, true] {
+            let what = format!("mode {mode}, {}", if by_state { "a state loaded" } else { "a flush" });
+            let mut host = Plugin::at_48k(&bundle, &before);
+            let ringing = host.render_blocks(&held, 4_800, 512);
+            assert!(ringing.peak() > 10.0 * fresh.peak(), "{what}: the notes before are louder");
+            host.restart(|p| {
+                if by_state {
+                    assert!(p.load(&state), "{what}: the state loads");
+                } else {
+                    p.flush_inactive(&after);
+                }
+            });
+            let heard = host.render_blocks(&score, samples, 512);
+            if let Some(i) = bit_identical(&heard, &fresh) {
+                panic!(
+                    "{what}: differs from a fresh instance from sample {i}: {} against {}",
+                    heard.left.get(i).copied().unwrap_or(f32::NAN),
+                    fresh.left.get(i).copied().unwrap_or(f32::NAN)
+                );
+            }
+        }
+    }
+}
+
 /// Garbage as saved state (random bytes, a plausible length prefix before random bytes, valid
 /// JSON of the wrong shape, a truncated real state) is refused, and every parameter keeps its
 /// value; a real saved state still loads afterwards and restores its values; the instrument

@@ -585,6 +585,40 @@ fn a_note_struck_while_every_voice_fades_takes_the_voice_whose_next_note_came_fi
     assert_eq!(p.steals(), 3);
 }
 
+/// A note that waits for a stolen voice's fade starts under its own channel's pedals, not those
+/// of the note it takes the voice from. One voice sounds A1 on channel 4; C4 comes on channel 3,
+/// whose sustain pedal is down (channels 3 and 4 are not an MPE zone's master, so each pedal
+/// speaks for its own channel). C4 sounds the same to the bit whether or not channel 4's pedal
+/// goes down with its note-on (the old note fades from then on, untouched by it), and its
+/// partners ring from its strike: without channel 3's pedal it sounds different (measured).
+#[test]
+fn a_note_waiting_for_a_steal_starts_under_its_own_channels_pedals() {
+    let render = |own_pedal: bool, old_pedal: bool| {
+        let mut score: Score = vec![(0, Event::NoteOn { channel: 3, key: 33, velocity: 0.7 })];
+        if own_pedal {
+            score.push((0, Event::Sustain { channel: 2, depth: 1.0 }));
+        }
+        score.push((4_800, Event::NoteOn { channel: 2, key: 60, velocity: 0.7 }));
+        if old_pedal {
+            score.push((4_800, Event::Sustain { channel: 3, depth: 1.0 }));
+        }
+        let mut p = piano(1);
+        let out = play(&mut p, &score, 48_000, || 256);
+        assert_eq!(p.steals(), 1, "C4 steals A1's voice");
+        out
+    };
+    let plain = render(true, false);
+    let old_down = render(true, true);
+    let first = plain.iter().zip(&old_down).position(|(a, b)| a.to_bits() != b.to_bits());
+    assert_eq!(first, None, "the old note's channel's pedal reaches the new note");
+    let unpedalled = render(false, false);
+    let tail = 9_600..;
+    let change: Vec<f32> = plain[tail.clone()].iter().zip(&unpedalled[tail.clone()]).map(|(a, b)| a - b).collect();
+    let change = rms(&change) / rms(&unpedalled[tail]);
+    println!("C4 with its channel's pedal against without: rms change {change:.3}");
+    assert!(change > 0.05, "the pedal of C4's channel makes no difference: {change}");
+}
+
 /// A key struck again and again while the voice it stole still fades sounds: on two voices
 /// holding C3 and G3, C5 struck 40 times every 2, 4, 5 or 6 ms (velocities 1/127 and 1 in turn)
 /// takes a voice whose steal fade lasts 5 ms. The strikes that come while that fade goes on
@@ -1876,9 +1910,11 @@ fn busy_session() -> Score {
 /// busy session cut off at a sample off the control blocks' grid, with notes, pedals and
 /// controllers still held, and the pickup and its resonance gliding to where the settings last
 /// moved them, what follows is the same, to the bit, as on an instrument just made with the
-/// settings in force. In both modes, at 44.1 and 48 kHz, with a control block of 64 samples
-/// and of 37, and in random buffers. The notes that sounded end at sample 0, and the reset
-/// allocates nothing (a host resets on the audio thread).
+/// settings in force, whether or not a buffer was rendered between the settings' change and
+/// the reset (a host loads state or flushes parameters while stopped, then resets). In both
+/// modes, at 44.1 and 48 kHz, with control blocks of 64, 37 and 16 samples, and in random
+/// buffers. The notes that sounded end at sample 0, and the reset allocates nothing (a host
+/// resets on the audio thread).
 #[test]
 fn a_reset_instrument_renders_as_one_just_made() {
     let after: Score = vec![
@@ -1892,32 +1928,71 @@ fn a_reset_instrument_renders_as_one_just_made() {
     ];
     for fs in [44_100.0, FS] {
         for mode in [Mode::Piano, Mode::Slide] {
-            for block in [64, 37] {
+            for block in [64, 37, 16] {
                 let settings = Settings { mode, block, ..Default::default() };
                 let what = format!("{mode:?} at {fs} Hz, control blocks of {block}");
                 let samples = (0.25 * fs) as usize;
                 let fresh = play(&mut Instrument::new(fs, 12, settings), &after, samples, || 256);
                 assert!(rms(&fresh) > 1e-4, "{what}: the notes after are silent");
-                let elsewhere = Settings { pickup_position: 0.6, pickup_resonance: 8_000.0, ..settings };
-                let mut used = Instrument::new(fs, 12, elsewhere);
-                let mut rng = seeded_rng(block as u64);
-                let session = play(&mut used, &busy_session(), 6_001, || rng.random_range(1..300));
-                assert!(rms(&session[4_000..]) > 1e-4, "{what}: the session is silent at its end");
-                used.set_settings(&settings);
-                let (mut l, mut r) = ([0.0f32; 300], [0.0f32; 300]);
-                used.process(&mut l, &mut r);
-                let _ = used.drain_ended().count();
-                assert_eq!(allocations_in(|| used.reset()), 0, "{what}: the reset allocates");
-                assert_eq!(used.now(), 0, "{what}: the clock");
-                let ended: Vec<u64> = used.drain_ended().map(|n| n.at).collect();
-                assert!(
-                    !ended.is_empty() && ended.iter().all(|&at| at == 0),
-                    "{what}: the notes that sounded end at 0, {ended:?}"
-                );
-                let heard = play(&mut used, &after, samples, || rng.random_range(1..300));
-                let first = heard.iter().zip(&fresh).position(|(a, b)| a.to_bits() != b.to_bits());
-                assert_eq!(first, None, "{what}: differs from an instrument just made from this sample on");
+                for rendered in [true, false] {
+                    let what = format!(
+                        "{what}, {} between the settings and the reset",
+                        if rendered { "a buffer" } else { "nothing" }
+                    );
+                    let elsewhere = Settings { pickup_position: 0.6, pickup_resonance: 8_000.0, gain: 3.5, ..settings };
+                    let mut used = Instrument::new(fs, 12, elsewhere);
+                    let mut rng = seeded_rng(block as u64);
+                    let session = play(&mut used, &busy_session(), 6_001, || rng.random_range(1..300));
+                    assert!(rms(&session[4_000..]) > 1e-4, "{what}: the session is silent at its end");
+                    used.set_settings(&settings);
+                    if rendered {
+                        let (mut l, mut r) = ([0.0f32; 300], [0.0f32; 300]);
+                        used.process(&mut l, &mut r);
+                    }
+                    let _ = used.drain_ended().count();
+                    assert_eq!(allocations_in(|| used.reset()), 0, "{what}: the reset allocates");
+                    assert_eq!(used.now(), 0, "{what}: the clock");
+                    let ended: Vec<u64> = used.drain_ended().map(|n| n.at).collect();
+                    assert!(
+                        !ended.is_empty() && ended.iter().all(|&at| at == 0),
+                        "{what}: the notes that sounded end at 0, {ended:?}"
+                    );
+                    let heard = play(&mut used, &after, samples, || rng.random_range(1..300));
+                    let first = heard.iter().zip(&fresh).position(|(a, b)| a.to_bits() != b.to_bits());
+                    assert_eq!(first, None, "{what}: differs from an instrument just made from this sample on");
+                }
             }
+        }
+    }
+}
+
+/// A reset instrument chooses the voices for its next notes, and ends them, as one just made:
+/// with control blocks shorter than the span over which a voice weighs its energy, the voices
+/// cut off mid-span by the reset and the keys they sounded leave no trace. Two voices sounding
+/// C6 and C2, reset 40 samples in (and after a buffer of 7 samples more); then C2 and G2 struck
+/// and let go after 0.1 s end at the same samples, and sound the same to the bit, as on an
+/// instrument just made, with control blocks of 16 and 37 samples.
+#[test]
+fn a_reset_instrument_ends_its_next_notes_where_one_just_made_does() {
+    let after: Score = vec![(0, on(36, 0.7)), (50, on(43, 0.6)), (4_800, off(36)), (4_800, off(43))];
+    let samples = 3 * 48_000;
+    for block in [16, 37] {
+        let settings = Settings { block, ..Default::default() };
+        let mut made = Instrument::new(FS, 2, settings);
+        let fresh = play(&mut made, &after, samples, || 512);
+        let fresh_ends: Vec<(u8, u64)> = made.drain_ended().map(|n| (n.note.key, n.at)).collect();
+        assert_eq!(fresh_ends.len(), 2, "block {block}: both notes end within 3 s: {fresh_ends:?}");
+        for cut in [40, 47] {
+            let mut used = Instrument::new(FS, 2, settings);
+            let _ = play(&mut used, &vec![(0, on(84, 0.8)), (5, on(36, 0.5))], cut, || 40);
+            used.reset();
+            let _ = used.drain_ended().count();
+            let heard = play(&mut used, &after, samples, || 512);
+            let ends: Vec<(u8, u64)> = used.drain_ended().map(|n| (n.note.key, n.at)).collect();
+            println!("block {block}, reset at {cut}: ends {ends:?}, just made {fresh_ends:?}");
+            assert_eq!(ends, fresh_ends, "block {block}, reset at {cut}: the notes end as on an instrument just made");
+            let first = heard.iter().zip(&fresh).position(|(a, b)| a.to_bits() != b.to_bits());
+            assert_eq!(first, None, "block {block}, reset at {cut}: differs from an instrument just made");
         }
     }
 }

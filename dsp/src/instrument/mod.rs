@@ -623,7 +623,7 @@ impl Instrument {
         self.now = 0;
         self.in_block = 0;
         self.notes.end_all(0);
-        self.voices.iter_mut().for_each(|v| v.started = 0);
+        self.voices.iter_mut().for_each(PianoVoice::reset);
         // As made with the settings in force: the pickup and its resonance where they ask, not
         // gliding there.
         let settings = self.requested;
@@ -633,6 +633,7 @@ impl Instrument {
         self.circuit.set(self.resonance, self.sample_rate);
         self.slides.iter_mut().for_each(|v| v.reset(&settings));
         self.sides.reset();
+        self.output.set_gain(settings.gain);
         self.output.reset();
     }
 
@@ -1123,7 +1124,7 @@ impl Instrument {
             if !(v.sounding || v.fading()) {
                 continue;
             }
-            let dampers = dampers[usize::from(v.strike.channel & 15)];
+            let dampers = dampers[usize::from(v.channel_now() & 15)];
             v.begin_block(&self.settings, dampers, len, self.now, Some(&mut self.partners), &mut seeks);
         }
         // The pickup slides to a new position instead of jumping: its weights move a little in

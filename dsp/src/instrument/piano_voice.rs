@@ -378,6 +378,9 @@ pub struct Strike {
     pub timbre: Option<f64>,
 }
 
+/// What a voice holds before its first note: C4 on channel 1, never struck.
+const UNPLAYED: Strike = Strike { channel: 0, key: 60, velocity: 0.0, shifted: false, timbre: None };
+
 /// CC74's middle, 64 of 0..=127: the felt as the `Hardness` setting has it.
 pub const TIMBRE_CENTRE: f64 = 64.0 / 127.0;
 
@@ -573,7 +576,7 @@ impl PianoVoice {
             extra: per_mode(),
             core,
             solvers: Solvers::new(law),
-            strike: Strike { channel: 0, key: 60, velocity: 0.0, shifted: false, timbre: None },
+            strike: UNPLAYED,
             sounding: false,
             key_down: false,
             started: 0,
@@ -809,6 +812,11 @@ impl PianoVoice {
         self.damper = 0.0;
         self.applied = 0.0;
         self.swing_age = f64::INFINITY;
+        // The new note's clocks start with it: when its dampers' coefficients are next updated
+        // and when its energy is next weighed do not depend on the note the voice played before.
+        self.since_update = 0.0;
+        self.partner_since = 0.0;
+        self.unweighed = 0;
         true
     }
 
@@ -938,6 +946,12 @@ impl PianoVoice {
         self.pending.filter(|_| self.fade_left == 0).map(|p| p.key)
     }
 
+    /// The MIDI channel whose pedals reach this voice from the coming block's start: that of the
+    /// pending note it starts then, else its note's.
+    pub fn channel_now(&self) -> u8 {
+        self.pending.filter(|_| self.fade_left == 0).map_or(self.strike.channel, |p| p.channel)
+    }
+
     /// The key this voice will sound once any steal fade is over.
     pub fn upcoming_key(&self) -> Option<u8> {
         match self.pending {
@@ -1001,6 +1015,14 @@ impl PianoVoice {
     /// ([`UnisonCore::swing_at`]): what a damper the sustain pedal holds partly up meets.
     pub fn pad_swing(&self) -> f64 {
         self.core.swing_at(pad_at(self.position, self.core.string().params().length))
+    }
+
+    /// As made: silent, with no note played yet, so that the voices are chosen for the next
+    /// notes and weigh their energy as on a new instrument.
+    pub fn reset(&mut self) {
+        self.silence();
+        self.strike = UNPLAYED;
+        self.started = 0;
     }
 
     /// Stop at once: the string at rest, no pending note, no guard fade under way.

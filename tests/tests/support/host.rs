@@ -213,17 +213,7 @@ impl Plugin {
         .expect("instantiate");
         let render: PluginRender = instance.plugin_handle().get_extension().expect("render extension");
         render.set(&instance.plugin_handle(), RenderMode::Offline).expect("offline rendering");
-        if !setup.is_empty() {
-            let params: PluginParams = instance.plugin_handle().get_extension().expect("params extension");
-            let mut events = EventBuffer::new();
-            for ev in setup {
-                let Ev::Param(id, value) = *ev else { panic!("setup takes parameter values only") };
-                events.push(&ParamValueEvent::new(0, ClapId::new(id), Pckn::match_all(), value));
-            }
-            let mut output = EventBuffer::new();
-            let mut handle = instance.inactive_plugin_handle().expect("inactive");
-            params.flush(&mut handle, &events.as_input(), &mut output.as_output());
-        }
+        flush_inactive(&mut instance, setup);
         let config = PluginAudioConfiguration { sample_rate, min_frames_count: 1, max_frames_count: max_block as u32 };
         let processor = instance.activate(|_, _| (), config).expect("activate").start_processing().expect("start");
         Self { instance, processor: Some(processor), config, max_block }
@@ -239,6 +229,25 @@ impl Plugin {
         let processor =
             self.instance.activate(|_, _| (), self.config).expect("activate").start_processing().expect("start");
         self.processor = Some(processor);
+    }
+
+    /// Stop processing and deactivate, run `while_stopped` (which may set parameters with
+    /// [`flush_inactive`] or load state), then activate at the same sample rate and start again,
+    /// as a host does around edits made while its transport stands.
+    pub fn restart(&mut self, while_stopped: impl FnOnce(&mut Self)) {
+        if let Some(processor) = self.processor.take() {
+            self.instance.deactivate(processor.stop_processing());
+        }
+        while_stopped(self);
+        let processor =
+            self.instance.activate(|_, _| (), self.config).expect("activate").start_processing().expect("start");
+        self.processor = Some(processor);
+    }
+
+    /// Set parameter values by flushing them while the instance is inactive.
+    pub fn flush_inactive(&mut self, values: &[Ev]) {
+        assert!(self.processor.is_none(), "flush_inactive while active");
+        flush_inactive(&mut self.instance, values);
     }
 
     /// A 48 kHz instance taking blocks of up to 8192 samples.
@@ -367,6 +376,23 @@ impl Drop for Plugin {
             self.instance.deactivate(processor.stop_processing());
         }
     }
+}
+
+/// Set `values` (parameter values only) on an inactive instance by a parameter flush, as a host
+/// restoring a project does.
+fn flush_inactive(instance: &mut PluginInstance<TestHost>, values: &[Ev]) {
+    if values.is_empty() {
+        return;
+    }
+    let params: PluginParams = instance.plugin_handle().get_extension().expect("params extension");
+    let mut events = EventBuffer::new();
+    for ev in values {
+        let Ev::Param(id, value) = *ev else { panic!("a flush takes parameter values only") };
+        events.push(&ParamValueEvent::new(0, ClapId::new(id), Pckn::match_all(), value));
+    }
+    let mut output = EventBuffer::new();
+    let mut handle = instance.inactive_plugin_handle().expect("inactive");
+    params.flush(&mut handle, &events.as_input(), &mut output.as_output());
 }
 
 pub fn push_event(buffer: &mut EventBuffer, time: u32, ev: Ev) {
