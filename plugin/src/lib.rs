@@ -35,7 +35,8 @@
 //!   it through the lock-free [`meter`] path (no allocation, lock or I/O on the audio thread).
 //!
 //! State (parameters) is saved by the framework with the plugin's version, which `filter_state`
-//! sees first: that is where later releases migrate old state.
+//! sees first: it brings every number into its parameter's range (a corrupt value to the
+//! default), and it is where later releases migrate old state.
 
 pub mod editor;
 pub mod meter;
@@ -47,9 +48,10 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use nice_plug::midi::{Channel, Key, VoiceID};
+use nice_plug::plugin::ParamValue;
 use nice_plug::prelude::*;
 use nice_plug_egui::{EguiEditor, EguiEditorState};
-use qsa_dsp::instrument::{Event, Instrument, Note, NoteTarget, bend_from_normalised};
+use qsa_dsp::instrument::{Event, Instrument, Note, NoteTarget, ParamKind, bend_from_normalised, param_spec};
 
 use meter::{Shared, Tap};
 use overload::OverloadGuard;
@@ -200,6 +202,23 @@ impl Plugin for QsaStrings {
     type Editor = EguiEditor<editor::EditorApp>;
     type SysExMessage = ();
     type BackgroundTask = ();
+
+    /// Every number in a state being loaded is brought into its parameter's range, and one that
+    /// is not finite (a corrupt state: JSON reads 1e39 as an `f32` infinity) becomes the default,
+    /// since the framework stores saved values as they are. The engine then never hears a value
+    /// the parameter cannot take, and the state the host saves next can be read back.
+    fn filter_state(state: &mut PluginState) {
+        for (id, value) in &mut state.params {
+            let Some(spec) = param_spec(id) else { continue };
+            match value {
+                ParamValue::F32(v) => *v = spec.clamp_plain(*v),
+                ParamValue::I32(v) if matches!(spec.kind, ParamKind::Int { .. }) => {
+                    *v = spec.clamp_plain(*v as f32) as i32;
+                }
+                _ => {}
+            }
+        }
+    }
 
     fn params(&self) -> Arc<dyn Params> {
         self.params.clone()

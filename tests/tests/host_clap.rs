@@ -950,6 +950,47 @@ fn a_state_from_a_later_version_loads_what_it_can() {
     assert!(audio.peak() > AUDIBLE, "the instrument plays after a later version's state");
 }
 
+/// A state whose numbers lie beyond their parameters' ranges (a hand-edited or corrupt preset)
+/// plays them at the ranges' ends: a gain of 1000 (the limiter off) sounds as +12 dB, to the bit,
+/// not louder. A number too large for an `f32` (1e39, which reads as infinity) takes the
+/// parameter's default, and the state the plugin then saves loads back with the same values
+/// (an infinity would be saved as `null`, which no instance could read).
+#[test]
+fn a_states_numbers_beyond_their_ranges_play_at_the_ranges_ends() {
+    let bundle = release_bundle();
+    let score: Score = vec![(0, Ev::On(0, 60, 1.0))];
+    let with_values = |values: &[(&str, serde_json::Value)]| {
+        let mut p = Plugin::at_48k(&bundle, &[]);
+        let mut state = state_json(&p.save());
+        for (id, value) in values {
+            state["params"][*id] = value.clone();
+        }
+        assert!(p.load(&state_bytes(&state)), "the state {values:?} loads");
+        p
+    };
+    let off = ("limit", serde_json::json!({ "bool": false }));
+    let top = with_values(&[off.clone(), ("gain", serde_json::json!({ "f32": 3.981_071_7 }))])
+        .render_blocks(&score, 9_600, 512);
+    let beyond =
+        with_values(&[off.clone(), ("gain", serde_json::json!({ "f32": 1000.0 }))]).render_blocks(&score, 9_600, 512);
+    assert!(top.peak() > AUDIBLE, "the note at +12 dB is silent");
+    if let Some(i) = bit_identical(&beyond, &top) {
+        panic!("a gain of 1000 differs from +12 dB from sample {i}: peaks {} and {}", beyond.peak(), top.peak());
+    }
+    let mut p =
+        with_values(&[("gain", serde_json::json!({ "f32": 1e39 })), ("hard", serde_json::json!({ "f32": -1e39 }))]);
+    let mut defaults = Plugin::at_48k(&bundle, &[]);
+    for id in ["gain", "hard"] {
+        assert_eq!(p.value(clap_id(id)), defaults.value(clap_id(id)), "{id}: a non-finite number takes the default");
+    }
+    let resaved = p.save();
+    let mut again = Plugin::at_48k(&bundle, &[param("gain", 1.0), param("hard", 1.0)]);
+    assert!(again.load(&resaved), "the state saved after a non-finite number loads");
+    for id in ["gain", "hard"] {
+        assert_eq!(again.value(clap_id(id)), defaults.value(clap_id(id)), "{id}: read back");
+    }
+}
+
 // ------------------------------------------------------------------------------------------------
 // Per-note expression, groups and value names
 // ------------------------------------------------------------------------------------------------

@@ -125,7 +125,8 @@ pub use presets::{
     CATEGORIES, FACTORY_PRESETS, Preset, PresetError, factory_presets, find_preset, load_factory_presets, parse_preset,
 };
 pub use settings::{
-    HAND_RANGE, HARDNESS_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody, hammer_speed,
+    GAIN_RANGE_DB, HAND_RANGE, HARDNESS_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody,
+    hammer_speed,
 };
 pub use slide_scale::SlideScale;
 pub use slide_voice::{

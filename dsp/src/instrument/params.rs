@@ -15,7 +15,9 @@
 use crate::contact::Method;
 use crate::instrument::MAX_VOICES;
 use crate::instrument::notes::NoteParam;
-use crate::instrument::settings::{HARDNESS_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody};
+use crate::instrument::settings::{
+    GAIN_RANGE_DB, HARDNESS_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody,
+};
 
 /// The editor section (host group: VST3 unit, CLAP module) that shows a parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -524,7 +526,14 @@ pub const PARAMETERS: [ParamSpec; 35] = [
         id: "gain",
         name: "Output gain",
         group: Group::Output,
-        kind: float(-36.0, 12.0, 0.0, " dB", Scale::Decibels, ValueDisplay::Rounded(1)),
+        kind: float(
+            GAIN_RANGE_DB.0 as f32,
+            GAIN_RANGE_DB.1 as f32,
+            0.0,
+            " dB",
+            Scale::Decibels,
+            ValueDisplay::Rounded(1),
+        ),
         maps_to: "[`Settings::gain`] (linear)",
         get: |v| v.gain,
         put: |v, x| v.gain = x,
@@ -646,6 +655,18 @@ impl ParamSpec {
             ParamKind::Float { scale, .. } => scale.to_plain(shown),
             _ => shown,
         }
+    }
+
+    /// `plain`, a plain value as saved state holds it, brought into the parameter's range (a
+    /// choice to its index range); a value that is not finite gives the default.
+    pub fn clamp_plain(&self, plain: f32) -> f32 {
+        let (lo, hi) = match self.kind {
+            ParamKind::Float { min, max, .. } => (self.to_plain(min), self.to_plain(max)),
+            ParamKind::Int { min, max, .. } => (min as f32, max as f32),
+            ParamKind::Bool { .. } => (0.0, 1.0),
+            ParamKind::Choice { options, .. } => (0.0, options.len().saturating_sub(1) as f32),
+        };
+        if plain.is_finite() { plain.clamp(lo, hi) } else { self.default_plain() }
     }
 
     /// Whether `shown`, a value in the parameter's shown unit, is in its range.
@@ -961,6 +982,46 @@ mod tests {
         values.set("gain", "-36").unwrap();
         values.set("gain", "12").unwrap();
         values.set("voices", "128").unwrap();
+    }
+
+    /// Whether two `Debug` texts are the same but for numbers that differ by no more than an
+    /// `f32`'s rounding (the table's ends are `f32`, the engine's `f64`).
+    fn same_to_f32(a: &str, b: &str) -> bool {
+        let words = |s: &str| {
+            s.split([' ', ',', ':', '{', '}']).filter(|w| !w.is_empty()).map(str::to_owned).collect::<Vec<_>>()
+        };
+        let (a, b) = (words(a), words(b));
+        a.len() == b.len()
+            && a.iter().zip(&b).all(|(x, y)| match (x.parse::<f64>(), y.parse::<f64>()) {
+                (Ok(x), Ok(y)) => (x - y).abs() <= 1e-7 * x.abs().max(y.abs()),
+                _ => x == y,
+            })
+    }
+
+    /// The engine plays no value a parameter cannot take: for every number, a plain value far
+    /// beyond either end of its range (as a corrupt saved state may hold) gives the engine the
+    /// same settings as that end, and `clamp_plain` brings it to that end (a NaN to the default).
+    #[test]
+    fn the_engine_clamps_every_number_to_its_parameters_range() {
+        for spec in &PARAMETERS {
+            let (lo, hi) = match spec.kind {
+                ParamKind::Float { min, max, .. } => (spec.to_plain(min), spec.to_plain(max)),
+                ParamKind::Int { min, max, .. } => (min as f32, max as f32),
+                _ => continue,
+            };
+            let span = (hi - lo).max(1.0);
+            for (end, beyond) in [(lo, (lo - 100.0 * span).min(0.0)), (hi, hi + 100.0 * span)] {
+                let with = |plain: f32| {
+                    let mut values = ParamValues::default();
+                    (spec.put)(&mut values, plain);
+                    values.settings().sanitized()
+                };
+                let (a, b) = (format!("{:?}", with(beyond)), format!("{:?}", with(end)));
+                assert!(same_to_f32(&a, &b), "{}: {beyond} plays as {end}:\n{a}\n{b}", spec.id);
+                assert_eq!(spec.clamp_plain(beyond), end, "{}: {beyond} clamped", spec.id);
+            }
+            assert_eq!(spec.clamp_plain(f32::NAN), spec.default_plain(), "{}: NaN", spec.id);
+        }
     }
 
     /// Ids are unique, every default is in its range, and `param_index` finds each.

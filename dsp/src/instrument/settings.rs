@@ -12,6 +12,9 @@ pub const MAX_BLOCK: usize = 256;
 /// `Hardness` setting's range, which a note's CC74 stays within too.
 pub const HARDNESS_RANGE: (f64, f64) = (0.1, 10.0);
 
+/// The output gain's range (dB): −36 to +12.
+pub const GAIN_RANGE_DB: (f64, f64) = (-36.0, 12.0);
+
 /// Which instrument the engine is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Mode {
@@ -103,7 +106,7 @@ pub struct Settings {
     pub half_pedal_from: f64,
     /// The zone's other end, 0..=1 (see [`half_pedal_from`](Self::half_pedal_from)).
     pub half_pedal_to: f64,
-    /// Output gain (linear), 0..=10.
+    /// Output gain (linear), [`GAIN_RANGE_DB`]: 0.0158..=3.98.
     pub gain: f64,
     /// Whether the safety limiter holds the output at or below its ceiling (0 dBFS).
     pub limiter: bool,
@@ -190,6 +193,11 @@ impl Default for Settings {
     }
 }
 
+/// The linear gain of `db` decibels.
+fn db_to_gain(db: f64) -> f64 {
+    10f64.powf(db / 20.0)
+}
+
 /// `value` clamped to `[lo, hi]`; NaN gives `fallback`.
 fn clamp(value: f64, lo: f64, hi: f64, fallback: f64) -> f64 {
     if value.is_nan() { fallback } else { value.clamp(lo, hi) }
@@ -216,7 +224,7 @@ impl Settings {
             half_pedal_to: clamp(self.half_pedal_to, 0.0, 1.0, d.half_pedal_to),
             damper_rate: clamp(self.damper_rate, 1.0, 500.0, d.damper_rate),
             damper_time: clamp(self.damper_time, 0.001, 0.1, d.damper_time),
-            gain: clamp(self.gain, 0.0, 10.0, d.gain),
+            gain: clamp(self.gain, db_to_gain(GAIN_RANGE_DB.0), db_to_gain(GAIN_RANGE_DB.1), d.gain),
             limiter: self.limiter,
             stereo_width: clamp(self.stereo_width, -1.0, 1.0, d.stereo_width),
             mode: self.mode,
@@ -270,7 +278,7 @@ mod tests {
         let s = Settings { hardness: f64::NAN, gain: f64::INFINITY, segments: 0, block: 100_000, ..Default::default() };
         let c = s.sanitized();
         assert_eq!(c.hardness, 1.0);
-        assert_eq!(c.gain, 10.0);
+        assert!((c.gain - 3.981_071_705_534_972).abs() < 1e-12, "+12 dB: {}", c.gain);
         assert_eq!(c.segments, 1);
         assert_eq!(c.block, MAX_BLOCK);
     }
