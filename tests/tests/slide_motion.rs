@@ -745,8 +745,11 @@ fn a_jump_of_the_slide_position_moves_the_slide_at_a_hands_speed() {
 /// its speed changing by at most 100 m/s² from block to block) and comes to rest where it was
 /// sent: a legato key change an octave up with the shortest glide (1 ms) and the default (50
 /// ms), a pitch bend jumping from the middle to the top and to the bottom of a 12-semitone
-/// range, a host's per-note tuning jumping 7 semitones, and the glide time jumping between 1 ms
-/// and 2 s at every block of a legato glide. The one block allowed 5 % over the limit is where
+/// range, a host's per-note tuning jumping 7 semitones, the glide time jumping between 1 ms
+/// and 2 s at every block of a legato glide, a trill of A2 and D3 (each held about 30 ms, so the
+/// slide turns back before it arrives: stopping there, it stood still for a block and ran on past
+/// the turn at 630 m/s²) and a bend vibrato of ±2 semitones at 7 Hz, faster than a hand can
+/// follow. The one block allowed 5 % over the limit is where
 /// the slide, having fallen behind a glide at the glide's start, catches up with it as it slows
 /// and stops on it (`Motion::approach` brakes as for a still target; measured 1.7 % over).
 #[test]
@@ -782,6 +785,27 @@ fn every_way_of_moving_the_slide_stays_within_a_hands_reach() {
         path.extend(slide_path(&mut instrument, &[], Some(&Settings { glide_time, ..slide }), 1).into_iter().skip(1));
     }
     cases.push(("glide time jumping at every block".into(), path, at(19.0)));
+    let off = |key: u8| Event::NoteOff { channel: 0, key };
+    let mut instrument = Instrument::new(FS, 1, slide);
+    let _ = slide_path(&mut instrument, &[on(45)], None, 20);
+    let mut path = slide_path(&mut instrument, &[], None, 0);
+    for _ in 0..10 {
+        for (change, blocks) in [(on(50), 22), (off(50), 23)] {
+            path.extend(slide_path(&mut instrument, &[change], None, blocks).into_iter().skip(1));
+        }
+    }
+    path.extend(slide_path(&mut instrument, &[], None, 300).into_iter().skip(1));
+    cases.push(("a trill of A2 and D3, turning back before it arrives".into(), path, at(0.0)));
+    let fast = Settings { glide_time: 0.001, ..slide };
+    let mut instrument = Instrument::new(FS, 1, fast);
+    let _ = slide_path(&mut instrument, &[on(52)], None, 20);
+    let mut path = slide_path(&mut instrument, &[], None, 0);
+    for block in 0..1500 {
+        let phase = 2.0 * std::f64::consts::PI * 7.0 * block as f64 * 64.0 / FS;
+        path.extend(slide_path(&mut instrument, &[bend(phase.sin() as f32)], None, 1).into_iter().skip(1));
+    }
+    path.extend(slide_path(&mut instrument, &[bend(0.0)], None, 300).into_iter().skip(1));
+    cases.push(("a bend vibrato of ±2 semitones at 7 Hz, faster than a hand".into(), path, at(7.0)));
     for (what, path, sent) in &cases {
         let (fastest, worst) = assert_within_a_hands_reach(path, 1.05, what);
         let n = path.len();

@@ -206,6 +206,19 @@ pub fn hand_reach(hand: &Motion, target: f64, gap: f64) -> Reach {
 /// arriving takes `v/(16a)` longer.
 pub const BRAKING: f64 = 8.0 / 9.0;
 
+/// What a [`Motion`] does with a target it would pass within a block.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Passing {
+    /// It stops on it, and sheds the speed it had over the next blocks without moving: the hand,
+    /// which never presses the slide further than it is sent (its path, [`HandPath`], smooths the
+    /// stop), and the plucking finger.
+    Never,
+    /// It stops on it only where it can within its limits or where the target stopped short;
+    /// a target coming towards it, or one that jumps too close ahead to stop on, it passes and
+    /// turns back to: the slide along the string, whose speed the string hears.
+    Turning,
+}
+
 /// Something a player's hand moves, block by block: the slide along the string, or the hand
 /// towards it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -224,9 +237,11 @@ impl Motion {
         Self { position, velocity: 0.0, target: position }
     }
 
-    /// Move on by one control block of `span` seconds towards `target` (m), within `reach`. With
-    /// `e` the distance to go, `Δv = a·span` the most the speed may change in a block and `u` the
-    /// target's own speed over the block (at most the top speed):
+    /// Move on by one control block of `span` seconds towards `target` (m), within `reach`,
+    /// passing it as `passing` says. With `e` the distance to go, `Δv = a·span` the most the speed
+    /// may change in a block and `u` the target's own speed over the block (at most the top
+    /// speed; to a turning motion a step beyond it is a jump, after which the target stands
+    /// where it landed):
     /// - where moving `e` in this block needs a speed `e/span` within the top speed, within `Δv`
     ///   of the present speed and within `Δv` of `u`, the motion meets the target: a target that
     ///   moves within the limits (a vibrato, a glide under way, automation drawn as a gesture)
@@ -236,14 +251,21 @@ impl Motion {
     ///   can still stop at a still target braking by `Δb` = [`BRAKING`]`·Δv` a block: slowing by
     ///   `Δb` a block from `v` covers `span·(v²/(2Δb) + v/2)`, so
     ///   `|v| ≤ (√(Δb² + 8Δb|e|/span) − Δb)/2`. A motion that would pass the target in this block
-    ///   stops on it, and sheds the speed it had in the next blocks: a target that stops short
-    ///   (the end of a ramp drawn as automation) is met where it stops, never passed.
+    ///   stops on it ([`Passing::Never`]), or ([`Passing::Turning`]) stops on it if it was on the
+    ///   target as the block began or can stop there within `Δv`, its speed then the distance it
+    ///   went: a target that stops short (the end of a ramp drawn as automation) is met where it
+    ///   stops, never passed. A target coming towards a turning motion (a glide turning back, a
+    ///   trill, a vibrato's turn that the motion lags), or one that jumps too close ahead of it
+    ///   to stop on, is passed instead, and the motion turns back to it within its limits, as a
+    ///   hand cannot stop at once.
     ///
-    /// The position's speed changes by at most `Δv` from block to block (jumps of the target
-    /// included), except where a moving target stops short faster than that: the motion then
-    /// stops with it; and, by a few percent, in the block where it catches up with a target that
-    /// slows as it arrives (a glide's tail), since it brakes as for a still one.
-    pub fn approach(&mut self, target: f64, span: f64, reach: Reach) {
+    /// A turning motion's speed is the position's over the block, and it changes by at most `Δv`
+    /// from block to block (jumps of the target and targets turning back included), except where
+    /// a moving target stops short faster than that: the motion then stops with it; and, by a few
+    /// percent, in the block where it catches up with a target that slows as it arrives (a
+    /// glide's tail), since it brakes as for a still one. A motion that never passes keeps those
+    /// bounds towards still targets and targets moving within the limits.
+    pub fn approach(&mut self, target: f64, span: f64, reach: Reach, passing: Passing) {
         let (position, velocity) = (self.position, self.velocity);
         let previous = std::mem::replace(&mut self.target, target);
         if position == target && velocity == 0.0 {
@@ -253,7 +275,12 @@ impl Motion {
         let error = target - position;
         let dv = reach.acceleration * span;
         let meeting = error / span;
-        let own = ((target - previous) / span).clamp(-reach.speed, reach.speed);
+        // The target's own speed. To a turning motion, a step it could not have made within the
+        // reach (beyond its rounding) is a jump, after which it stands where it landed; one that
+        // never passes meets a target that jumped only at its top speed.
+        let step = target - previous;
+        let jumped = passing == Passing::Turning && step.abs() > reach.speed * span * (1.0 + 1e-9);
+        let own = if jumped { 0.0 } else { (step / span).clamp(-reach.speed, reach.speed) };
         if meeting.abs() <= reach.speed && (meeting - velocity).abs() <= dv && (meeting - own).abs() <= dv {
             (self.position, self.velocity) = (target, meeting);
             return;
@@ -263,8 +290,22 @@ impl Motion {
         let wanted = error.signum() * reach.speed.min(stopping);
         self.velocity = velocity + (wanted - velocity).clamp(-dv, dv);
         let moved = self.velocity * span;
-        let arrives = moved.abs() >= error.abs() && moved * error >= 0.0;
-        self.position = if arrives { target } else { position + moved };
+        let passes = moved.abs() >= error.abs() && moved * error >= 0.0;
+        match passing {
+            Passing::Never if passes => self.position = target,
+            Passing::Never => self.position = position + moved,
+            Passing::Turning => {
+                // Where the target was as the block began, seen from the motion.
+                let gap = if jumped { error } else { previous - position };
+                let oncoming = own * gap < 0.0;
+                let stops = gap == 0.0 || (meeting - velocity).abs() <= dv;
+                if passes && stops && !oncoming {
+                    (self.position, self.velocity) = (target, meeting);
+                } else {
+                    self.position = position + moved;
+                }
+            }
+        }
     }
 }
 
@@ -326,7 +367,7 @@ impl HandPath {
         // the midpoint by is where the path would end, less the midpoint.
         let taken = self.height + 0.5 * span * (self.average_speed + speed) - middle;
         self.offset.position = taken;
-        self.offset.approach(0.0, span, reach);
+        self.offset.approach(0.0, span, reach, Passing::Never);
         let path = Bow {
             from: self.height,
             to: middle + self.offset.position,
@@ -910,13 +951,13 @@ impl SlideVoice {
         }
         let scale = &self.scale;
         let x_o = self.position_at.get(self.semitones(settings), |semitones| scale.position(semitones));
-        self.slide_motion.approach(x_o, span, SLIDE_REACH);
+        self.slide_motion.approach(x_o, span, SLIDE_REACH, Passing::Turning);
         let hand_height = self.hand_height(settings, channel);
         // The slide rides on the hand's path, which runs behind the plan: the gap the plan has
         // left is the slide's less the path's lag.
         let gap = -self.core.compressions().1 - (self.hand_path.height - self.hand.position);
         let reach = hand_reach(&self.hand, hand_height, gap);
-        self.hand.approach(hand_height, span, reach);
+        self.hand.approach(hand_height, span, reach, Passing::Never);
         let hand = self.hand_path.follow(self.hand.position, span, reach);
         // The slide of the current note, its hand stilling it as the finger mutes the string.
         let mut slide = self.slide;
@@ -936,7 +977,7 @@ impl SlideVoice {
                 REST_FORCE * landed
             }
         };
-        self.right.approach(settings.pluck_position * self.length, span, SLIDE_REACH);
+        self.right.approach(settings.pluck_position * self.length, span, SLIDE_REACH, Passing::Never);
         let x_o = self.slide_motion.position;
         self.live.0 = SlideControls {
             slide_position: x_o,
@@ -1242,7 +1283,7 @@ mod tests {
                 {
                     let (was, starting) = (plan.position, path.velocity());
                     let reach = hand_reach(&plan, target, gap);
-                    plan.approach(target, span, reach);
+                    plan.approach(target, span, reach, Passing::Never);
                     let bow = path.follow(plan.position, span, reach);
                     let what = format!("block {block}, leg {leg}, block {blocks}: {path:?}");
                     let jump = start_speed(&bow, span) - starting;
@@ -1273,7 +1314,7 @@ mod tests {
                 }
                 let (was, starting) = (plan.position, path.velocity());
                 let reach = hand_reach(&plan, target, 1e-3);
-                plan.approach(target, span, reach);
+                plan.approach(target, span, reach, Passing::Never);
                 let bow = path.follow(plan.position, span, reach);
                 let what = format!("leg {leg}, {span} s blocks, block {blocks}: {path:?}");
                 let jump = start_speed(&bow, span) - starting;
@@ -1300,7 +1341,9 @@ mod tests {
     fn the_hand_and_the_slide_approach_their_targets_with_bounded_speed_and_acceleration() {
         for block in [1.0, 8.0, 64.0, 256.0] {
             let span = block / 48_000.0;
-            for (reach, (near, far)) in [(HAND_REACH, (-2e-3f64, 2e-3f64)), (SLIDE_REACH, (0.005, 0.49))] {
+            let motions =
+                [(HAND_REACH, Passing::Never, (-2e-3f64, 2e-3f64)), (SLIDE_REACH, Passing::Turning, (0.005, 0.49))];
+            for (reach, passing, (near, far)) in motions {
                 let dv = reach.acceleration * span;
                 let mut rng = Pcg64::seed_from_u64(73);
                 let (mut m, mut speed) = (Motion::at_rest(near), 0.0);
@@ -1315,7 +1358,7 @@ mod tests {
                     let mut blocks = 0;
                     while m.position != target || m.velocity != 0.0 {
                         let x = m.position;
-                        m.approach(target, span, reach);
+                        m.approach(target, span, reach, passing);
                         let now = (m.position - x) / span;
                         let what = format!("block {block}, {reach:?}, leg {leg}: {m:?}");
                         assert!(now.abs() <= reach.speed * (1.0 + 1e-12), "{what}: {now} m/s");
@@ -1345,7 +1388,7 @@ mod tests {
             let mut m = Motion::at_rest(vibrato(0.0));
             for n in 1..(0.5 / span) as usize {
                 let v = m.velocity;
-                m.approach(vibrato(n as f64 * span), span, SLIDE_REACH);
+                m.approach(vibrato(n as f64 * span), span, SLIDE_REACH, Passing::Turning);
                 assert_eq!(m.position, vibrato(n as f64 * span), "block {block}, step {n}");
                 assert!(
                     (m.velocity - v).abs() <= (2.0 * PI * 6.0).powi(2) * 3e-3 * span * 1.01,
@@ -1355,10 +1398,54 @@ mod tests {
             let ramp = |t: f64| (0.1 + 0.5 * t).min(0.2);
             let mut m = Motion::at_rest(0.1);
             for n in 1..(0.3 / span) as usize {
-                m.approach(ramp(n as f64 * span), span, SLIDE_REACH);
+                m.approach(ramp(n as f64 * span), span, SLIDE_REACH, Passing::Turning);
                 assert!(m.position <= 0.2, "block {block}: past the ramp's end: {m:?}");
             }
             assert_eq!((m.position, m.velocity), (0.2, 0.0), "block {block}: at rest on the ramp's end");
+        }
+    }
+
+    /// A target that turns back towards a turning motion lagging it (a glide reversed before the
+    /// slide arrives, a trill, a vibrato faster than the slide can follow) is passed and met
+    /// again, the speed never changing by more than the acceleration allows in a block: with the
+    /// slide's reach and the hand's, it chases targets moving at random speeds up to the top
+    /// speed, turning back at random
+    /// (about five times a second) and jumping at random (about once a second), never standing
+    /// still, for 10 s at control blocks of 1, 8, 64 and 256 samples. Stopping on such a target
+    /// kept the speed it had and went on past it in the next block.
+    #[test]
+    fn a_motion_chasing_a_target_that_turns_back_keeps_within_its_acceleration() {
+        for block in [1.0, 8.0, 64.0, 256.0] {
+            let span = block / 48_000.0;
+            for (reach, (near, far)) in [(SLIDE_REACH, (0.005f64, 0.49f64)), (HAND_REACH, (-2e-3, 2e-3))] {
+                let dv = reach.acceleration * span;
+                let mut rng = Pcg64::seed_from_u64(74);
+                let mut m = Motion::at_rest(near);
+                let (mut target, mut target_speed, mut speed) = (near, reach.speed, 0.0);
+                let mut worst = 0.0f64;
+                for n in 0..(10.0 / span) as usize {
+                    if rng.random_bool((span * 1.0).min(1.0)) {
+                        target = rng.random_range(near..far);
+                    }
+                    if rng.random_bool((span * 5.0).min(1.0)) {
+                        target_speed = -target_speed.signum() * rng.random_range(0.1..1.0) * reach.speed;
+                    }
+                    if !(near..=far).contains(&(target + target_speed * span)) {
+                        target_speed = -target_speed;
+                    }
+                    target += target_speed * span;
+                    let x = m.position;
+                    m.approach(target, span, reach, Passing::Turning);
+                    let now = (m.position - x) / span;
+                    let what = format!("block {block}, {reach:?}, step {n}: target {target}, {m:?}");
+                    assert!(now.abs() <= reach.speed * (1.0 + 1e-12), "{what}: {now} m/s");
+                    assert!((now - m.velocity).abs() <= 1e-9 * reach.speed, "{what}: moved at {now} m/s");
+                    worst = worst.max((now - speed).abs() / dv);
+                    assert!((now - speed).abs() <= dv * (1.0 + 1e-9), "{what}: {speed} → {now} m/s");
+                    speed = now;
+                }
+                println!("block {block}, {reach:?}: largest change of speed {worst:.3} of the limit");
+            }
         }
     }
 
