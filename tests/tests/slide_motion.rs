@@ -405,6 +405,26 @@ fn perform_slide(
     left.iter().map(|&v| f64::from(v)).collect()
 }
 
+/// A legato note played while the pluck is under way glides the slide without plucking, and
+/// leaves the pluck as its own note made it: A2 plucked at full velocity, then D3 legato on its
+/// channel 2 ms in (the pluck lasts about 9.5 ms), sounds the same to the bit whether D3 comes at
+/// velocity 0.05 or 1. With the legato note's velocity taking over the pluck, the softer one
+/// cut the rest of the pluck's force from 3.0 N to 0.44 N.
+#[test]
+fn a_legato_note_during_the_pluck_leaves_the_pluck_as_its_note_made_it() {
+    let render = |velocity: f32| {
+        let events = [
+            (0, Event::NoteOn { channel: 0, key: 45, velocity: 1.0 }),
+            (96, Event::NoteOn { channel: 0, key: 50, velocity }),
+        ];
+        perform_slide(Settings::default(), &events, &[], 24_000)
+    };
+    let (soft, hard) = (render(0.05), render(1.0));
+    assert!(peak_dbfs(&hard) > -40.0, "the pluck sounds: {:.1} dBFS", peak_dbfs(&hard));
+    let first = soft.iter().zip(&hard).position(|(a, b)| a.to_bits() != b.to_bits());
+    assert_eq!(first, None, "the legato note's velocity reaches the pluck under way");
+}
+
 /// The largest sample of `x`, in dBFS.
 fn peak_dbfs(x: &[f64]) -> f64 {
     20.0 * x.iter().fold(0.0f64, |m, v| m.max(v.abs())).log10()

@@ -511,6 +511,9 @@ pub struct SlideVoice {
     trips: u32,
     /// Samples into the pluck at the end of the control block under way, while plucking.
     pluck: Option<usize>,
+    /// The peak force of the pluck under way (N): its own note's, whatever legato notes glide
+    /// to meanwhile without plucking.
+    plucking_force: f64,
     /// The pieces of the control block under way that the pluck's corners cut.
     corners: Corners,
     /// Energy a pluck puts into the string (J): the release reference.
@@ -593,6 +596,7 @@ impl SlideVoice {
             shed_fade: GuardFade::default(),
             trips: 0,
             pluck: None,
+            plucking_force: 0.0,
             corners: Corners::NONE,
             reference_energy: f64::MIN_POSITIVE,
             motion: 0.0,
@@ -678,6 +682,7 @@ impl SlideVoice {
             (0.5 * force * force * x * (self.length - x) / (t * self.length)).max(f64::MIN_POSITIVE);
         self.motion = self.reference_energy;
         self.pluck = Some(0);
+        self.plucking_force = force;
         self.sounding = true;
         self.started = now;
     }
@@ -963,7 +968,7 @@ impl SlideVoice {
         let mut slide = self.slide;
         let (from, plucked) = (self.live.0, self.pluck);
         let corners = pluck_corners(fs);
-        let full = pluck_force(self.strike.velocity);
+        let full = self.plucking_force;
         let right_force = match plucked {
             Some(t) => {
                 self.pluck = Some(t + len).filter(|&n| n < corners[1]);
