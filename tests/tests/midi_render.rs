@@ -29,7 +29,7 @@ fn render(args: RenderArgs) -> (Outcome, Vec<f32>, Vec<f32>) {
 }
 
 fn midi_args(file: &str, out: PathBuf) -> RenderArgs {
-    RenderArgs { midi: Some(scene(file)), out: Some(out), tail: 1.0, ..RenderArgs::default() }
+    RenderArgs { midi: Some(scene(file)), out: Some(out), tail: Some(1.0), ..RenderArgs::default() }
 }
 
 /// The piano phrase: every note is played (14), the sound is finite, audible and below full
@@ -93,7 +93,10 @@ fn bad_midi_input_is_refused() {
         (midi(&corrupt, "corrupt.wav"), "malformed"),
         (midi(&untimed, "untimed.wav"), "0 ticks per quarter note"),
         (midi(&stopped, "stopped.wav"), "tempo of 0"),
-        (RenderArgs { rate: 768_000, tail: 590.0, ..midi(&file("whole.mid", &whole), "huge.wav") }, "at most 6e7"),
+        (
+            RenderArgs { rate: Some(768_000), tail: Some(590.0), ..midi(&file("whole.mid", &whole), "huge.wav") },
+            "at most 6e7",
+        ),
         (
             RenderArgs { midi: Some(junk.clone()), out: Some(dir.path().join("1.wav")), ..RenderArgs::default() },
             "not a MIDI file",
@@ -171,7 +174,7 @@ fn midi_files_with_garbage_events_render_safely_or_are_refused() {
         let path = dir.path().join(format!("{name}.mid"));
         std::fs::write(&path, &bytes).unwrap();
         let out = dir.path().join(format!("{name}.wav"));
-        let args = RenderArgs { midi: Some(path), out: Some(out.clone()), tail: 0.5, ..RenderArgs::default() };
+        let args = RenderArgs { midi: Some(path), out: Some(out.clone()), tail: Some(0.5), ..RenderArgs::default() };
         match run(&args, &mut Vec::new()) {
             Ok(_) => {
                 let mut reader = hound::WavReader::open(&out).unwrap();

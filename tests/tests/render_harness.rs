@@ -807,7 +807,7 @@ fn out_naming_a_pipe_writes_into_it_and_leaves_it_a_pipe() {
 }
 
 /// The options that apply to `--midi` alone are refused with a scene file, naming the option,
-/// rather than ignored; nothing is written.
+/// rather than ignored, even at their defaults; nothing is written.
 #[test]
 fn midi_options_with_a_scene_file_are_refused() {
     for extra in [
@@ -815,7 +815,9 @@ fn midi_options_with_a_scene_file_are_refused() {
         &["--mode", "slide"],
         &["--set", "hard=2"],
         &["--rate", "96000"],
+        &["--rate", "48000"],
         &["--tail", "5"],
+        &["--tail", "2"],
         &["--raw"],
     ] {
         let dir = TempDir::new().unwrap();

@@ -441,6 +441,9 @@ fn bad_string_scenes_are_errors_naming_the_key() {
         (hammer.replace("mass = 2.97e-3", "mass = -2.97e-3"), "hammer.mass"),
         (hammer.replace("preset = \"c4\"", "preset = \"c4\"\ntension = -5.0"), "string.tension"),
         (hammer.replace("preset = \"c4\"", "preset = \"c5\""), "string.preset"),
+        // A MIDI key only the piano-note preset reads.
+        (hammer.replace("preset = \"c4\"", "preset = \"c4\"\nnote = 64"), "string.note"),
+        (slide.replace("preset = \"slide-guitar\"", "preset = \"slide-guitar\"\nnote = 64"), "string.note"),
         (hammer.replace("kind = \"bridge-force\"", "kind = \"bridge-force\"\nposition = 1.5"), "output.position"),
         // A pickup position the bridge force would ignore.
         (hammer.replace("kind = \"bridge-force\"", "kind = \"bridge-force\"\nposition = 0.3"), "output.position"),

@@ -42,7 +42,7 @@ pub mod midi;
 pub const CHUNK_SEED: u64 = 0x5eed_c4a7;
 
 /// Arguments of `render`.
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone, Default, Args)]
 pub struct RenderArgs {
     /// Scene file (TOML).
     #[arg(required_unless_present = "midi", conflicts_with = "midi")]
@@ -61,12 +61,12 @@ pub struct RenderArgs {
     /// --set gain=-6.
     #[arg(long = "set", value_name = "ID=VALUE", requires = "midi")]
     pub set: Vec<String>,
-    /// Sample rate for --midi (Hz).
-    #[arg(long, default_value_t = MIDI_RATE, requires = "midi")]
-    pub rate: u32,
-    /// Seconds rendered after the last MIDI event.
-    #[arg(long, default_value_t = MIDI_TAIL, requires = "midi")]
-    pub tail: f64,
+    /// Sample rate for --midi (Hz) [default: 48000].
+    #[arg(long, requires = "midi")]
+    pub rate: Option<u32>,
+    /// Seconds rendered after the last MIDI event [default: 2].
+    #[arg(long, requires = "midi")]
+    pub tail: Option<f64>,
     /// Output WAV path [default: the input path with extension .wav].
     #[arg(long, value_name = "PATH.wav")]
     pub out: Option<PathBuf>,
@@ -84,9 +84,9 @@ pub struct RenderArgs {
 }
 
 /// `--rate`'s default (Hz).
-const MIDI_RATE: u32 = 48_000;
+pub(crate) const MIDI_RATE: u32 = 48_000;
 /// `--tail`'s default (s).
-const MIDI_TAIL: f64 = 2.0;
+pub(crate) const MIDI_TAIL: f64 = 2.0;
 
 /// What `--mode` takes: the option ids of the `mode` parameter.
 fn mode_options() -> clap::builder::PossibleValuesParser {
@@ -95,24 +95,6 @@ fn mode_options() -> clap::builder::PossibleValuesParser {
         _ => &[],
     };
     clap::builder::PossibleValuesParser::new(options.iter().map(|(id, _)| *id))
-}
-
-impl Default for RenderArgs {
-    fn default() -> Self {
-        Self {
-            scene: None,
-            midi: None,
-            preset: None,
-            mode: None,
-            set: Vec::new(),
-            rate: MIDI_RATE,
-            tail: MIDI_TAIL,
-            out: None,
-            csv: false,
-            chunk: None,
-            raw: false,
-        }
-    }
 }
 
 /// The summary line of a scene render: what it measured, then how long the simulation took.
@@ -223,8 +205,8 @@ pub fn run(args: &RenderArgs, stdout: &mut dyn Write) -> Result<Outcome, RenderE
                 ("--preset", args.preset.is_some()),
                 ("--mode", args.mode.is_some()),
                 ("--set", !args.set.is_empty()),
-                ("--rate", args.rate != MIDI_RATE),
-                ("--tail", args.tail.to_bits() != MIDI_TAIL.to_bits()),
+                ("--rate", args.rate.is_some()),
+                ("--tail", args.tail.is_some()),
                 ("--raw", args.raw),
             ];
             if let Some((flag, _)) = midi_only.iter().find(|(_, given)| *given) {

@@ -160,13 +160,11 @@ struct PresetExtras {
 
 impl StringTable {
     fn resolve(&self) -> Result<(StringParams, PresetExtras), SceneError> {
+        if self.preset.as_deref() != Some("piano-note") && self.note.is_some() {
+            return Err(SceneError::invalid("string.note", "only used with preset = \"piano-note\""));
+        }
         let (base, extras) = match self.preset.as_deref() {
-            None => {
-                if self.note.is_some() {
-                    return Err(SceneError::invalid("string.note", "only used with preset = \"piano-note\""));
-                }
-                (None, PresetExtras::default())
-            }
+            None => (None, PresetExtras::default()),
             Some(name) => {
                 let piano = match name {
                     "c4" => chaigne_askenfelt_c4(),
@@ -199,9 +197,6 @@ impl StringTable {
                         ));
                     }
                 };
-                if name != "piano-note" && self.note.is_some() {
-                    return Err(SceneError::invalid("string.note", "only used with preset = \"piano-note\""));
-                }
                 let extras = PresetExtras {
                     law: Some((piano.kappa, piano.alpha)),
                     hammer_mass: Some(piano.hammer_mass),

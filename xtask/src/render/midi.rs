@@ -210,15 +210,16 @@ pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSumma
     for assignment in &args.set {
         apply_set(&mut params, assignment).map_err(RenderError::Midi)?;
     }
-    if !(1000..=768_000).contains(&args.rate) {
-        return Err(RenderError::Midi(format!("--rate {}: must be 1000 to 768000 Hz", args.rate)));
+    let (rate, tail) = (args.rate.unwrap_or(super::MIDI_RATE), args.tail.unwrap_or(super::MIDI_TAIL));
+    if !(1000..=768_000).contains(&rate) {
+        return Err(RenderError::Midi(format!("--rate {rate}: must be 1000 to 768000 Hz")));
     }
-    if !(args.tail.is_finite() && (0.0..=600.0).contains(&args.tail)) {
-        return Err(RenderError::Midi(format!("--tail {}: must be 0 to 600 s", args.tail)));
+    if !(tail.is_finite() && (0.0..=600.0).contains(&tail)) {
+        return Err(RenderError::Midi(format!("--tail {tail}: must be 0 to 600 s")));
     }
-    let fs = f64::from(args.rate);
+    let fs = f64::from(rate);
     let score = score(&bytes, fs).map_err(|e| RenderError::Midi(format!("{}: {e}", path.display())))?;
-    let seconds = (score.events.last().map_or(0, |e| e.0) as f64) / fs + args.tail;
+    let seconds = (score.events.last().map_or(0, |e| e.0) as f64) / fs + tail;
     if seconds > 600.0 {
         return Err(RenderError::Midi(format!("{}: lasts {seconds:.0} s; at most 600 s", path.display())));
     }
@@ -226,7 +227,7 @@ pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSumma
         return Err(RenderError::Midi(format!(
             "{}: {seconds:.0} s at {} Hz is {:.2e} samples; at most {MAX_SAMPLES:.0e} (600 s at 96 kHz)",
             path.display(),
-            args.rate,
+            rate,
             seconds * fs
         )));
     }
@@ -235,10 +236,10 @@ pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSumma
     // In calls of 512 samples unless `--chunk` says otherwise (0: seeded random sizes).
     let mut sizes = super::chunk_sizes(Some(args.chunk.unwrap_or(512)));
     let (left, right, wall) =
-        render_signals(&score, &params, fs, (args.tail, &mut || sizes.next().unwrap_or(usize::MAX)), args.raw);
+        render_signals(&score, &params, fs, (tail, &mut || sizes.next().unwrap_or(usize::MAX)), args.raw);
     let spec = hound::WavSpec {
         channels: 2,
-        sample_rate: args.rate,
+        sample_rate: rate,
         bits_per_sample: 32,
         sample_format: hound::SampleFormat::Float,
     };
@@ -261,7 +262,7 @@ pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSumma
         scene: "midi",
         method: settings.method.name(),
         segments: settings.segments,
-        sample_rate: args.rate,
+        sample_rate: rate,
         samples,
         contact_samples: None,
         contacts: score.notes,
