@@ -203,16 +203,17 @@ impl Plugin for QsaStrings {
     type SysExMessage = ();
     type BackgroundTask = ();
 
-    /// Every number in a state being loaded is brought into its parameter's range, and one that
-    /// is not finite (a corrupt state: JSON reads 1e39 as an `f32` infinity) becomes the default,
-    /// since the framework stores saved values as they are. The engine then never hears a value
-    /// the parameter cannot take, and the state the host saves next can be read back.
+    /// Every number in a state being loaded (a choice saved by its index included) is brought
+    /// into its parameter's range, and one that is not finite (a corrupt state: JSON reads 1e39
+    /// as an `f32` infinity) becomes the default, since the framework stores saved values as
+    /// they are. The engine then never hears a value the parameter cannot take, and the state
+    /// the host saves next can be read back.
     fn filter_state(state: &mut PluginState) {
         for (id, value) in &mut state.params {
             let Some(spec) = param_spec(id) else { continue };
             match value {
                 ParamValue::F32(v) => *v = spec.clamp_plain(*v),
-                ParamValue::I32(v) if matches!(spec.kind, ParamKind::Int { .. }) => {
+                ParamValue::I32(v) if matches!(spec.kind, ParamKind::Int { .. } | ParamKind::Choice { .. }) => {
                     *v = spec.clamp_plain(*v as f32) as i32;
                 }
                 _ => {}

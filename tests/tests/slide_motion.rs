@@ -768,8 +768,10 @@ fn a_jump_of_the_slide_position_moves_the_slide_at_a_hands_speed() {
 /// range, a host's per-note tuning jumping 7 semitones, the glide time jumping between 1 ms
 /// and 2 s at every block of a legato glide, a trill of A2 and D3 (each held about 30 ms, so the
 /// slide turns back before it arrives: stopping there, it stood still for a block and ran on past
-/// the turn at 630 m/s²) and a bend vibrato of ±2 semitones at 7 Hz, faster than a hand can
-/// follow. The one block allowed 5 % over the limit is where
+/// the turn at 630 m/s²), a fast trill of A2 and B2 at the nut with the shortest glide, and a
+/// bend vibrato of ±2 semitones at 7 Hz, faster than a hand can follow; it never leaves
+/// the range the scale places it in (5 mm from the nut to 0.8 of the length), passing a target
+/// that turns back included. The one block allowed 5 % over the limit is where
 /// the slide, having fallen behind a glide at the glide's start, catches up with it as it slows
 /// and stops on it (`Motion::approach` brakes as for a still target; measured 1.7 % over).
 #[test]
@@ -816,6 +818,16 @@ fn every_way_of_moving_the_slide_stays_within_a_hands_reach() {
     }
     path.extend(slide_path(&mut instrument, &[], None, 300).into_iter().skip(1));
     cases.push(("a trill of A2 and D3, turning back before it arrives".into(), path, at(0.0)));
+    let mut instrument = Instrument::new(FS, 1, Settings { glide_time: 0.001, ..slide });
+    let _ = slide_path(&mut instrument, &[on(45)], None, 20);
+    let mut path = slide_path(&mut instrument, &[], None, 0);
+    for hold in [3usize, 5, 8, 12, 4, 6, 9, 3, 7, 5] {
+        for change in [on(47), off(47)] {
+            path.extend(slide_path(&mut instrument, &[change], None, hold).into_iter().skip(1));
+        }
+    }
+    path.extend(slide_path(&mut instrument, &[], None, 300).into_iter().skip(1));
+    cases.push(("a fast trill of A2 and B2 at the nut, the shortest glide".into(), path, at(0.0)));
     let fast = Settings { glide_time: 0.001, ..slide };
     let mut instrument = Instrument::new(FS, 1, fast);
     let _ = slide_path(&mut instrument, &[on(52)], None, 20);
@@ -828,6 +840,9 @@ fn every_way_of_moving_the_slide_stays_within_a_hands_reach() {
     cases.push(("a bend vibrato of ±2 semitones at 7 Hz, faster than a hand".into(), path, at(7.0)));
     for (what, path, sent) in &cases {
         let (fastest, worst) = assert_within_a_hands_reach(path, 1.05, what);
+        let (lowest, highest) = (at(-100.0), at(100.0));
+        let outside = path.iter().find(|&&x| !(lowest..=highest).contains(&x));
+        assert_eq!(outside, None, "{what}: the slide leaves {lowest}..={highest} m");
         let n = path.len();
         println!(
             "{what}: from {:.4} m to {:.4} m, at most {fastest:.2} m/s, speed changing by at most {:.3} of the limit",

@@ -711,7 +711,9 @@ impl Scale {
     /// The plain value of `shown` (dB to linear gain for [`Scale::Decibels`]).
     pub fn to_plain(self, shown: f32) -> f32 {
         match self {
-            Scale::Decibels => 10f32.powf(shown / 20.0),
+            // As the plugin framework converts (`util::db_to_gain`), so that a range's end in
+            // dB is, to the bit, the end of the plugin's parameter.
+            Scale::Decibels => 10f32.powf(shown * 0.05),
             Scale::Linear | Scale::Skewed(_) => shown,
         }
     }

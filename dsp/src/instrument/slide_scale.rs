@@ -93,11 +93,17 @@ impl SlideScale {
         self.correction[j] + t * (self.correction[j + 1] - self.correction[j])
     }
 
+    /// Where the slide may go (m): from `NEAREST_NUT` to `REACH` of the length.
+    pub fn range(&self) -> (f64, f64) {
+        (NEAREST_NUT, REACH * self.length)
+    }
+
     /// Slide position `x_o` (m) that sounds `semitones` above the open string, between
     /// `NEAREST_NUT` and `REACH` of the length.
     pub fn position(&self, semitones: f64) -> f64 {
         let ideal = self.length * (1.0 - 2f64.powf(-semitones / 12.0));
-        (ideal - self.end_correction(ideal)).clamp(NEAREST_NUT, REACH * self.length)
+        let (nearest, farthest) = self.range();
+        (ideal - self.end_correction(ideal)).clamp(nearest, farthest)
     }
 }
 

@@ -307,6 +307,16 @@ impl Motion {
             }
         }
     }
+
+    /// Stop against the ends of `(lowest, highest)` (m), the range the targets lie in: a turning
+    /// motion passing a target that turned back near an end would otherwise run on past it, past
+    /// the nut, by up to `v²/(2a)`. Where it stops there, it stands still.
+    pub fn stop_within(&mut self, (lowest, highest): (f64, f64)) {
+        if !(lowest..=highest).contains(&self.position) {
+            self.position = self.position.clamp(lowest, highest);
+            self.velocity = 0.0;
+        }
+    }
 }
 
 /// The path the hand pulls the slide's spring along: the hand's [`Motion`], which moves linearly
@@ -957,6 +967,7 @@ impl SlideVoice {
         let scale = &self.scale;
         let x_o = self.position_at.get(self.semitones(settings), |semitones| scale.position(semitones));
         self.slide_motion.approach(x_o, span, SLIDE_REACH, Passing::Turning);
+        self.slide_motion.stop_within(self.scale.range());
         let hand_height = self.hand_height(settings, channel);
         // The slide rides on the hand's path, which runs behind the plan: the gap the plan has
         // left is the slide's less the path's lag.
@@ -1452,6 +1463,31 @@ mod tests {
                 println!("block {block}, {reach:?}: largest change of speed {worst:.3} of the limit");
             }
         }
+    }
+
+    /// A slide following a target that speeds towards the nut (1.8 m/s at 10.2 mm, within the
+    /// limits, so it is met at every block) and turns straight back passes the turn by up to
+    /// `v²/(2a)` = 16 mm, which would take it past the nut; it stops against the scale's end
+    /// (5 mm) instead, and follows the target back up.
+    #[test]
+    fn a_slide_passing_a_turn_near_the_nut_stops_against_the_scales_end() {
+        let span = 64.0 / 48_000.0;
+        let range = (0.005, 0.52);
+        let target = |t: f64| if t <= 0.1 { 0.1 - 0.0898 * (t / 0.1).powi(2) } else { 0.0102 + 1.8 * (t - 0.1) };
+        let mut m = Motion::at_rest(target(0.0));
+        let mut lowest = f64::INFINITY;
+        for n in 1..(0.3 / span) as usize {
+            let t = n as f64 * span;
+            m.approach(target(t), span, SLIDE_REACH, Passing::Turning);
+            m.stop_within(range);
+            lowest = lowest.min(m.position);
+            if t < 0.099 {
+                assert_eq!(m.position, target(t), "followed at {t} s");
+            }
+        }
+        println!("lowest {lowest} m");
+        assert_eq!(lowest, range.0, "the slide stops against the scale's end");
+        assert!(m.position > 0.2, "the slide follows the target back up: {m:?}");
     }
 
     /// A voice plucked and rendered for `blocks` blocks of the default 64 samples.
