@@ -209,9 +209,9 @@ pub const BRAKING: f64 = 8.0 / 9.0;
 /// What a [`Motion`] does with a target it would pass within a block.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Passing {
-    /// It stops on it, and sheds the speed it had over the next blocks without moving: the hand,
-    /// which never presses the slide further than it is sent (its path, [`HandPath`], smooths the
-    /// stop), and the plucking finger.
+    /// It stops on it, and sheds the speed it had over the next blocks, standing while the
+    /// target stands: the hand (its path, [`HandPath`], smooths the stop) and the plucking
+    /// finger, whose targets the player or the host sets.
     Never,
     /// It stops on it only where it can within its limits or where the target stopped short;
     /// a target coming towards it, or one that jumps too close ahead to stop on, it passes and
