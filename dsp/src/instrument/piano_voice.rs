@@ -649,6 +649,11 @@ impl PianoVoice {
         now: u64,
         partners: Option<(&PartnerTable, Dampers)>,
     ) {
+        // A voice the guard is fading has left its bound: its note ends here, counted, and the
+        // new strike (on its key too) meets strings at rest, as on any silent voice.
+        if self.guard_fade.is_fading() {
+            self.trip();
+        }
         let note = piano_note(strike.key);
         let position = Self::striking_point(strike.key, settings);
         let restrike = self.sounding && self.strike.key == strike.key && self.pending.is_none();
@@ -1342,6 +1347,31 @@ mod tests {
         assert!(voice.sounding, "the new note sounds");
         assert_eq!(voice.guard_trips(), 0);
         assert_eq!(heard, expected, "as on a fresh voice");
+    }
+
+    /// A key struck on a voice the guard is fading, its own key again or another, sounds in full
+    /// as on a fresh voice: the old note's trip is counted and the strike meets strings at rest.
+    #[test]
+    fn a_strike_during_a_guard_fade_sounds_as_on_a_fresh_voice() {
+        for key in [60, 62] {
+            let (mut voice, settings) = struck(20);
+            voice.reference_energy *= 1e-6;
+            let mut out = [0.0; 64];
+            voice.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
+            voice.render(&mut out);
+            let mut fresh = PianoVoice::new(200, FS);
+            let (mut heard, mut expected) = ([0.0; 256], [0.0; 256]);
+            for (v, out) in [(&mut voice, &mut heard), (&mut fresh, &mut expected)] {
+                v.play(Strike { channel: 0, key, velocity: 0.7, shifted: false, timbre: None }, &settings, 0);
+                for block in out.chunks_mut(64) {
+                    v.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
+                    v.render(block);
+                }
+            }
+            assert!(voice.sounding, "key {key}: the new note sounds");
+            assert_eq!(voice.guard_trips(), 1, "key {key}");
+            assert_eq!(heard, expected, "key {key}: as on a fresh voice");
+        }
     }
 
     /// `voice`'s output for `key` struck at velocity 0.7, held for 20 blocks of 64 samples and let

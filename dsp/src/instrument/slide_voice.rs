@@ -644,6 +644,11 @@ impl SlideVoice {
     /// key and `channel`'s bend put it: MPE controllers send a note's first bend before its
     /// note-on, and a channel keeps its bend from note to note.
     pub fn play(&mut self, strike: Strike, settings: &Settings, channel: &ChannelState, legato: bool, now: u64) {
+        // A voice the guard is fading has left its bound: its note ends here, counted, and the
+        // new one starts from silence (legato or not), as it would on any silent voice.
+        if self.guard_fade.is_fading() {
+            self.trip();
+        }
         self.strike = strike;
         self.key_down = true;
         self.mute = 0.0;
@@ -1582,6 +1587,39 @@ mod tests {
         }
         assert!(voice.sounding && peak > 0.0, "the new note sounds (peak {peak:e})");
         assert_eq!(voice.guard_trips(), 0);
+    }
+
+    /// A note played on a voice the guard is fading, legato or not, sounds: the old note's trip
+    /// is counted and the new one is plucked from silence, as on a fresh voice to the bit.
+    #[test]
+    fn a_note_played_during_a_guard_fade_sounds_from_silence() {
+        let strike = Strike { channel: 0, key: 50, velocity: 0.8, shifted: false, timbre: None };
+        let channel = ChannelState::default();
+        let run = |voice: &mut SlideVoice, settings: &Settings| {
+            let mut out = [0.0; 64];
+            (0..8)
+                .flat_map(|_| {
+                    voice.begin_block(settings, &channel, 64);
+                    voice.render(&mut out);
+                    out
+                })
+                .collect::<Vec<_>>()
+        };
+        let (mut fresh, settings) = plucked(0);
+        fresh.silence();
+        fresh.play(strike, &settings, &channel, false, 0);
+        let expected = run(&mut fresh, &settings);
+        assert!(expected.iter().any(|&x| x != 0.0));
+        for legato in [false, true] {
+            let (mut voice, settings) = plucked(20);
+            over_its_bound(&mut voice);
+            let mut out = [0.0; 64];
+            voice.begin_block(&settings, &channel, 64);
+            voice.render(&mut out);
+            voice.play(strike, &settings, &channel, legato, 0);
+            assert_eq!(voice.guard_trips(), 1, "legato {legato}");
+            assert_eq!(run(&mut voice, &settings), expected, "legato {legato}");
+        }
     }
 
     /// With a control block of one sample the guard weighs the energy every [`ENERGY_INTERVAL`]
