@@ -7,6 +7,7 @@
 //! editor's window polls. The editor drains the queue each frame into its own `History`.
 
 mod presets;
+mod slider;
 #[cfg(test)]
 mod tests;
 mod views;
@@ -20,7 +21,6 @@ use nice_plug::context::gui::GuiContext;
 use nice_plug::editor::dpi::LogicalSize;
 use nice_plug::prelude::{Param, ParamSetter};
 use nice_plug_egui::baseview::HandlerError;
-use nice_plug_egui::widgets::ParamSlider;
 use nice_plug_egui::{EguiEditor, EguiEditorState, EguiNiceSettings, NiceEguiApp, create_egui_editor};
 use qsa_dsp::instrument::{Mode, Monitor};
 
@@ -267,7 +267,7 @@ fn section(ui: &mut Ui, title: &str, active: Option<bool>, rows: impl FnOnce(&mu
 /// A parameter's name and its slider.
 fn row<P: Param>(ui: &mut Ui, param: &P, setter: &ParamSetter) {
     ui.label(param.name());
-    ui.add(ParamSlider::for_param(param, setter).with_width(SLIDER_WIDTH));
+    ui.add(slider::Slider::new(param, setter, SLIDER_WIDTH));
     ui.end_row();
 }
 
