@@ -1375,10 +1375,18 @@ impl BodySides {
 }
 
 /// Add `x · g · p_L` and `x · g · p_R` to the buses, with the voicing gain `g` (from `voiced`)
-/// and the pan gains `p` (from `pan`) moving towards their targets by `gains.rate` each sample:
-/// a voice struck again at another dynamic level, or a width moved, changes smoothly.
-fn mix_voiced(x: &[f64], gains: &Gains, voiced: &mut f64, pan: &mut [f64; 2], left: &mut [f64], right: &mut [f64]) {
-    let (mut g, [mut pl, mut pr]) = (*voiced, *pan);
+/// and the pan gains `p` (from `pan`, or the target for a note not mixed yet) moving towards
+/// their targets by `gains.rate` each sample: a voice struck again at another dynamic level, or
+/// a width moved, changes smoothly.
+fn mix_voiced(
+    x: &[f64],
+    gains: &Gains,
+    voiced: &mut f64,
+    pan: &mut Option<[f64; 2]>,
+    left: &mut [f64],
+    right: &mut [f64],
+) {
+    let (mut g, [mut pl, mut pr]) = (*voiced, pan.unwrap_or(gains.pan));
     for ((l, r), &v) in left.iter_mut().zip(right.iter_mut()).zip(x) {
         g += (gains.voicing - g) * gains.rate;
         pl += (gains.pan[0] - pl) * gains.rate;
@@ -1387,7 +1395,7 @@ fn mix_voiced(x: &[f64], gains: &Gains, voiced: &mut f64, pan: &mut [f64; 2], le
         *r += v * g * pr;
     }
     *voiced = g;
-    *pan = [pl, pr];
+    *pan = Some([pl, pr]);
 }
 
 #[cfg(test)]
@@ -1729,6 +1737,27 @@ mod tests {
             out.extend(left.iter().chain(&right).map(|x| x.to_bits()));
         }
         out
+    }
+
+    /// The raw output is centred from a note's first sample: A0 and C8, the keys the default
+    /// width pans furthest, sound the same on the left and on the right to the bit, with no
+    /// glide from their places in the mix.
+    #[test]
+    fn a_raw_note_is_centred_from_its_first_sample() {
+        for key in [21, 108] {
+            let mut instrument = Instrument::new(48_000.0, 2, Settings::default());
+            assert!(instrument.settings.stereo_width > 0.0);
+            instrument.set_raw_output(true);
+            instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.7 });
+            let (mut left, mut right) = ([0.0; 64], [0.0; 64]);
+            let mut peak: f32 = 0.0;
+            for block in 0..16 {
+                instrument.process(&mut left, &mut right);
+                peak = left.iter().fold(peak, |m, x| m.max(x.abs()));
+                assert_eq!(left, right, "key {key}, block {block}");
+            }
+            assert!(peak > 0.0, "key {key} sounds");
+        }
     }
 
     /// Render `key` struck at `velocity` on channel 0 with the soft pedal down or up, the raw

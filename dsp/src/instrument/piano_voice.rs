@@ -496,8 +496,8 @@ pub struct PianoVoice {
     /// A re-strike whose hammer has not left yet: what it added is weighed once it has.
     restruck: Option<Restruck>,
     /// Left and right gains now ([`super::pan_gains`]): they move to the key's when the stereo
-    /// width changes.
-    pub pan: [f64; 2],
+    /// width changes. `None` for a note not mixed yet, which starts where the mix pans its key.
+    pub pan: Option<[f64; 2]>,
     /// The damper's decay rate at the fundamental now, `D` (1/s), moving towards its target.
     damper: f64,
     /// The extra decay at the fundamental the string's coefficients hold now (1/s).
@@ -583,7 +583,7 @@ impl PianoVoice {
             voicing: 1.0,
             voiced: 1.0,
             restruck: None,
-            pan: [1.0; 2],
+            pan: None,
             damper: 0.0,
             applied: 0.0,
             partner_keys: [0; MAX_PARTNERS],
@@ -664,7 +664,7 @@ impl PianoVoice {
             self.restruck = None;
             self.voicing = gain;
             self.voiced = gain;
-            self.pan = super::pan_gains(strike.key, settings.stereo_width);
+            self.pan = None;
             if !self.tune(strike.key, settings, position, partners) {
                 return;
             }
