@@ -964,7 +964,7 @@ impl Instrument {
     /// voices' bridges at its striking point: the hammer meets them there too (docs/physics.md
     /// §14.3).
     fn meet_elsewhere(voices: &mut [PianoVoice], index: usize, key: u8, settings: &Settings) {
-        let ell = PianoVoice::striking_point(key, settings);
+        let ell = voices[index].striking_point_for(key, settings);
         let elsewhere = (voices.iter().enumerate())
             .filter_map(|(i, v)| v.partner_index(key).filter(|_| i != index).map(|j| v.partner_motion(j, ell)))
             .fold(Elsewhere::default(), |sum, x| sum + x);
@@ -1451,6 +1451,39 @@ mod tests {
         let fresh = PartnerTable::new(48_000.0, &settings);
         assert!(!pick(&fresh).is_empty());
         assert_eq!(pick(&instrument.partners), pick(&fresh));
+    }
+
+    /// A key struck again strikes its ringing strings where their hammer meets them, which is
+    /// where it first struck them: with the sustain pedal down, C3 and C4 ringing (C4's strings
+    /// sounding on C3's bridge too), the strike position moved from 1 to 1.15 before C4 is struck
+    /// again changes nothing, to the bit.
+    #[test]
+    fn a_key_struck_again_strikes_its_strings_where_it_first_struck_them() {
+        let render = |moved: f64| {
+            let mut instrument = Instrument::new(48_000.0, 4, Settings::default());
+            instrument.handle(Event::Sustain { channel: 0, depth: 1.0 });
+            let mut out = Vec::new();
+            let (mut left, mut right) = ([0.0; 64], [0.0; 64]);
+            for block in 0..120 {
+                if block == 0 {
+                    for key in [48, 60] {
+                        instrument.handle(Event::NoteOn { channel: 0, key, velocity: 0.6 });
+                    }
+                }
+                if block == 20 {
+                    instrument.set_settings(&Settings { strike_position: moved, ..Settings::default() });
+                    instrument.handle(Event::NoteOn { channel: 0, key: 60, velocity: 0.9 });
+                }
+                instrument.process(&mut left, &mut right);
+                out.extend(left.iter().chain(&right).map(|x| x.to_bits()));
+            }
+            let c4 = voice_of(&instrument, 60).map(|i| instrument.voices[i].striking_position());
+            (out, c4.unwrap())
+        };
+        let (still, at_still) = render(1.0);
+        let (moved, at_moved) = render(1.15);
+        assert_eq!(at_still, at_moved, "C4's striking point");
+        assert!(still == moved, "a re-strike under a moved strike position sounds as under the first");
     }
 
     /// A slide voice silent while the pickup moved hears the string where the pickup is when

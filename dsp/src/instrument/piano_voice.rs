@@ -633,6 +633,18 @@ impl PianoVoice {
         (strike_position(key) * settings.strike_position).clamp(0.02, 0.5)
     }
 
+    /// Whether `key` struck now strikes this voice's sounding strings again.
+    fn restrikes(&self, key: u8) -> bool {
+        self.sounding && self.strike.key == key && self.pending.is_none()
+    }
+
+    /// Where this voice's hammer strikes `key` now (fraction of the length): on strings it sounds
+    /// already, where it struck them, which is where their hammer meets them (the strings are
+    /// tuned for a striking point as they are struck from rest); else where `settings` put it.
+    pub fn striking_point_for(&self, key: u8, settings: &Settings) -> f64 {
+        if self.restrikes(key) { self.position } else { Self::striking_point(key, settings) }
+    }
+
     /// Play `strike` now: on the same string if this voice already sounds that key (a re-strike),
     /// else on a freshly tuned string at rest. Never allocates.
     pub fn play(&mut self, strike: Strike, settings: &Settings, now: u64) {
@@ -655,8 +667,8 @@ impl PianoVoice {
             self.trip();
         }
         let note = piano_note(strike.key);
-        let position = Self::striking_point(strike.key, settings);
-        let restrike = self.sounding && self.strike.key == strike.key && self.pending.is_none();
+        let position = self.striking_point_for(strike.key, settings);
+        let restrike = self.restrikes(strike.key);
         self.own_brightness = false;
         let gain = super::voicing_gain(strike.key, strike.velocity);
         let strings = note.strings as f64;
