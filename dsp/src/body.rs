@@ -87,7 +87,7 @@
 //! model's numbers give them (docs/physics.md §13.5). The coupled frequencies' squares sum to the
 //! uncoupled ones', so the top with the hole closed resonates at `f_p² = f₋² + f₊² − f_h²` with
 //! the mass `m_p` at the bridge. Taken as a simply supported plate of aspect `A` whose lowest mode
-//! that is, the top has the constant modal density and the mass
+//! is that one, the top has the constant modal density and the mass
 //!
 //! ```text
 //! n = (S/2)√(ρh/D) = (π/4)(A + 1/A)/f_p,     M = 4m_p,     G = n/(4M)
@@ -428,12 +428,19 @@ pub struct Body {
     /// Whether every mode is exactly at rest (zero), as [`reset`](Self::reset) leaves them: then
     /// silence in gives silence out without looking at the modes.
     resting: bool,
+    /// Samples stepped since the last multiple of [`REST_CHECK`]: where the silence test falls.
+    clock: usize,
     /// The vector unit the steps run on.
     isa: Isa,
 }
 
-/// Below this mean square of `|z|` (m²/s²) with no force, a body has fallen silent.
+/// Below this sum over the modes of `|z_j|²` (m²/s²), a body has fallen silent.
 const SILENT: f64 = 1e-40;
+
+/// Samples between the silence tests of a ringing body. They fall on a fixed grid of the samples
+/// it has stepped, so that where it comes to rest does not depend on how its input is cut into
+/// calls.
+const REST_CHECK: usize = 1024;
 
 /// Most samples one pass of [`Step`] runs (its partial sums live on the stack).
 const RUN: usize = 64;
@@ -459,6 +466,7 @@ impl Body {
             sample_rate,
             last: 0.0,
             resting: true,
+            clock: 0,
             isa: Isa::detect(),
         };
         for (j, m) in kept.iter().enumerate() {
@@ -484,10 +492,16 @@ impl Body {
         self.beta2.len()
     }
 
-    /// Bring every mode to rest.
+    /// As made: every mode at rest, and the silence tests' grid from the next sample.
     pub fn reset(&mut self) {
-        self.w.iter_mut().for_each(|w| w.fill(0.0));
+        self.rest_modes();
         self.last = 0.0;
+        self.clock = 0;
+    }
+
+    /// Bring every mode to rest.
+    fn rest_modes(&mut self) {
+        self.w.iter_mut().for_each(|w| w.fill(0.0));
         self.resting = true;
     }
 
@@ -501,37 +515,49 @@ impl Body {
     /// Replace the bridge force in `io` (N, one value per sample) by the radiated signal
     /// (module docs), sample by sample: for a body heard by its acceleration, each sample's
     /// mean acceleration. A body at rest given no force stays at rest at no cost (it does not
-    /// even look at its modes, which matters when a call is a single sample).
+    /// even look at its modes, which matters when a call is a single sample). A ringing body is
+    /// tested for silence every [`REST_CHECK`] samples it steps, and brought to rest once silent:
+    /// the same samples come out however the input is cut into calls.
     pub fn process(&mut self, io: &mut [f64]) {
-        if io.iter().all(|&f| f == 0.0) {
-            if self.resting {
-                return;
-            }
-            if self.is_silent() {
-                self.reset();
-                return;
-            }
-        }
-        self.resting = false;
-        let [w_re, w_im] = &mut self.w;
-        for run in io.chunks_mut(RUN) {
-            self.isa.run(Step {
-                lambda: [chunks(&self.lambda[0]), chunks(&self.lambda[1])],
-                gamma: [chunks(&self.gamma[0]), chunks(&self.gamma[1])],
-                w: [chunks_mut(w_re), chunks_mut(w_im)],
-                io: run,
-            });
-        }
-        // Every mode, the padded ones too, adds `γ·w` to each output, so a state gone non-finite
-        // shows in the outputs (`0·∞` and `γ·NaN` are NaN): looking at them is enough.
-        if !io.iter().all(|y| y.is_finite()) {
-            self.reset();
-            io.fill(0.0);
+        let silent_in = |x: &[f64]| x.iter().all(|&f| f == 0.0);
+        if self.resting && self.last == 0.0 && silent_in(io) {
+            self.clock = (self.clock + io.len()) % REST_CHECK;
             return;
         }
-        if self.heard == Heard::Acceleration {
-            for y in io.iter_mut() {
-                (*y, self.last) = ((*y - self.last) * self.sample_rate, *y);
+        let mut done = 0;
+        while done < io.len() {
+            let end = io.len().min(done + REST_CHECK - self.clock);
+            let run = &mut io[done..end];
+            // Modes at rest given no force stay exactly at rest: stepping them changes nothing.
+            if !(self.resting && silent_in(run)) {
+                self.resting = false;
+                let [w_re, w_im] = &mut self.w;
+                for piece in run.chunks_mut(RUN) {
+                    self.isa.run(Step {
+                        lambda: [chunks(&self.lambda[0]), chunks(&self.lambda[1])],
+                        gamma: [chunks(&self.gamma[0]), chunks(&self.gamma[1])],
+                        w: [chunks_mut(w_re), chunks_mut(w_im)],
+                        io: piece,
+                    });
+                }
+            }
+            // Every mode, the padded ones too, adds `γ·w` to each output, so a state gone
+            // non-finite shows in the outputs (`0·∞` and `γ·NaN` are NaN): looking at them is
+            // enough.
+            if !run.iter().all(|y| y.is_finite()) {
+                self.reset();
+                io.fill(0.0);
+                return;
+            }
+            if self.heard == Heard::Acceleration {
+                for y in run.iter_mut() {
+                    (*y, self.last) = ((*y - self.last) * self.sample_rate, *y);
+                }
+            }
+            self.clock = (self.clock + run.len()) % REST_CHECK;
+            done = end;
+            if self.clock == 0 && !self.resting && self.is_silent() {
+                self.rest_modes();
             }
         }
     }
@@ -830,34 +856,35 @@ mod tests {
     }
 
     /// A struck body given silence rings on (the shortcut for a body at rest does not cut it
-    /// off): calls of one and of five samples give the bits of 64-sample calls, the ring lasts,
-    /// and once it has died away below the silence test the body is at rest again and stays so.
+    /// off) until it has died away below the silence test, then rests and stays at rest: calls
+    /// of one, five and 37 samples give the bits of 64-sample calls all the way, the ring lasting
+    /// half a second on and the rest coming at the same sample.
     #[test]
-    fn a_ringing_body_rings_on_through_one_sample_calls_until_it_rests() {
+    fn a_ringing_body_rings_and_comes_to_rest_alike_however_its_calls_are_cut() {
         let params = BodyParams::piano();
-        let samples = 48_000 * 4;
+        let samples = 48_000 * 12;
         let mut by_block = vec![0.0; samples];
         by_block[0] = 1.0;
-        let (mut by_five, mut by_sample) = (by_block.clone(), by_block.clone());
-        let [mut whole, mut five, mut single] = [(); 3].map(|_| Body::new(&params, 48_000.0));
+        let mut whole = Body::new(&params, 48_000.0);
         by_block.chunks_mut(64).for_each(|block| whole.process(block));
-        by_five.chunks_mut(5).for_each(|block| five.process(block));
-        by_sample.chunks_mut(1).for_each(|sample| single.process(sample));
-        assert_eq!(by_block, by_sample);
-        assert_eq!(by_block, by_five);
+        assert!(whole.resting, "still ringing 12 s on");
         let late = by_block[24_000..24_064].iter().map(|y| y * y).sum::<f64>();
         println!("0.5 s after the strike, 64 samples' energy {late:e}");
         assert!(late > 0.0, "the body still rings half a second on");
-        let mut silence = [0.0; 1];
-        let mut rested_at = samples;
-        while !single.resting && rested_at < 48_000 * 60 {
-            single.process(&mut silence);
-            rested_at += 1;
+        let last = by_block.iter().rposition(|&y| y != 0.0).unwrap();
+        println!("last sound {:.3} s after the strike", last as f64 / 48_000.0);
+        assert!(last < samples - 48_000, "the body rests a second before the end");
+        for len in [1, 5, 37] {
+            let mut cut = vec![0.0; samples];
+            cut[0] = 1.0;
+            let mut body = Body::new(&params, 48_000.0);
+            cut.chunks_mut(len).for_each(|call| body.process(call));
+            assert!(cut == by_block, "calls of {len} samples");
+            assert!(body.resting && body.is_silent());
         }
-        println!("at rest {:.2} s after the strike", rested_at as f64 / 48_000.0);
-        assert!(single.resting && single.is_silent(), "still ringing a minute on");
-        single.process(&mut silence);
-        assert!(single.resting && silence[0] == 0.0);
+        let mut silence = [0.0; 1];
+        whole.process(&mut silence);
+        assert!(whole.resting && silence[0] == 0.0);
     }
 
     /// No force, no state: a body costs nothing and outputs zeros; a non-finite force silences

@@ -108,7 +108,7 @@ pub struct Settings {
     pub half_pedal_to: f64,
     /// Output gain (linear), [`GAIN_RANGE_DB`]: 0.0158..=3.98.
     pub gain: f64,
-    /// Whether the safety limiter holds the output at or below its ceiling (0 dBFS).
+    /// Whether the safety limiter holds the output at or below its ceiling (−0.1 dBFS).
     pub limiter: bool,
     /// Stereo width, −1..=1: each piano key is panned by its place along the bridge, the lowest
     /// key to the left and the highest to the right at 1 (the pianist's view), mirrored below 0
