@@ -74,8 +74,8 @@
 //!   circuit ([`crate::pickup`]), scaled by [`SLIDE_SCALE`]; on the acoustic guitar
 //!   (`Settings::slide_body`), what the body their strings end on radiates, scaled by
 //!   [`ACOUSTIC_SCALE`], its two lowest modes in the centre and its higher modes panned
-//!   alternately left and right by the stereo width ([`side_gains`]). A note keeps the guitar
-//!   it was plucked on.
+//!   alternately left and right by the stereo width ([`side_gains`]). A string keeps the guitar
+//!   it was plucked on from silence until it falls silent, through the notes that take it over.
 //!
 //! [`Instrument::set_raw_output`] gives the dry signals instead, centred. Both then pass the
 //! output stage ([`OutputStage`]): the gain, smoothed over a few milliseconds, and the safety
@@ -1484,6 +1484,32 @@ mod tests {
         let (moved, at_moved) = render(1.15);
         assert_eq!(at_still, at_moved, "C4's striking point");
         assert!(still == moved, "a re-strike under a moved strike position sounds as under the first");
+    }
+
+    /// A string keeps the guitar it was plucked on from silence until it falls silent: with one
+    /// voice, a note that takes it over while it rings (stolen, and legato) stays on the electric
+    /// guitar after the acoustic one was chosen, and the note after all sound off is on the
+    /// acoustic one.
+    #[test]
+    fn a_sounding_string_keeps_its_guitar_through_the_notes_that_take_it_over() {
+        let electric = Settings { mode: Mode::Slide, ..Settings::default() };
+        let acoustic = Settings { slide_body: SlideBody::Acoustic, ..electric };
+        let mut instrument = Instrument::new(48_000.0, 1, electric);
+        let (mut left, mut right) = ([0.0; 64], [0.0; 64]);
+        let on = |key| Event::NoteOn { channel: 0, key, velocity: 0.7 };
+        instrument.handle(on(45));
+        instrument.process(&mut left, &mut right);
+        instrument.handle(Event::NoteOff { channel: 0, key: 45 });
+        instrument.set_settings(&acoustic);
+        for event in [on(50), on(52)] {
+            instrument.process(&mut left, &mut right);
+            instrument.handle(event);
+            assert!(instrument.slides[0].sounding);
+            assert_eq!(instrument.slides[0].body, SlideBody::Pickup, "{event:?}");
+        }
+        instrument.handle(Event::AllSoundOff);
+        instrument.handle(on(50));
+        assert_eq!(instrument.slides[0].body, SlideBody::Acoustic);
     }
 
     /// A slide voice silent while the pickup moved hears the string where the pickup is when

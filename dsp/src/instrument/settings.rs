@@ -142,8 +142,9 @@ pub struct Settings {
     /// Resonance of the pickup loaded by its cable (Hz), 1 kHz..=10 kHz
     /// ([`crate::pickup::PickupCircuit`]).
     pub pickup_resonance: f64,
-    /// The slide guitar's body: a magnetic pickup or an acoustic body. New notes take the one in
-    /// force; sounding ones keep theirs.
+    /// The slide guitar's body: a magnetic pickup or an acoustic body. A note plucked from
+    /// silence takes the one in force; a sounding string keeps its own, through the notes that
+    /// take it over (legato, or stolen with every voice busy), until it falls silent.
     pub slide_body: SlideBody,
     /// Slide contact stiffness κ (N/m^α), 1e6..=1e13.
     pub slide_kappa: f64,
