@@ -1169,7 +1169,9 @@ impl UnisonCore {
         let Shared { background, watches, sinks } = shared;
         let mut done = 0;
         while done < out.len() && !self.retired {
-            self.background_next = background.get(done).copied().unwrap_or(0.0);
+            // Motion handed on by a voice gone wrong (not finite) is not met: the fault stays
+            // with that voice, whose guard silences it, instead of spreading to this one.
+            self.background_next = background.get(done).copied().filter(|b| b.is_finite()).unwrap_or(0.0);
             out[done] = self.step::<S, false>(solver).output;
             self.report(watches, sinks, done);
             done += 1;
@@ -1437,6 +1439,37 @@ mod tests {
         compare(&ringing, &hammer, || QsaSolver::new(QuadSpline::new(law(3), y_ref, 6).unwrap()), "qsa");
         compare(&ringing, &hammer, || NewtonSolver::new(law(3)), "imp");
         compare(&ringing, &hammer, || ExplicitSolver::new(law(3)), "exp");
+    }
+
+    /// Motion elsewhere that is not finite (handed on by a voice gone wrong) is not met: C4
+    /// struck with NaN and infinities among its background samples sounds as with zeros there,
+    /// to the bit, and stays finite.
+    #[test]
+    fn a_background_that_is_not_finite_is_not_met() {
+        let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
+        let render = |bad: f64| {
+            let mut core = c4_unison(3, [-1.0, 0.2, 0.8], &board);
+            let y_ref = law(3).compression_at_energy(0.5 * 3.0 * 2.97e-3 * 3.5 * 3.5);
+            let mut solver = QsaSolver::new(QuadSpline::new(law(3), y_ref, 6).unwrap());
+            let (y_prev, y_now) = core.compressions();
+            solver.start(y_prev, y_now);
+            let mut background = vec![1e-7; 64];
+            for k in [3, 20, 41] {
+                background[k] = if k == 20 { -bad } else { bad };
+            }
+            let (mut out, mut all) = (vec![0.0; 64], Vec::new());
+            for _ in 0..20 {
+                let shared = Shared { background: &background, watches: &[], sinks: &mut [] };
+                core.process_shared(&mut solver, &mut out, shared);
+                all.extend(out.iter().map(|x| x.to_bits()));
+            }
+            all
+        };
+        let zeros = render(0.0);
+        assert!(zeros.iter().all(|&x| f64::from_bits(x).is_finite()));
+        for bad in [f64::NAN, f64::INFINITY] {
+            assert!(render(bad) == zeros, "{bad}");
+        }
     }
 
     /// The partners' motion at their own keys' striking points, handed on after every step
