@@ -213,7 +213,8 @@ pub enum Passing {
     /// target stands: the hand (its path, [`HandPath`], smooths the stop) and the plucking
     /// finger, whose targets the player or the host sets.
     Never,
-    /// It stops on it only where it can within its limits or where the target stopped short;
+    /// It stops on it only where it can within its limits or where it was on the target as the
+    /// block began (a target that stopped short or slowed);
     /// a target coming towards it, or one that jumps too close ahead to stop on, it passes and
     /// turns back to: the slide along the string, whose speed the string hears.
     Turning,
@@ -261,7 +262,8 @@ impl Motion {
     ///
     /// A turning motion's speed is the position's over the block, and it changes by at most `Δv`
     /// from block to block (jumps of the target and targets turning back included), except where
-    /// a moving target stops short faster than that: the motion then stops with it; and, by a few
+    /// a target it is on stops short or slows faster than that (a ramp drawn as automation that
+    /// ends, or goes on more slowly): the motion then keeps on it; and, by a few
     /// percent, in the block where it catches up with a target that slows as it arrives (a
     /// glide's tail), since it brakes as for a still one. A motion that never passes keeps those
     /// bounds towards still targets and targets moving within the limits.
