@@ -516,8 +516,8 @@ impl Body {
     /// (module docs), sample by sample: for a body heard by its acceleration, each sample's
     /// mean acceleration. A body at rest given no force stays at rest at no cost (it does not
     /// even look at its modes, which matters when a call is a single sample). A ringing body is
-    /// tested for silence every [`REST_CHECK`] samples it steps, and brought to rest once silent:
-    /// the same samples come out however the input is cut into calls.
+    /// tested for silence on a fixed grid of the samples it steps (every 1024), and brought to
+    /// rest once silent: the same samples come out however the input is cut into calls.
     pub fn process(&mut self, io: &mut [f64]) {
         let silent_in = |x: &[f64]| x.iter().all(|&f| f == 0.0);
         if self.resting && self.last == 0.0 && silent_in(io) {
