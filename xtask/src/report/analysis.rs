@@ -15,8 +15,8 @@
 
 use qsa_dsp::contact::Method;
 
-use super::error::{Config, ErrorRow, OVERSAMPLING, SWEPT_SEGMENTS};
-use super::fit::{LineFit, fit_line};
+use super::error::{Config, ErrorRow, OVERSAMPLING, REFERENCE_OVERSAMPLING, SWEPT_SEGMENTS};
+use super::fit::{LineFit, fit_against_reference, fit_line};
 
 /// Smallest N in the fits of the error against N.
 pub const ORDER_MIN_SEGMENTS: usize = 4;
@@ -136,12 +136,16 @@ pub fn orders(rows: &[ErrorRow], cases: &[&str]) -> Vec<Order> {
                     .iter()
                     .filter_map(|&k| find(rows, case, method, segments, k).map(|r| ((k as f64).log10(), signal.of(r))))
                     .collect();
-                if let Some(fit) = fit_line(&points) {
+                // Where the error does not fall with k the reference-aware model does not apply,
+                // and the straight line says how it goes instead.
+                let fitted = (fit_against_reference(&points, REFERENCE_OVERSAMPLING as f64).map(|f| (f, "")))
+                    .or_else(|| fit_line(&points).map(|f| (f, ", line")));
+                if let Some((fit, how)) = fitted {
                     out.push(Order {
                         case: case.to_owned(),
                         quantity,
                         method: label.to_owned(),
-                        range: format!("k = {k_lo}–{k_hi}"),
+                        range: format!("k = {k_lo}–{k_hi}{how}"),
                         fit,
                     });
                 }
@@ -269,10 +273,13 @@ pub fn most_accurate<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal) -> Op
 
 /// The Pareto front of `case` over all methods for `signal`, by increasing RTF, with errors below
 /// the reference's resolution `check` counted as `check` (no row is credited with an accuracy the
-/// reference cannot confirm, so the cheapest of such rows stands for them).
+/// reference cannot confirm, so the cheapest of such rows stands for them). A row whose error is
+/// not a number is left out.
 pub fn pareto<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal, check: f64) -> Vec<&'a ErrorRow> {
-    let points: Vec<(f64, f64, &ErrorRow)> =
-        rows.iter().filter(|r| r.case == case).filter_map(|r| r.rtf.map(|t| (t, signal.of(r).max(check), r))).collect();
+    let points: Vec<(f64, f64, &ErrorRow)> = (rows.iter())
+        .filter(|r| r.case == case && !signal.of(r).is_nan())
+        .filter_map(|r| r.rtf.map(|t| (t, signal.of(r).max(check), r)))
+        .collect();
     super::pareto::front(&points).into_iter().map(|p| p.2).collect()
 }
 

@@ -24,9 +24,9 @@
 //!
 //! `sensitivity` is the largest change of the four errors when the exciter's initial speed (or the
 //! slide's mass) is scaled by `1 ± 1e-14` ([`SENSITIVITY_PERTURBATION`]): a few rounding errors.
-//! It is 0.000 wherever the dynamics are regular; a contact that rattles chaotically amplifies
-//! such a perturbation (the slide excerpt does), and its errors are then only known to about this
-//! much. `--quick` compares, digit for digit as printed, only rows whose sensitivity prints as
+//! It is 0.000 wherever the dynamics are regular; a contact that rattled chaotically would amplify
+//! such a perturbation, and its errors would then only be known to about this much (the report
+//! names such cases; at the printed precision none of today's is). `--quick` compares, digit for digit as printed, only rows whose sensitivity prints as
 //! 0.0000 (see `QUICK_MAX_SENSITIVITY`).
 //!
 //! # Run time
@@ -200,6 +200,8 @@ pub fn sweep_case(case: &Case, configs: &[Config], timing_runs: usize, tick: &dy
     let mut rows = Vec::with_capacity(configs.len());
     for k in rates {
         let same_rate = imp(k);
+        // Frame n of a run at k× lies on frame n·K/k of the reference at K×: K must be a multiple.
+        assert_eq!(REFERENCE_OVERSAMPLING % k, 0, "{k}× does not divide the reference's rate");
         let stride = REFERENCE_OVERSAMPLING / k;
         for config in configs.iter().filter(|c| c.oversampling == k) {
             let owned;
@@ -266,8 +268,9 @@ pub fn measure_sensitivity(case: &Case, configs: &[Config], rows: &mut [ErrorRow
                 .errors()
                 .iter()
                 .zip(other.errors())
+                // An error that turns NaN (or back) under the perturbation is not known at all.
                 .map(|(a, b)| if a == &b || (a.is_nan() && b.is_nan()) { 0.0 } else { (a - b).abs() })
-                .fold(0.0, f64::max);
+                .fold(0.0, |most: f64, change| if change.is_nan() { f64::INFINITY } else { most.max(change) });
             row.sensitivity = Some(row.sensitivity.unwrap_or(0.0).max(change));
         }
     }

@@ -284,9 +284,10 @@ fn readme(r: &Results, orders: &[Order]) -> String {
         let _ = writeln!(
             w,
             "In {}, IMP at {REFERENCE_OVERSAMPLING}× still differs from IMP at {CHECK_OVERSAMPLING}× by more than \
-             1 % of the force. A stiff contact pressed against the string's light high modes forms an oscillator \
-             above the base rate's Nyquist frequency (the stiff hammer's ripple is measured below). The schemes \
-             cannot follow it below a high enough rate, so the force error falls slowly or not at all with k.{} \
+             1 % of the force. A stiff contact pressed against the string's light high modes can form an \
+             oscillator above the base rate's Nyquist frequency: the stiff hammer's ripple is measured below (for \
+             the other cases this is the likely cause, not a measured one). The schemes cannot follow such an \
+             oscillator below a high enough rate, so the force error falls slowly or not at all with k.{} \
              These oscillations are above hearing: for these cases choose by the output signal, and read errors \
              below the reference's own as unresolved (the tables above mark them).\n",
             names.join(" and "),
@@ -435,11 +436,13 @@ fn readme(r: &Results, orders: &[Order]) -> String {
     let _ = writeln!(w, "## Convergence orders\n");
     let _ = writeln!(
         w,
-        "Least-squares lines (faer QR) through log10 error against log10 N or log10 k; the order p is minus the \
-         slope (error ∝ N^−p or Δt^p). N-fits use N = {}–100 (below that the first segment decides the error); \
-         k-fits use k = 1, 2, 4, 8. R² tells how straight the line is: a low R² means the order is not a useful \
-         summary there.\n",
-        analysis::ORDER_MIN_SEGMENTS
+        "Least-squares fits of log10 error: against log10 N, lines (faer QR) whose slope is −p (error ∝ N^−p); \
+         against k = 1, 2, 4, 8, the model error ∝ k^−p − {r}^−p, since the reference is itself a run at {r}× \
+         (a straight line would read a steeper fall: 2.13 for an exact order 2; `xtask/src/report/fit.rs`), \
+         or a straight line where the error does not fall with k (marked \"line\"). N-fits use N = {}–100 (below that the first segment decides the error). R² tells how well the fit \
+         holds: a low R² means the order is not a useful summary there.\n",
+        analysis::ORDER_MIN_SEGMENTS,
+        r = super::error::REFERENCE_OVERSAMPLING
     );
     let _ = writeln!(w, "| case | quantity | method | range | order p | R² |");
     let _ = writeln!(w, "|---|---|---|---|---|---|");
@@ -479,9 +482,10 @@ fn readme(r: &Results, orders: &[Order]) -> String {
         .collect();
     let _ = writeln!(
         w,
-        "In short, at the base rate: {}. The spline's force error should fall as N^−2 for α ≥ 2 and more slowly \
-         for α < 2 (docs/physics.md §1.5), and the scheme should be second order in Δt; where R² is low (the \
-         rattling slide, the unresolved stiff hammer) the numbers do not follow a power law.\n",
+        "In short (the N-orders at the base rate, the time-step orders over k = 1–8): {}. The spline's force error should fall as N^−2 for α ≥ 2 and more slowly \
+         for α < 2 (docs/physics.md §1.5), and the scheme should be second order in Δt; where R² is low or a \
+         line was fitted (the slide's force, the unresolved stiff hammer) the numbers do not follow a power \
+         law.\n",
         summary.join("; ")
     );
 

@@ -79,6 +79,7 @@ pub fn study(case: &Case) -> Vec<StiffRow> {
             let frames = render(method, k);
             let (first_peak_force, first_peak_us, ripple_hz) = waveform(&frames, base * k as f64);
             for (reference, ref_frames) in references.iter().filter(|(r, _)| *r > k) {
+                assert_eq!(reference % k, 0, "{k}× does not divide the reference's rate");
                 let stride = reference / k;
                 let error = |field: fn(&Frame) -> f64| {
                     log10_rel_l2(frames.iter().enumerate().map(|(n, f)| (field(f), field(&ref_frames[n * stride]))))
