@@ -84,6 +84,9 @@ pub struct BenchArgs {
     /// Also write docs/report/bench.md and the table in README.md (needs every case).
     #[arg(long)]
     pub write: bool,
+    /// Repository root, where `--write` writes.
+    #[arg(long, default_value = ".")]
+    pub root: PathBuf,
     /// Run the kernels on this vector unit or a narrower one, as a CPU without the wider units
     /// would (`avx` is what an AVX2 machine runs); the widest this CPU has by default.
     #[arg(long, value_enum)]
@@ -282,8 +285,11 @@ const BEGIN: &str = "<!-- bench-table:begin -->";
 const END: &str = "<!-- bench-table:end -->";
 
 /// Write docs/report/bench.md and the table between README.md's markers.
-fn write_docs(lines: &[BenchLine], peak: f64, isa: &str) -> Result<(), BenchError> {
-    let err = |what: &str, e: std::io::Error| BenchError::Write(format!("{what}: {e}"));
+/// Write `docs/report/bench.md` and the table between the README's markers under `root`, each
+/// through a temporary file renamed into place; a README without the markers in order is left as
+/// it is.
+fn write_docs(root: &Path, lines: &[BenchLine], peak: f64, isa: &str) -> Result<(), BenchError> {
+    let err = |what: &Path, e: String| BenchError::Write(format!("{}: {e}", what.display()));
     let table = table(lines);
     let head = format!(
         "One run of `cargo xtask bench --write` on this machine ({} cores, {isa} kernels, measured \
@@ -295,13 +301,17 @@ fn write_docs(lines: &[BenchLine], peak: f64, isa: &str) -> Result<(), BenchErro
         "# Benchmarks\n\nWritten by `cargo xtask bench --write`; see `xtask/src/bench.rs` for the cases \
          and the columns.\n\n{head}{table}\n```json\n{json}```\n"
     );
-    std::fs::write("docs/report/bench.md", doc).map_err(|e| err("docs/report/bench.md", e))?;
-    let readme = std::fs::read_to_string("README.md").map_err(|e| err("README.md", e))?;
-    let (Some(b), Some(e)) = (readme.find(BEGIN), readme.find(END)) else {
-        return Err(BenchError::Write(format!("README.md has no {BEGIN} … {END} markers")));
+    let write = |path: &Path, text: &str| {
+        crate::examples::write_atomically(path, |file| file.write_all(text.as_bytes()))
+            .map_err(|e| err(path, e.to_string()))
     };
-    let updated = format!("{}{BEGIN}\n{head}{table}{}", &readme[..b], &readme[e..]);
-    std::fs::write("README.md", updated).map_err(|e| err("README.md", e))
+    let readme_path = root.join("README.md");
+    let readme = std::fs::read_to_string(&readme_path).map_err(|e| err(&readme_path, e.to_string()))?;
+    let Some((b, e)) = readme.find(BEGIN).zip(readme.find(END)).filter(|&(b, e)| b < e) else {
+        return Err(err(&readme_path, format!("no {BEGIN} … {END} markers, in that order")));
+    };
+    write(&root.join("docs/report/bench.md"), &doc)?;
+    write(&readme_path, &format!("{}{BEGIN}\n{head}{table}{}", &readme[..b], &readme[e..]))
 }
 
 fn load(dir: &Path, name: &str) -> Result<SceneDescription, BenchError> {
@@ -684,7 +694,7 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
         writeln!(stdout, "{}", automated(args.runs)).ok();
     }
     if args.write {
-        write_docs(&lines, peak, &isa)?;
+        write_docs(&args.root, &lines, peak, &isa)?;
     }
     Ok(lines)
 }
