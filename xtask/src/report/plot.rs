@@ -117,7 +117,8 @@ fn pareto_panel(area: &Area, rows: &[&ErrorRow], signal: Signal, check: f64, cap
     let timed: Vec<&ErrorRow> =
         rows.iter().copied().filter(|r| r.rtf.is_some_and(|t| t > 0.0) && signal.of(r).is_finite()).collect();
     let (x0, x1) = range(timed.iter().map(|r| r.rtf.unwrap_or(1.0).log10()), 0.05, 0.5);
-    let (y0, y1) = range(timed.iter().map(|r| signal.of(r)).chain([-2.0]), 0.08, 1.0);
+    let (y0, y1) =
+        range(timed.iter().map(|r| signal.of(r)).chain([-2.0]).chain(Some(check).filter(|c| c.is_finite())), 0.08, 1.0);
     // Room below the data for the legend (lower left): a third of the height.
     let y0 = y0 - 0.45 * (y1 - y0);
     let (x0, x1) = (10f64.powf(x0), 10f64.powf(x1));
@@ -172,7 +173,10 @@ fn pareto_panel(area: &Area, rows: &[&ErrorRow], signal: Signal, check: f64, cap
         chart
             .draw_series(points.iter().map(|p| Circle::new((p.0, p.1), 4, marker_style)))
             .map_err(|e| e.to_string())?;
-        let best = front(&points);
+        // The front ranks the rows as the tables do: an error below the reference's own counts as
+        // that (unresolved), so the line runs along it there while the dots stay where they fell.
+        let capped: Vec<(f64, f64, String)> = points.iter().map(|p| (p.0, p.1.max(check), p.2.clone())).collect();
+        let best = front(&capped);
         chart
             .draw_series(LineSeries::new(best.iter().map(|p| (p.0, p.1)), c.stroke_width(2)))
             .map_err(|e| e.to_string())?
