@@ -242,14 +242,20 @@ fn write_csv(path: &Path, rows: &[KeyLoudness]) -> Result<(), String> {
     for r in rows {
         text += &format!("{},{},{:.3},{:.1},{:.5}\n", r.key, r.velocity, r.lufs, r.rms_frequency, r.peak);
     }
-    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+    write_text(path, &text)
+}
+
+/// Write `text` to `path` through a temporary file renamed into place.
+fn write_text(path: &Path, text: &str) -> Result<(), String> {
+    use std::io::Write;
+    crate::examples::write_atomically(path, |file| file.write_all(text.as_bytes())).map_err(|e| e.to_string())
 }
 
 fn write_voicing(path: &Path, table: &[[f32; 43]; 128]) -> Result<(), String> {
     let old = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let (begin, end) = ("// voicing-table:begin\n", "// voicing-table:end");
-    let (Some(a), Some(b)) = (old.find(begin), old.find(end)) else {
-        return Err(format!("{}: no voicing-table markers", path.display()));
+    let Some((a, b)) = old.find(begin).zip(old.find(end)).filter(|&(a, b)| a < b) else {
+        return Err(format!("{}: no voicing-table markers, in order", path.display()));
     };
     let mut rows = String::new();
     for (key, gains) in table.iter().enumerate() {
@@ -261,7 +267,7 @@ fn write_voicing(path: &Path, table: &[[f32; 43]; 128]) -> Result<(), String> {
         &old[..a],
         &old[b..]
     );
-    std::fs::write(path, new).map_err(|e| format!("{}: {e}", path.display()))
+    write_text(path, &new)
 }
 
 fn plot(path: &Path, rows: &[KeyLoudness]) -> Result<(), String> {

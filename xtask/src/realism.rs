@@ -1,8 +1,8 @@
 //! How the piano compares with real grands: `cargo xtask realism` writes `docs/report/realism.md`
 //! with its pictures and sound examples in `docs/report/realism/`.
 //!
-//! - **Two-stage decay**: the partial envelopes of C4 struck mezzo-forte and held, with the
-//!   default unison spread and with the unison tuned exactly alike.
+//! - **Two-stage decay**: the partial envelopes of C4 struck at velocity 0.6 (2.2 m/s) and held,
+//!   with the default unison spread and with the unison tuned exactly alike.
 //! - **Contact duration** against key at mezzo-forte and forte, beside the string's period and
 //!   the published measurements of docs/physics.md §8.4.
 //! - **Inharmonicity** `B` against key beside the grands measured by Lehtonen et al. and Rigaud
@@ -412,7 +412,8 @@ pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
         (&guitars, &stereo),
     );
     let path = args.root.join("docs/report/realism.md");
-    std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    crate::examples::write_atomically(&path, |file| std::io::Write::write_all(file, text.as_bytes()))
+        .map_err(|e| e.to_string())?;
     writeln!(out, "{}", serde_json::json!({ "written": path.display().to_string() })).map_err(|e| e.to_string())
 }
 
@@ -431,7 +432,7 @@ fn envelopes(path: &Path) -> Result<Vec<Envelope>, String> {
             true => (levels.as_slice(), colour, format!("partial {partial}, unison spread {detune} cents"), 2),
             false => (levels.as_slice(), colour, format!("partial {partial}, unison tuned exactly alike"), 1),
         });
-    draw_levels(path, "C4 struck mezzo-forte and held: partial levels (50 ms windows)", lines.collect())?;
+    draw_levels(path, "C4 struck at 2.2 m/s (velocity 0.6) and held: partial levels (50 ms windows)", lines.collect())?;
     Ok(rows)
 }
 
@@ -451,7 +452,7 @@ fn una_corda(path: &Path) -> Result<Vec<Shifted>, String> {
         true => (levels.as_slice(), colour, format!("partial {partial}, una corda: two strings struck"), 1),
         false => (levels.as_slice(), colour, format!("partial {partial}, all three strings struck"), 2),
     });
-    let caption = "C4 struck mezzo-forte and held, with and without the una corda (50 ms windows)";
+    let caption = "C4 struck at 2.2 m/s (velocity 0.6) and held, with and without the una corda (50 ms windows)";
     draw_levels(path, caption, lines.collect())?;
     Ok(rows)
 }
@@ -688,7 +689,7 @@ fn decays(path: &Path) -> Result<Vec<Decay>, String> {
     let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let mut chart = ChartBuilder::on(&root)
-        .caption("Decay rates of the first two partials (mezzo-forte, held)", ("sans-serif", 22))
+        .caption("Decay rates of the first two partials (velocity 0.6, 2.2 m/s, held)", ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(44)
         .y_label_area_size(60)
