@@ -895,6 +895,9 @@ impl SlideVoice {
     fn trip(&mut self) {
         self.trips += 1;
         self.silence();
+        // The books of a state gone wrong may hold NaN, which would blind the guard's bound to
+        // the work later notes supply.
+        self.core.open_books();
     }
 
     /// A silent voice's slide at rest at `x_o` (m), lifted, its trailing finger behind it and the
@@ -1676,16 +1679,24 @@ mod tests {
     }
 
     /// A non-finite state silences the voice in the same call: the samples are zero, not NaN,
-    /// and the trip is counted.
+    /// and the trip is counted. Its energy books start afresh, so the next note's bound counts the
+    /// work the hand supplies, as on a fresh voice.
     #[test]
     fn a_non_finite_state_is_silenced_at_once() {
-        let (mut voice, _) = plucked(20);
+        let (mut voice, settings) = plucked(20);
         corrupt(&mut voice);
         let mut out = [1.0; 64];
         voice.render(&mut out);
         assert!(out.iter().all(|&x| x == 0.0));
         assert!(!voice.sounding);
         assert_eq!(voice.guard_trips(), 1);
+        assert_eq!(voice.core.control_work(), 0.0);
+        voice.play(STRIKE, &settings, &ChannelState::default(), false, 0);
+        for _ in 0..20 {
+            voice.begin_block(&settings, &ChannelState::default(), 64);
+            voice.render(&mut out);
+        }
+        assert!(voice.core.control_work().is_finite() && voice.work_at_pluck.is_finite());
     }
 
     /// Silenced at once (all sound off), a ringing voice keeps nothing of its note: on either

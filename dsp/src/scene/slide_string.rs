@@ -1009,6 +1009,12 @@ impl SlideCore {
     /// from this step and the energy's books at zero.
     pub fn restart(&mut self) {
         (self.n, self.k) = (0, 0);
+        self.open_books();
+    }
+
+    /// Start the energy books afresh: no losses and no control work so far. A state gone
+    /// non-finite leaves NaN in them, which every later difference of the work would carry.
+    pub fn open_books(&mut self) {
         (self.losses, self.control_work) = (0.0, 0.0);
     }
 
