@@ -1116,7 +1116,9 @@ impl SlideCore {
     }
 
     /// New slide-and-hand and finger-damping parameters and control block length N_b (samples),
-    /// taking effect at once (the block length at the next block boundary). Keeps the motion.
+    /// taking effect at once (the block length at the next block boundary). Keeps the motion: a
+    /// new hand stiffness or slide mass under a pressed, moving slide changes the energy the hand
+    /// and the slide hold, which the books do not count as work (the balance steps there).
     pub fn set_params(&mut self, slide: SlideParams, finger_damping: [f64; 2], block: usize) {
         self.sho.set_params(slide);
         self.r = finger_damping;
