@@ -581,6 +581,11 @@ fn bad_scenes() -> Vec<Bad> {
         bad("negative duration", e("duration = 0.002", "duration = -0.002"), &["duration", "> 0"]),
         bad("duration under one sample", e("duration = 0.002", "duration = 1e-9"), &["duration", "samples"]),
         bad("overlong duration", e("duration = 0.002", "duration = 1e6"), &["duration", "at most"]),
+        bad(
+            "more frames than memory should hold",
+            e("duration = 0.002", "duration = 600.0\nsample_rate = 96000").replace("sample_rate = 44100\n", ""),
+            &["duration", "57600000 samples", "must be 1 to 14000000"],
+        ),
         // NaN and infinity, written as TOML `nan` / `inf`.
         bad("nan kappa", e("kappa = 1e8", "kappa = nan"), &["contact.kappa", "finite"]),
         bad("inf kappa", e("kappa = 1e8", "kappa = inf"), &["contact.kappa", "finite"]),

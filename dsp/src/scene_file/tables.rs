@@ -9,8 +9,9 @@ use crate::contact::{Method, PowerLaw, SolverSettings};
 /// Longest render a scene file may ask for (s).
 pub const MAX_SCENE_DURATION: f64 = 600.0;
 
-/// Most samples a scene file may ask for (bounds memory: every sample keeps a frame).
-pub const MAX_SCENE_SAMPLES: usize = 50_000_000;
+/// Most samples a scene file may ask for: every sample keeps a frame of 72 bytes, so this bounds
+/// a render's frames near 1 GB (600 s at 23 kHz, 317 s at 44.1 kHz).
+pub const MAX_SCENE_SAMPLES: usize = 14_000_000;
 
 /// Most QSA segments a scene file may ask for (the plugin's own, smaller bound is
 /// [`MAX_SEGMENTS`](crate::instrument::MAX_SEGMENTS)).
