@@ -30,7 +30,8 @@
 //! switching it never shifts the sound. Switched off, every frame asks for gain 1 and the gain
 //! it was applying recovers at the release rate instead of jumping.
 //!
-//! A frame that is not finite (NaN or infinite in either channel) enters as silence.
+//! A frame that is not finite (NaN or infinite in either channel, or beyond the range of an `f32`
+//! once the gain is applied) enters as silence.
 //!
 //! The physics never needs it in normal playing (the default gain keeps a fortissimo chord of
 //! ten notes below 0 dBFS); it is there for 32 unison voices at full gain and for a gain raised
@@ -134,12 +135,13 @@ impl OutputStage {
             *a += (self.target - *a) * self.smoothing;
             *g += (*a - *g) * self.smoothing;
             let mut frame = (f64::from(*l) * *g, f64::from(*r) * *g);
-            let mut peak = frame.0.abs().max(frame.1.abs());
-            // A frame that is not finite leaves as silence, limiter or not: no voice makes one,
-            // but a sum can overflow an `f32`, and the host must never receive one.
-            if !peak.is_finite() {
-                (frame, peak) = ((0.0, 0.0), 0.0);
+            // A frame not finite in either channel, or beyond an `f32` once the gain is applied,
+            // leaves as silence, limiter or not: no voice makes one, but a sum can overflow, and
+            // the host must never receive one.
+            if !((frame.0 as f32).is_finite() && (frame.1 as f32).is_finite()) {
+                frame = (0.0, 0.0);
             }
+            let peak = frame.0.abs().max(frame.1.abs());
             let need = if limit && peak > CEILING { CEILING / peak } else { 1.0 };
             self.at = if self.at + 1 == w { 0 } else { self.at + 1 };
             self.limiting -= usize::from(self.needed[self.at] < 1.0);
@@ -171,28 +173,37 @@ impl OutputStage {
 mod tests {
     use super::*;
 
-    /// A frame that is not finite leaves as silence, with the limiter on or off, and the frames
-    /// around it leave as they would without it: the gain and the limiter take no harm.
+    /// A frame that is not finite in either channel, or that the gain (here 2) carries beyond
+    /// an `f32`, leaves as silence in both, with the limiter on or off, and the frames around it
+    /// leave as they would without it: the gain and the limiter take no harm.
     #[test]
     fn a_frame_that_is_not_finite_leaves_as_silence() {
+        let bad = [(100, f32::NAN), (101, f32::INFINITY), (250, f32::NEG_INFINITY), (300, 3e38)];
         for limit in [true, false] {
-            let input: Vec<f32> = (0..400).map(|i| (0.9 * (0.3 * i as f64).sin()) as f32).collect();
-            let mut bad = input.clone();
-            for (i, x) in [(100, f32::NAN), (101, f32::INFINITY), (250, f32::NEG_INFINITY)] {
-                bad[i] = x;
-            }
-            let run = |x: &[f32]| {
-                let mut stage = OutputStage::new(48_000.0, 1.0);
-                let (mut l, mut r) = (x.to_vec(), x.to_vec());
-                stage.process(&mut l, &mut r, limit);
-                (l, r, stage.latency())
-            };
-            let (clean, _, lat) = run(&input);
-            let (l, r, _) = run(&bad);
-            assert_eq!(l, r);
-            for (i, (y, c)) in l.iter().zip(&clean).enumerate() {
-                let expected = if i >= lat && matches!(i - lat, 100 | 101 | 250) { 0.0 } else { *c };
-                assert_eq!(*y, expected, "limit {limit}, sample {i}");
+            for channel in 0..3 {
+                let input: Vec<f32> = (0..400).map(|i| (0.45 * (0.3 * i as f64).sin()) as f32).collect();
+                let run = |faults: &[(usize, f32)]| {
+                    let mut stage = OutputStage::new(48_000.0, 2.0);
+                    let (mut l, mut r) = (input.clone(), input.clone());
+                    for &(i, x) in faults {
+                        if channel != 1 {
+                            l[i] = x;
+                        }
+                        if channel != 0 {
+                            r[i] = x;
+                        }
+                    }
+                    stage.process(&mut l, &mut r, limit);
+                    (l, r, stage.latency())
+                };
+                let (clean, _, lat) = run(&[]);
+                let (l, r, _) = run(&bad);
+                for (i, (y, c)) in l.iter().zip(&clean).enumerate() {
+                    let faulty = i >= lat && bad.iter().any(|&(at, _)| at == i - lat);
+                    let expected = if faulty { 0.0 } else { *c };
+                    assert_eq!(*y, expected, "limit {limit}, channels {channel}, sample {i}");
+                    assert_eq!(r[i], expected, "limit {limit}, channels {channel}, sample {i}");
+                }
             }
         }
     }
