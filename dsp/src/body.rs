@@ -519,6 +519,8 @@ impl Body {
     /// tested for silence on a fixed grid of the samples it steps (every 1024), and brought to
     /// rest once silent: the same samples come out however the input is cut into calls.
     pub fn process(&mut self, io: &mut [f64]) {
+        // A force that is not finite (no voice hands one on) is dropped, sample by sample.
+        io.iter_mut().filter(|f| !f.is_finite()).for_each(|f| *f = 0.0);
         let silent_in = |x: &[f64]| x.iter().all(|&f| f == 0.0);
         if self.resting && self.last == 0.0 && silent_in(io) {
             self.clock = (self.clock + io.len()) % REST_CHECK;
@@ -544,15 +546,20 @@ impl Body {
             // Every mode, the padded ones too, adds `γ·w` to each output, so a state gone
             // non-finite shows in the outputs (`0·∞` and `γ·NaN` are NaN): looking at them is
             // enough.
-            if !run.iter().all(|y| y.is_finite()) {
-                self.reset();
-                io.fill(0.0);
-                return;
-            }
+            let bad = run.iter().position(|y| !y.is_finite());
+            let good = bad.unwrap_or(run.len());
             if self.heard == Heard::Acceleration {
-                for y in run.iter_mut() {
+                for y in &mut run[..good] {
                     (*y, self.last) = ((*y - self.last) * self.sample_rate, *y);
                 }
+            }
+            if let Some(bad) = bad {
+                // Silence from that sample on, the modes at rest, the grid kept.
+                io[done + bad..].fill(0.0);
+                self.rest_modes();
+                self.last = 0.0;
+                self.clock = (self.clock + io.len() - done) % REST_CHECK;
+                return;
             }
             self.clock = (self.clock + run.len()) % REST_CHECK;
             done = end;
@@ -885,6 +892,31 @@ mod tests {
         let mut silence = [0.0; 1];
         whole.process(&mut silence);
         assert!(whole.resting && silence[0] == 0.0);
+    }
+
+    /// A force sample that is not finite is dropped as if it were zero, however the calls are
+    /// cut: with NaN and infinities among a driving force, calls of 1, 37 and 64 samples give the
+    /// bits of the force with zeros there.
+    #[test]
+    fn a_non_finite_force_sample_is_dropped_however_the_calls_are_cut() {
+        let mut force: Vec<f64> = (0..4_000).map(|n| (0.01 * n as f64).sin()).collect();
+        let render = |force: &[f64], len: usize| {
+            let mut body = Body::new(&BodyParams::piano(), 48_000.0);
+            let mut io = force.to_vec();
+            io.chunks_mut(len).for_each(|call| body.process(call));
+            io
+        };
+        for at in [1_500, 1_501, 2_900] {
+            force[at] = 0.0;
+        }
+        let zeros = render(&force, 64);
+        assert!(zeros.iter().all(|y| y.is_finite()) && zeros[3_000..].iter().any(|&y| y != 0.0));
+        for (at, bad) in [(1_500, f64::NAN), (1_501, f64::INFINITY), (2_900, f64::NEG_INFINITY)] {
+            force[at] = bad;
+        }
+        for len in [1, 37, 64] {
+            assert!(render(&force, len) == zeros, "calls of {len}");
+        }
     }
 
     /// No force, no state: a body costs nothing and outputs zeros; a non-finite force silences

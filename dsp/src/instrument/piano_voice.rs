@@ -635,9 +635,10 @@ impl PianoVoice {
         (strike_position(key) * settings.strike_position).clamp(0.02, 0.5)
     }
 
-    /// Whether `key` struck now strikes this voice's sounding strings again.
+    /// Whether `key` struck now strikes this voice's sounding strings again (a voice the guard
+    /// is fading meets the strike silent: see [`play_with`](Self::play_with)).
     fn restrikes(&self, key: u8) -> bool {
-        self.sounding && self.strike.key == key && self.pending.is_none()
+        self.sounding && self.strike.key == key && self.pending.is_none() && !self.guard_fade.is_fading()
     }
 
     /// Where this voice's hammer strikes `key` now (fraction of the length): on strings it sounds
