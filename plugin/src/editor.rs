@@ -62,6 +62,8 @@ pub struct EditorApp {
     history: History,
     /// Peak load shown and when it was taken (egui time, s).
     peak_hold: (f32, f64),
+    /// The sliders' gestures under way.
+    gestures: slider::Gestures,
 }
 
 impl NiceEguiApp for EditorApp {
@@ -81,6 +83,11 @@ impl NiceEguiApp for EditorApp {
     }
 
     fn editor_closed(&mut self) {
+        // A drag under way as the window closes ends with it: the host must not keep the
+        // parameter touched.
+        if let Some(gui) = &self.gui {
+            self.gestures.end_all(&gui.param_setter());
+        }
         self.gui = None;
     }
 }
@@ -95,6 +102,7 @@ impl EditorApp {
             latest: Monitor::default(),
             history: History::default(),
             peak_hold: (0.0, 0.0),
+            gestures: slider::Gestures::default(),
         }
     }
 
@@ -118,13 +126,14 @@ impl EditorApp {
         };
         let setter = gui.param_setter();
         let (params, latest, history, peak) = (&*self.params, &self.latest, &self.history, self.peak_hold.0);
+        let gestures = &self.gestures;
         egui::CentralPanel::default().show(ui, |ui| {
             header(ui, latest, load, peak);
             ui.add_space(6.0);
             live_view(ui, latest, history);
             ui.add_space(6.0);
             ui.separator();
-            parameters(ui, params, &setter);
+            parameters(ui, params, Controls { setter: &setter, gestures });
         });
     }
 }
@@ -197,58 +206,58 @@ fn live_view(ui: &mut Ui, m: &Monitor, history: &History) {
 }
 
 /// The parameters in three columns: Engine and Output, Piano, Slide.
-fn parameters(ui: &mut Ui, p: &QsaParams, setter: &ParamSetter) {
+fn parameters(ui: &mut Ui, p: &QsaParams, controls: Controls) {
     let mode = p.engine.mode.value();
     ui.columns(3, |columns| {
         let ui = &mut columns[0];
         section(ui, "Engine", None, |ui| {
-            row(ui, &p.engine.mode, setter);
-            row(ui, &p.engine.solver, setter);
-            row(ui, &p.engine.segments, setter);
-            row(ui, &p.engine.block, setter);
-            row(ui, &p.engine.voices, setter);
-            row(ui, &p.engine.overload_guard, setter);
+            row(ui, &p.engine.mode, controls);
+            row(ui, &p.engine.solver, controls);
+            row(ui, &p.engine.segments, controls);
+            row(ui, &p.engine.block, controls);
+            row(ui, &p.engine.voices, controls);
+            row(ui, &p.engine.overload_guard, controls);
         });
         ui.label(RichText::new("Voices take effect when the plugin is next activated.").small().weak());
         ui.add_space(10.0);
         section(ui, "Output", None, |ui| {
-            row(ui, &p.output.gain, setter);
-            row(ui, &p.output.limiter, setter);
-            row(ui, &p.output.stereo_width, setter);
+            row(ui, &p.output.gain, controls);
+            row(ui, &p.output.limiter, controls);
+            row(ui, &p.output.stereo_width, controls);
         });
         ui.add_space(10.0);
-        presets::section(ui, p, setter);
+        presets::section(ui, p, controls.setter);
 
         section(&mut columns[1], "Piano", Some(mode == ModeParam::Piano), |ui| {
-            row(ui, &p.piano.hardness, setter);
-            row(ui, &p.piano.hammer_mass, setter);
-            row(ui, &p.piano.strike_position, setter);
-            row(ui, &p.piano.damping, setter);
-            row(ui, &p.piano.brightness, setter);
-            row(ui, &p.piano.damper, setter);
-            row(ui, &p.piano.unison_detune, setter);
-            row(ui, &p.piano.stretch, setter);
-            row(ui, &p.piano.half_pedal_from, setter);
-            row(ui, &p.piano.half_pedal_to, setter);
+            row(ui, &p.piano.hardness, controls);
+            row(ui, &p.piano.hammer_mass, controls);
+            row(ui, &p.piano.strike_position, controls);
+            row(ui, &p.piano.damping, controls);
+            row(ui, &p.piano.brightness, controls);
+            row(ui, &p.piano.damper, controls);
+            row(ui, &p.piano.unison_detune, controls);
+            row(ui, &p.piano.stretch, controls);
+            row(ui, &p.piano.half_pedal_from, controls);
+            row(ui, &p.piano.half_pedal_to, controls);
         });
 
         section(&mut columns[2], "Slide", Some(mode == ModeParam::Slide), |ui| {
-            row(ui, &p.slide.slide_position, setter);
-            row(ui, &p.slide.follow_key, setter);
-            row(ui, &p.slide.glide, setter);
-            row(ui, &p.slide.bend_range, setter);
-            row(ui, &p.slide.hand_height, setter);
-            row(ui, &p.slide.hand_source, setter);
-            row(ui, &p.slide.slide_mass, setter);
-            row(ui, &p.slide.hand_stiffness, setter);
-            row(ui, &p.slide.hand_damping, setter);
-            row(ui, &p.slide.finger_damping, setter);
-            row(ui, &p.slide.kappa, setter);
-            row(ui, &p.slide.alpha, setter);
-            row(ui, &p.slide.pluck_position, setter);
-            row(ui, &p.slide.pickup_position, setter);
-            row(ui, &p.slide.pickup_resonance, setter);
-            row(ui, &p.slide.body, setter);
+            row(ui, &p.slide.slide_position, controls);
+            row(ui, &p.slide.follow_key, controls);
+            row(ui, &p.slide.glide, controls);
+            row(ui, &p.slide.bend_range, controls);
+            row(ui, &p.slide.hand_height, controls);
+            row(ui, &p.slide.hand_source, controls);
+            row(ui, &p.slide.slide_mass, controls);
+            row(ui, &p.slide.hand_stiffness, controls);
+            row(ui, &p.slide.hand_damping, controls);
+            row(ui, &p.slide.finger_damping, controls);
+            row(ui, &p.slide.kappa, controls);
+            row(ui, &p.slide.alpha, controls);
+            row(ui, &p.slide.pluck_position, controls);
+            row(ui, &p.slide.pickup_position, controls);
+            row(ui, &p.slide.pickup_resonance, controls);
+            row(ui, &p.slide.body, controls);
         });
     });
 }
@@ -264,10 +273,17 @@ fn section(ui: &mut Ui, title: &str, active: Option<bool>, rows: impl FnOnce(&mu
     egui::Grid::new(title).num_columns(2).spacing([8.0, 4.0]).show(ui, |ui| rows(ui));
 }
 
+/// What the sliders change parameters through: the host's setter, and the gestures under way.
+#[derive(Clone, Copy)]
+struct Controls<'a> {
+    setter: &'a ParamSetter<'a>,
+    gestures: &'a slider::Gestures,
+}
+
 /// A parameter's name and its slider.
-fn row<P: Param>(ui: &mut Ui, param: &P, setter: &ParamSetter) {
+fn row<P: Param>(ui: &mut Ui, param: &P, controls: Controls) {
     ui.label(param.name());
-    ui.add(slider::Slider::new(param, setter, SLIDER_WIDTH));
+    ui.add(slider::Slider::new(param, controls.setter, controls.gestures, SLIDER_WIDTH));
     ui.end_row();
 }
 

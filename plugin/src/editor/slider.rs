@@ -6,20 +6,24 @@
 //! parameter "touched", its automation overwritten, until the session ends. So every gesture the
 //! slider begins it ends, whatever the pointer did:
 //!
-//! - pressing the bar begins one, and letting go (after a drag, a click that moved too little to
-//!   count as a drag, or a press carried off the bar) ends it;
+//! - pressing the bar with the primary button begins one, and letting go (after a drag, a click
+//!   that moved too little to count as a drag, or a press carried off the bar) ends it; a press
+//!   and release within one frame is a gesture of its own; the other buttons change nothing;
 //! - the value follows the pointer across the bar, or with Shift held moves finely with the
 //!   pointer's travel ([`FINE`] of the range per point), and Ctrl or Cmd puts it at the default, as
 //!   does a double-click;
 //! - a value typed into the field that a click on the value opens is set in one gesture of its
 //!   own when Enter is pressed (Escape, or clicking elsewhere, leaves it unset).
 //!
-//! Each slider keeps its gesture in egui's memory under its own id, so one slider's gesture
-//! never ends or begins another's.
+//! The gestures under way are kept by parameter in the editor's [`Gestures`], not in egui's
+//! memory, so one slider's gesture never ends or begins another's, and those still open when the
+//! window closes (a drag under way) are ended then.
+
+use std::cell::RefCell;
 
 use egui::emath::GuiRounding;
 use egui::{Id, Key, Response, Sense, Stroke, StrokeKind, TextEdit, TextStyle, Ui, Widget, vec2};
-use nice_plug::prelude::{Param, ParamSetter};
+use nice_plug::prelude::{Param, ParamPtr, ParamSetter};
 
 /// Change of the normalized value per logical point of pointer travel with Shift held.
 const FINE: f32 = 0.0015;
@@ -29,13 +33,53 @@ const FINE: f32 = 0.0015;
 pub struct Slider<'a, P: Param> {
     param: &'a P,
     setter: &'a ParamSetter<'a>,
+    gestures: &'a Gestures,
     /// Width of the bar (logical points).
     width: f32,
 }
 
+/// The gestures the editor's sliders have begun and not ended yet, by parameter.
+#[derive(Debug, Default)]
+pub struct Gestures(RefCell<Vec<(ParamPtr, Gesture)>>);
+
+impl Gestures {
+    fn get(&self, param: ParamPtr) -> Option<Gesture> {
+        self.0.borrow().iter().find(|(p, _)| *p == param).map(|(_, g)| *g)
+    }
+
+    fn begin(&self, setter: &ParamSetter, param: &impl Param) -> Gesture {
+        setter.begin_set_parameter(param);
+        let gesture = Gesture::default();
+        self.0.borrow_mut().push((param.as_ptr(), gesture));
+        gesture
+    }
+
+    fn keep(&self, param: ParamPtr, gesture: Gesture) {
+        if let Some(slot) = self.0.borrow_mut().iter_mut().find(|(p, _)| *p == param) {
+            slot.1 = gesture;
+        }
+    }
+
+    fn end(&self, setter: &ParamSetter, param: &impl Param) {
+        setter.end_set_parameter(param);
+        self.0.borrow_mut().retain(|(p, _)| *p != param.as_ptr());
+    }
+
+    /// End every gesture still open (the window closing in the middle of a drag).
+    #[allow(unsafe_code)] // nice-plug's type-erased parameter calls are `unsafe`; see SAFETY.
+    pub fn end_all(&self, setter: &ParamSetter) {
+        for (param, _) in self.0.take() {
+            // SAFETY: `param` was taken from a parameter of the `QsaParams` the editor holds for
+            // its whole life, so it points at a live parameter; the call is made from the GUI
+            // thread, as `ParamSetter::end_set_parameter` makes it.
+            unsafe { setter.raw_context.raw_end_set_parameter(param) };
+        }
+    }
+}
+
 /// A gesture under way: what the slider remembers between frames while its bar is held.
 #[derive(Clone, Copy, Debug, Default)]
-struct Gesture {
+pub struct Gesture {
     /// The normalized value last sent to the host in this gesture, if any: the parameter's own
     /// lags it until the host has taken the change.
     sent: Option<f32>,
@@ -44,9 +88,10 @@ struct Gesture {
 }
 
 impl<'a, P: Param> Slider<'a, P> {
-    /// A slider `width` logical points wide for `param`, whose changes go through `setter`.
-    pub fn new(param: &'a P, setter: &'a ParamSetter<'a>, width: f32) -> Self {
-        Self { param, setter, width }
+    /// A slider `width` logical points wide for `param`, whose changes go through `setter` in
+    /// gestures kept in `gestures`.
+    pub fn new(param: &'a P, setter: &'a ParamSetter<'a>, gestures: &'a Gestures, width: f32) -> Self {
+        Self { param, setter, gestures, width }
     }
 
     /// Send `normalized` (0..=1, snapped to the parameter's steps) in the gesture `gesture`,
@@ -80,33 +125,29 @@ impl<'a, P: Param> Slider<'a, P> {
 
     /// Handle the bar's input: begin, change and end gestures.
     fn interact(&self, ui: &Ui, bar: &Response) {
-        let id = bar.id;
-        let ongoing: Option<Gesture> = ui.data(|d| d.get_temp(id));
-        if bar.is_pointer_button_down_on() {
-            let mut gesture = ongoing.unwrap_or_else(|| {
-                self.setter.begin_set_parameter(self.param);
-                Gesture::default()
-            });
+        let ptr = self.param.as_ptr();
+        let ongoing = self.gestures.get(ptr);
+        if bar.is_pointer_button_down_on() && ui.input(|i| i.pointer.primary_down()) {
+            let mut gesture = ongoing.unwrap_or_else(|| self.gestures.begin(self.setter, self.param));
             if let Some(normalized) = self.held(ui, bar, &mut gesture) {
                 self.send(&mut gesture, normalized);
             }
-            ui.data_mut(|d| d.insert_temp(id, gesture));
+            self.gestures.keep(ptr, gesture);
             return;
         }
-        // Let go (or, at a double-click, let go a second time within the double-click time).
-        let reset = bar.double_clicked();
-        if ongoing.is_none() && !reset {
+        // Let go; or pressed and let go within this frame (a click, or the second of a
+        // double-click), which no frame saw held.
+        let (reset, tapped) = (bar.double_clicked(), bar.clicked() && ongoing.is_none());
+        if ongoing.is_none() && !reset && !tapped {
             return;
         }
-        let mut gesture = ongoing.unwrap_or_else(|| {
-            self.setter.begin_set_parameter(self.param);
-            Gesture::default()
-        });
+        let mut gesture = ongoing.unwrap_or_else(|| self.gestures.begin(self.setter, self.param));
         if reset {
             self.send(&mut gesture, self.param.default_normalized_value());
+        } else if tapped && let Some(normalized) = self.held(ui, bar, &mut gesture) {
+            self.send(&mut gesture, normalized);
         }
-        self.setter.end_set_parameter(self.param);
-        ui.data_mut(|d| d.remove::<Gesture>(id));
+        self.gestures.end(self.setter, self.param);
     }
 
     /// Draw the bar: the range's background, the part up to the value filled, a frame.
@@ -229,6 +270,7 @@ mod tests {
         gui: GuiContext,
         gain: FloatParam,
         switch: BoolParam,
+        gestures: Gestures,
         time: f64,
         /// Where each slider's bar and value were drawn: gain, switch.
         bars: [Rect; 2],
@@ -244,6 +286,7 @@ mod tests {
                 host,
                 gain: FloatParam::new("Gain", 0.0, FloatRange::Linear { min: -36.0, max: 12.0 }),
                 switch: BoolParam::new("Switch", true),
+                gestures: Gestures::default(),
                 time: 0.0,
                 bars: [Rect::NOTHING; 2],
                 values: [Rect::NOTHING; 2],
@@ -260,15 +303,17 @@ mod tests {
             let events = [Event::ModifiersChanged(modifiers)].into_iter().chain(events).collect();
             let input = RawInput { screen_rect: Some(screen), time: Some(self.time), events, ..Default::default() };
             let setter = self.gui.param_setter();
-            let (gain, switch) = (&self.gain, &self.switch);
+            let (gain, switch, gestures) = (&self.gain, &self.switch, &self.gestures);
             let mut bars = [Rect::NOTHING; 2];
             let mut values = [Rect::NOTHING; 2];
             let mut output = self.ctx.run_ui(input, |ui| {
                 egui::CentralPanel::default().show(ui, |ui| {
-                    for (k, response) in
-                        [ui.add(Slider::new(gain, &setter, 100.0)), ui.add(Slider::new(switch, &setter, 100.0))]
-                            .into_iter()
-                            .enumerate()
+                    for (k, response) in [
+                        ui.add(Slider::new(gain, &setter, gestures, 100.0)),
+                        ui.add(Slider::new(switch, &setter, gestures, 100.0)),
+                    ]
+                    .into_iter()
+                    .enumerate()
                     {
                         // The value's button follows the bar after the spacing between items.
                         let bar = response.rect;
@@ -329,9 +374,9 @@ mod tests {
     /// A click on a switch, a drag on the gain after it, a click on the gain's bar, a
     /// double-click and a Ctrl-click (each to the default), a Shift drag and a typed value: each
     /// is exactly one gesture of its own parameter (two for the double-click's two presses), each
-    /// closed, its values where the pointer or the text put them. A click that moves too little
-    /// for egui to call it a drag used to leave its gesture open, and the next slider's changes
-    /// then came outside any gesture.
+    /// closed, its values where the pointer or the text put them. egui does not call a click
+    /// that moves too little a drag: a gesture ended only at a drag's end would stay open, and
+    /// the next slider's changes would come outside any gesture.
     #[test]
     fn every_change_lies_in_one_closed_gesture_of_its_own_parameter() {
         let mut bench = Bench::new();
@@ -374,13 +419,13 @@ mod tests {
         assert_eq!(reset, [(gain, vec![default])], "a Ctrl-click sets the default");
 
         // A fine drag of 100 points moves the value by 100 FINE from where it was (the host has
-        // applied nothing, so from the parameter's own value).
+        // applied nothing, so from the parameter's own value), to the f32's rounding.
         let from = at(gain_bar, 0.5);
         bench.drag(from, &[from + vec2(40.0, 0.0), from + vec2(100.0, 0.0)], Modifiers::SHIFT);
         let fine = gestures(&bench.asked());
         assert_eq!(fine.len(), 1, "{fine:?}");
         let end = *fine[0].1.last().unwrap();
-        assert!((end - (default + 100.0 * FINE)).abs() < 0.2 * 100.0 * FINE, "fine drag ended at {end}");
+        assert!((end - (default + 100.0 * FINE)).abs() < 1e-6, "fine drag ended at {end}");
 
         let value = bench.values[0].center();
         bench.click(value, Modifiers::NONE);
@@ -399,5 +444,49 @@ mod tests {
         let typed = gestures(&bench.asked());
         assert_eq!(typed.len(), 1, "{typed:?}");
         assert_eq!(typed[0].1, [bench.gain.preview_normalized(-6.0)], "the typed value");
+    }
+
+    /// A press and release within one frame (a quick tap on a slow frame) is one gesture with
+    /// the value under the pointer; a press of the secondary button changes nothing.
+    #[test]
+    fn a_tap_within_one_frame_is_a_gesture_and_other_buttons_change_nothing() {
+        let mut bench = Bench::new();
+        let gain = bench.gain.as_ptr();
+        let bar = bench.bars[0];
+        let at = pos2(bar.left() + 0.3 * bar.width(), bar.center().y);
+        let button = |button, pressed| Event::PointerButton { pos: at, button, pressed, modifiers: Modifiers::NONE };
+        bench.time += 1.0;
+        let tap =
+            vec![Event::PointerMoved(at), button(PointerButton::Primary, true), button(PointerButton::Primary, false)];
+        bench.frame(tap, Modifiers::NONE);
+        bench.frame(vec![], Modifiers::NONE);
+        let tapped = gestures(&bench.asked());
+        assert_eq!(tapped.len(), 1, "{tapped:?}");
+        assert_eq!(tapped[0].0, gain);
+        assert!((tapped[0].1[0] - 0.3).abs() < 0.01, "{tapped:?}");
+        bench.time += 1.0;
+        for pressed in [true, false] {
+            bench.frame(vec![Event::PointerMoved(at), button(PointerButton::Secondary, pressed)], Modifiers::NONE);
+        }
+        bench.frame(vec![], Modifiers::NONE);
+        assert_eq!(bench.asked(), [], "the secondary button");
+    }
+
+    /// A drag under way as the window closes is ended then, and the editor opened again (a new
+    /// egui context) begins its next gesture afresh.
+    #[test]
+    fn a_gesture_open_as_the_window_closes_is_ended() {
+        let mut bench = Bench::new();
+        let bar = bench.bars[0];
+        let at = pos2(bar.left() + 0.6 * bar.width(), bar.center().y);
+        bench.time += 1.0;
+        bench.press(at, true, Modifiers::NONE);
+        bench.gestures.end_all(&bench.gui.param_setter());
+        assert_eq!(gestures(&bench.asked()).len(), 1, "the open drag ended");
+        bench.ctx = egui::Context::default();
+        bench.frame(vec![], Modifiers::NONE);
+        bench.frame(vec![], Modifiers::NONE);
+        bench.click(at, Modifiers::NONE);
+        assert_eq!(gestures(&bench.asked()).len(), 1, "a new gesture, begun and ended");
     }
 }
