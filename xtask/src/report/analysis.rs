@@ -134,12 +134,16 @@ pub fn orders(rows: &[ErrorRow], cases: &[&str]) -> Vec<Order> {
             {
                 let points: Vec<(f64, f64)> = OVERSAMPLING
                     .iter()
-                    .filter_map(|&k| find(rows, case, method, segments, k).map(|r| ((k as f64).log10(), signal.of(r))))
+                    .filter_map(|&k| find(rows, case, method, segments, k).map(|r| (k as f64, signal.of(r))))
                     .collect();
-                // Where the error does not fall with k the reference-aware model does not apply,
-                // and the straight line says how it goes instead.
-                let fitted = (fit_against_reference(&points, REFERENCE_OVERSAMPLING as f64).map(|f| (f, "")))
-                    .or_else(|| fit_line(&points).map(|f| (f, ", line")));
+                // IMP is the reference's own scheme, so its error against it follows the model;
+                // the others' differ from it by their own error and IMP's at 16×, and get the
+                // straight line, as does IMP where the model does not apply.
+                let model = (method == Method::Imp)
+                    .then(|| fit_against_reference(&points, REFERENCE_OVERSAMPLING as f64))
+                    .flatten();
+                let logs: Vec<(f64, f64)> = points.iter().map(|&(k, y)| (k.log10(), y)).collect();
+                let fitted = model.map(|f| (f, "")).or_else(|| fit_line(&logs).map(|f| (f, ", line")));
                 if let Some((fit, how)) = fitted {
                     out.push(Order {
                         case: case.to_owned(),
@@ -153,6 +157,16 @@ pub fn orders(rows: &[ErrorRow], cases: &[&str]) -> Vec<Order> {
         }
     }
     out
+}
+
+/// The order a straight line through `log10 k` reads, over the report's rates, from errors of
+/// the exact order `order` measured against IMP at the reference's rate.
+pub fn straight_line_order(order: f64) -> f64 {
+    let r = REFERENCE_OVERSAMPLING as f64;
+    let points: Vec<(f64, f64)> = (OVERSAMPLING.iter())
+        .map(|&k| ((k as f64).log10(), ((k as f64).powf(-order) - r.powf(-order)).log10()))
+        .collect();
+    fit_line(&points).map_or(f64::NAN, |f| -f.slope)
 }
 
 /// The timed row of `case` with the lowest RTF among those whose `signal` error against the

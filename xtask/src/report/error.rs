@@ -26,8 +26,8 @@
 //! slide's mass) is scaled by `1 ± 1e-14` ([`SENSITIVITY_PERTURBATION`]): a few rounding errors.
 //! It is 0.000 wherever the dynamics are regular; a contact that rattled chaotically would amplify
 //! such a perturbation, and its errors would then only be known to about this much (the report
-//! names such cases; at the printed precision none of today's is). `--quick` compares, digit for digit as printed, only rows whose sensitivity prints as
-//! 0.0000 (see `QUICK_MAX_SENSITIVITY`).
+//! names such cases; at the printed precision none of today's is). `--quick` compares, digit for
+//! digit as printed, only rows whose sensitivity prints as 0.0000 (see `QUICK_MAX_SENSITIVITY`).
 //!
 //! # Run time
 //!

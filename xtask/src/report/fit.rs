@@ -65,13 +65,15 @@ pub fn fit_line(points: &[(f64, f64)]) -> Option<LineFit> {
     Some(LineFit { slope, intercept, r2, points: m })
 }
 
-/// Fit `log10‖e_k‖ = a + log10(k^−p − K^−p)` to the finite points `(log10 k, log10‖e_k‖)` with
-/// `k < K = reference` (module docs): the order `p` between 0.25 and 8 as `−slope`, `a` as the
-/// intercept. `None` with fewer than two such points of distinct `k`, or where the error does not
-/// fall with `k` (the best order at the bottom of the range): the model then does not apply.
+/// Fit `log10‖e_k‖ = a + log10(k^−p − K^−p)` to the finite points `(k, log10‖e_k‖)` with
+/// `0 < k < K = reference` (module docs): the order `p` between 0.25 and 8 as `−slope`, `a` as
+/// the intercept. `None` with fewer than two such points of distinct `k`, or where the best order
+/// lies at either end of that range (an error that does not fall with `k`, or falls faster than
+/// any order): the model then does not apply.
 pub fn fit_against_reference(points: &[(f64, f64)], reference: f64) -> Option<LineFit> {
-    let pts: Vec<(f64, f64)> = (points.iter().copied())
-        .filter(|&(x, y)| x.is_finite() && y.is_finite() && 10f64.powf(x) < reference)
+    let pts: Vec<(f64, f64)> = (points.iter())
+        .filter(|&&(k, y)| k > 0.0 && k < reference && y.is_finite())
+        .map(|&(k, y)| (k.log10(), y))
         .collect();
     let m = pts.len();
     if m < 2 || !pts.iter().any(|p| p.0 != pts[0].0) {
@@ -97,7 +99,7 @@ pub fn fit_against_reference(points: &[(f64, f64)], reference: f64) -> Option<Li
         }
     }
     let order = 0.5 * (a + b);
-    if order < lo + 2.0 * step {
+    if order < lo + 2.0 * step || order > hi - 2.0 * step {
         return None;
     }
     let mean = pts.iter().map(|p| p.1).sum::<f64>() / m as f64;
@@ -128,20 +130,23 @@ mod tests {
         for order in [2.0, 1.5] {
             let pts: Vec<(f64, f64)> = [1.0f64, 2.0, 4.0, 8.0, 16.0]
                 .iter()
-                .map(|&k: &f64| (k.log10(), (0.3 * (k.powf(-order) - 16f64.powf(-order))).log10()))
+                .map(|&k: &f64| (k, (0.3 * (k.powf(-order) - 16f64.powf(-order))).log10()))
                 .collect();
             let fit = fit_against_reference(&pts, 16.0).unwrap();
             assert!((fit.slope + order).abs() < 1e-6, "{order}: {fit:?}");
             assert!((fit.intercept - 0.3f64.log10()).abs() < 1e-6, "{order}: {fit:?}");
             assert!((fit.r2 - 1.0).abs() < 1e-9 && fit.points == 4, "{order}: {fit:?}");
             if order == 2.0 {
-                let line = fit_line(&pts[..4]).unwrap();
+                let logs: Vec<(f64, f64)> = pts[..4].iter().map(|&(k, y)| (k.log10(), y)).collect();
+                let line = fit_line(&logs).unwrap();
                 assert!((line.slope + 2.13).abs() < 0.01, "the straight line reads {}", -line.slope);
             }
         }
-        assert!(fit_against_reference(&[(0.0, -1.0), (16f64.log10(), -2.0)], 16.0).is_none());
-        let rising = [(0.0, -1.0), (2f64.log10(), -0.9), (4f64.log10(), -0.8)];
+        assert!(fit_against_reference(&[(1.0, -1.0), (16.0, -2.0)], 16.0).is_none());
+        let rising = [(1.0, -1.0), (2.0, -0.9), (4.0, -0.8)];
         assert!(fit_against_reference(&rising, 16.0).is_none(), "an error that does not fall");
+        let steep: Vec<(f64, f64)> = [1.0f64, 2.0, 4.0].iter().map(|&k| (k, -12.0 * k.log10())).collect();
+        assert!(fit_against_reference(&steep, 16.0).is_none(), "an order beyond the range");
     }
 
     #[test]
