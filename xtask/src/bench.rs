@@ -284,7 +284,6 @@ pub fn table(lines: &[BenchLine]) -> String {
 const BEGIN: &str = "<!-- bench-table:begin -->";
 const END: &str = "<!-- bench-table:end -->";
 
-/// Write docs/report/bench.md and the table between README.md's markers.
 /// Write `docs/report/bench.md` and the table between the README's markers under `root`, each
 /// through a temporary file renamed into place; a README without the markers in order is left as
 /// it is.

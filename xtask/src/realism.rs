@@ -432,7 +432,9 @@ fn envelopes(path: &Path) -> Result<Vec<Envelope>, String> {
             true => (levels.as_slice(), colour, format!("partial {partial}, unison spread {detune} cents"), 2),
             false => (levels.as_slice(), colour, format!("partial {partial}, unison tuned exactly alike"), 1),
         });
-    draw_levels(path, "C4 struck at 2.2 m/s (velocity 0.6) and held: partial levels (50 ms windows)", lines.collect())?;
+    let caption =
+        format!("C4 struck at {:.1} m/s (velocity 0.6) and held: partial levels (50 ms windows)", hammer_speed(0.6));
+    draw_levels(path, &caption, lines.collect())?;
     Ok(rows)
 }
 
@@ -452,8 +454,11 @@ fn una_corda(path: &Path) -> Result<Vec<Shifted>, String> {
         true => (levels.as_slice(), colour, format!("partial {partial}, una corda: two strings struck"), 1),
         false => (levels.as_slice(), colour, format!("partial {partial}, all three strings struck"), 2),
     });
-    let caption = "C4 struck at 2.2 m/s (velocity 0.6) and held, with and without the una corda (50 ms windows)";
-    draw_levels(path, caption, lines.collect())?;
+    let caption = format!(
+        "C4 struck at {:.1} m/s (velocity 0.6) and held, with and without the una corda (50 ms windows)",
+        hammer_speed(0.6)
+    );
+    draw_levels(path, &caption, lines.collect())?;
     Ok(rows)
 }
 
@@ -689,7 +694,10 @@ fn decays(path: &Path) -> Result<Vec<Decay>, String> {
     let root = BitMapBackend::new(path, (960, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let mut chart = ChartBuilder::on(&root)
-        .caption("Decay rates of the first two partials (velocity 0.6, 2.2 m/s, held)", ("sans-serif", 22))
+        .caption(
+            format!("Decay rates of the first two partials (velocity 0.6, {:.1} m/s, held)", hammer_speed(0.6)),
+            ("sans-serif", 22),
+        )
         .margin(12)
         .x_label_area_size(44)
         .y_label_area_size(60)

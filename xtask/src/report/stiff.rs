@@ -250,24 +250,22 @@ pub fn explanation(rows: &[StiffRow], base_rate: f64) -> String {
     // The peaks are the largest samples: at k× their times are known to a sample, and a crest
     // between two samples reads low by where they fall.
     let sample_us = 1e6 / (base_rate * k as f64);
-    let closer = |imp: f64, exp: f64| if exp < imp { "EXP" } else { "IMP" };
+    // A crest read up to half a sample off its top reads low by up to `1 − cos(π f Δt)`.
+    let crest = 1.0 - (std::f64::consts::PI * truth.ripple_hz * sample_us * 1e-6).cos();
+    let closer = |imp: f64, exp: f64, resolution: f64, what: &str| {
+        if (imp - exp).abs() <= resolution {
+            format!("in {what} the two differ by less than the samples resolve")
+        } else {
+            format!("in {what} {} is closer", if exp < imp { "EXP" } else { "IMP" })
+        }
+    };
     let _ = write!(
         s,
-        ". The peaks are read at samples, {sample_us:.2} µs apart at {k}×, so their times and heights carry up to a \
-         sample's error of their own. {}",
-        if imp_miss.0.max(exp_miss.0) < sample_us {
-            format!(
-                "In time both are within a sample of the finest render's, which the samples cannot tell apart; in \
-                 height {} is closer.",
-                closer(imp_miss.1, exp_miss.1)
-            )
-        } else {
-            format!(
-                "{} is closer in time and {} in height.",
-                closer(imp_miss.0, exp_miss.0),
-                closer(imp_miss.1, exp_miss.1)
-            )
-        }
+        ". The peaks are read at samples, {sample_us:.2} µs apart at {k}×, so a time is known to a sample and \
+         a height to {:.1} % (a crest at the ripple's frequency read half a sample off its top): {}, and {}.",
+        100.0 * crest,
+        closer(imp_miss.0, exp_miss.0, sample_us, "time"),
+        closer(imp_miss.1, exp_miss.1, crest, "height"),
     );
     s
 }
