@@ -64,6 +64,8 @@ pub struct EditorApp {
     peak_hold: (f32, f64),
     /// The sliders' gestures under way.
     gestures: slider::Gestures,
+    /// The voice count the editor last asked the host to restart the plugin for.
+    restart_asked: Option<usize>,
 }
 
 impl NiceEguiApp for EditorApp {
@@ -103,6 +105,7 @@ impl EditorApp {
             history: History::default(),
             peak_hold: (0.0, 0.0),
             gestures: slider::Gestures::default(),
+            restart_asked: None,
         }
     }
 
@@ -124,6 +127,14 @@ impl EditorApp {
         let Some(gui) = &self.gui else {
             return;
         };
+        // The voice pool is sized when the plugin is activated: a new count, once the slider
+        // has let it go, asks the host to restart the plugin (once per count).
+        let voices = &self.params.engine.voices;
+        let (wanted, active) = (voices.value().clamp(1, 128) as usize, self.shared.voices.load(Ordering::Relaxed));
+        if active != 0 && wanted != active && self.restart_asked != Some(wanted) && !self.gestures.holds(voices) {
+            gui.request_restart();
+            self.restart_asked = Some(wanted);
+        }
         let setter = gui.param_setter();
         let (params, latest, history, peak) = (&*self.params, &self.latest, &self.history, self.peak_hold.0);
         let gestures = &self.gestures;
@@ -218,7 +229,7 @@ fn parameters(ui: &mut Ui, p: &QsaParams, controls: Controls) {
             row(ui, &p.engine.voices, controls);
             row(ui, &p.engine.overload_guard, controls);
         });
-        ui.label(RichText::new("Voices take effect when the plugin is next activated.").small().weak());
+        ui.label(RichText::new("A new voice count restarts the plugin: a short gap in the sound.").small().weak());
         ui.add_space(10.0);
         section(ui, "Output", None, |ui| {
             row(ui, &p.output.gain, controls);

@@ -237,6 +237,7 @@ impl Plugin for QsaStrings {
     ) -> bool {
         let voices = self.params.engine.voices.value().clamp(1, 128) as usize;
         context.set_current_voice_capacity(voices as u32);
+        self.tap.shared().voices.store(voices, std::sync::atomic::Ordering::Relaxed);
         let fs = f64::from(buffer_config.sample_rate);
         let reuse = self.engine.as_ref().is_some_and(|e| e.sample_rate() == fs && e.voices() == voices);
         if !reuse {

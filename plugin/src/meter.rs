@@ -16,7 +16,7 @@
 //! (energy and force traces) on its own side.
 
 use std::sync::Arc;
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
 use atomic_float::AtomicF32;
@@ -44,6 +44,8 @@ pub struct Shared {
     pub monitors: ArrayQueue<Monitor>,
     /// Set when a snapshot arrives; the editor polls it and repaints.
     pub repaint: RepaintNotifier,
+    /// The voice count the engine was last activated with (0 before the first activation).
+    pub voices: AtomicUsize,
 }
 
 impl Default for Shared {
@@ -53,6 +55,7 @@ impl Default for Shared {
             peak: AtomicF32::new(0.0),
             monitors: ArrayQueue::new(QUEUE_CAPACITY),
             repaint: RepaintNotifier::new(),
+            voices: AtomicUsize::new(0),
         }
     }
 }

@@ -43,6 +43,11 @@ pub struct Slider<'a, P: Param> {
 pub struct Gestures(RefCell<Vec<(ParamPtr, Gesture)>>);
 
 impl Gestures {
+    /// Whether a gesture of `param` is under way.
+    pub fn holds(&self, param: &impl Param) -> bool {
+        self.get(param.as_ptr()).is_some()
+    }
+
     fn get(&self, param: ParamPtr) -> Option<Gesture> {
         self.0.borrow().iter().find(|(p, _)| *p == param).map(|(_, g)| *g)
     }

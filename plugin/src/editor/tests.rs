@@ -170,3 +170,58 @@ fn the_editor_shows_every_parameter() {
         assert!(shown.iter().any(|(text, _)| text == spec.name), "{} is not shown", spec.name);
     }
 }
+
+/// A host that counts the editor's restart requests.
+#[derive(Default)]
+struct Restarts(std::sync::atomic::AtomicUsize);
+
+// nice-plug declares the parameter callbacks `unsafe`; these do nothing.
+#[allow(unsafe_code)]
+impl GuiContextInner for Restarts {
+    fn plugin_api(&self) -> PluginApi {
+        PluginApi::Clap
+    }
+
+    unsafe fn raw_begin_set_parameter(&self, _: ParamPtr) {}
+
+    unsafe fn raw_set_parameter_normalized(&self, _: ParamPtr, _: f32) {}
+
+    unsafe fn raw_end_set_parameter(&self, _: ParamPtr) {}
+
+    fn get_state(&self) -> PluginState {
+        PluginState { version: String::new(), params: BTreeMap::new(), fields: BTreeMap::new() }
+    }
+
+    fn set_state(&self, _: PluginState) {}
+
+    fn request_restart(&self) {
+        self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+}
+
+/// A voice count other than the one the plugin was activated with asks the host to restart the
+/// plugin, once: the parameter at its default of 32 against an activation with 16 asks in the
+/// first frame and not again in the next ten; activated with 32 (the restart done), nothing
+/// more; and before any activation, nothing.
+#[test]
+fn a_new_voice_count_asks_the_host_once_to_restart_the_plugin() {
+    let shared = Arc::new(Shared::default());
+    let host = Arc::new(Restarts::default());
+    let mut app = EditorApp::new(Arc::new(QsaParams::default()), shared.clone());
+    app.gui = Some(GuiContext::new(host.clone()));
+    let ctx = egui::Context::default();
+    let input =
+        RawInput { screen_rect: Some(Rect::from_min_size(Pos2::ZERO, vec2(1000.0, 775.0))), ..RawInput::default() };
+    let mut frames = |n: usize| {
+        for _ in 0..n {
+            ctx.run_ui(input.clone(), |ui| app.show(ui)).textures_delta.clear();
+        }
+        host.0.load(std::sync::atomic::Ordering::Relaxed)
+    };
+    assert_eq!(frames(3), 0, "before any activation");
+    shared.voices.store(16, std::sync::atomic::Ordering::Relaxed);
+    assert_eq!(frames(1), 1, "activated with 16, 32 asked for");
+    assert_eq!(frames(10), 1, "asked once");
+    shared.voices.store(32, std::sync::atomic::Ordering::Relaxed);
+    assert_eq!(frames(10), 1, "restarted with 32");
+}
