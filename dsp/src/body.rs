@@ -517,7 +517,8 @@ impl Body {
     /// mean acceleration. A body at rest given no force stays at rest at no cost (it does not
     /// even look at its modes, which matters when a call is a single sample). A ringing body is
     /// tested for silence on a fixed grid of the samples it steps (every 1024), and brought to
-    /// rest once silent: the same samples come out however the input is cut into calls.
+    /// rest once silent: the same samples come out however the input is cut into calls (unless
+    /// forces beyond any instrument's overflow the state, which silences the rest of the call).
     pub fn process(&mut self, io: &mut [f64]) {
         // A force that is not finite (no voice hands one on) is dropped, sample by sample.
         io.iter_mut().filter(|f| !f.is_finite()).for_each(|f| *f = 0.0);
@@ -919,8 +920,8 @@ mod tests {
         }
     }
 
-    /// No force, no state: a body costs nothing and outputs zeros; a non-finite force silences
-    /// it instead of filling it with NaN.
+    /// No force, no state: a body costs nothing and outputs zeros; a non-finite force is
+    /// dropped instead of filling it with NaN.
     #[test]
     fn a_silent_body_stays_silent_and_bad_force_is_dropped() {
         let mut body = Body::new(&BodyParams::piano(), 48_000.0);

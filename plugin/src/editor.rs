@@ -66,7 +66,13 @@ pub struct EditorApp {
     gestures: slider::Gestures,
     /// The voice count the editor last asked the host to restart the plugin for.
     restart_asked: Option<usize>,
+    /// The voice count the parameter holds and since when (egui time, s).
+    voices_since: (usize, f64),
 }
+
+/// How long a new voice count holds before the editor asks for a restart (s): the parameter
+/// reads what the host has taken, which can trail what the slider sent by a few calls.
+const VOICES_SETTLE: f64 = 0.3;
 
 impl NiceEguiApp for EditorApp {
     fn build(
@@ -76,21 +82,12 @@ impl NiceEguiApp for EditorApp {
         _frame: &mut nice_plug_egui::Frame,
     ) -> Result<(), HandlerError> {
         egui_ctx.set_theme(egui::Theme::Dark);
-        self.gui = Some(nice_gui_ctx);
+        self.open_with(nice_gui_ctx);
         Ok(())
     }
 
     fn ui(&mut self, ui: &mut Ui, _frame: &mut nice_plug_egui::Frame) {
         self.show(ui);
-    }
-
-    fn editor_closed(&mut self) {
-        // A drag under way as the window closes ends with it: the host must not keep the
-        // parameter touched.
-        if let Some(gui) = &self.gui {
-            self.gestures.end_all(&gui.param_setter());
-        }
-        self.gui = None;
     }
 }
 
@@ -106,7 +103,18 @@ impl EditorApp {
             peak_hold: (0.0, 0.0),
             gestures: slider::Gestures::default(),
             restart_asked: None,
+            voices_since: (0, 0.0),
         }
+    }
+
+    /// The window opens with the host's context `gui`. The window before it may have closed on
+    /// a drag (nice-plug-egui tells the app nothing when it closes): its gestures end here,
+    /// through the context they began in, so that the host does not keep the parameter touched.
+    fn open_with(&mut self, gui: GuiContext) {
+        if let Some(old) = &self.gui {
+            self.gestures.end_all(&old.param_setter());
+        }
+        self.gui = Some(gui);
     }
 
     /// A frame of the editor (what [`NiceEguiApp::ui`] draws; the tests draw it headless).
@@ -128,10 +136,15 @@ impl EditorApp {
             return;
         };
         // The voice pool is sized when the plugin is activated: a new count, once the slider
-        // has let it go, asks the host to restart the plugin (once per count).
+        // has let it go and it has held for `VOICES_SETTLE`, asks the host to restart the plugin
+        // (once per count).
         let voices = &self.params.engine.voices;
         let (wanted, active) = (voices.value().clamp(1, 128) as usize, self.shared.voices.load(Ordering::Relaxed));
-        if active != 0 && wanted != active && self.restart_asked != Some(wanted) && !self.gestures.holds(voices) {
+        if self.voices_since.0 != wanted {
+            self.voices_since = (wanted, now);
+        }
+        let settled = now - self.voices_since.1 >= VOICES_SETTLE && !self.gestures.holds(voices);
+        if active != 0 && wanted != active && self.restart_asked != Some(wanted) && settled {
             gui.request_restart();
             self.restart_asked = Some(wanted);
         }
@@ -229,7 +242,7 @@ fn parameters(ui: &mut Ui, p: &QsaParams, controls: Controls) {
             row(ui, &p.engine.voices, controls);
             row(ui, &p.engine.overload_guard, controls);
         });
-        ui.label(RichText::new("A new voice count restarts the plugin: a short gap in the sound.").small().weak());
+        ui.label(RichText::new("A new voice count: the host is asked to restart the plugin.").small().weak());
         ui.add_space(10.0);
         section(ui, "Output", None, |ui| {
             row(ui, &p.output.gain, controls);

@@ -17,7 +17,7 @@
 //!
 //! The gestures under way are kept by parameter in the editor's [`Gestures`], not in egui's
 //! memory, so one slider's gesture never ends or begins another's, and those still open when the
-//! window closes (a drag under way) are ended then.
+//! window closed (on a drag) are ended when it opens again.
 
 use std::cell::RefCell;
 
@@ -70,7 +70,7 @@ impl Gestures {
         self.0.borrow_mut().retain(|(p, _)| *p != param.as_ptr());
     }
 
-    /// End every gesture still open (the window closing in the middle of a drag).
+    /// End every gesture still open (the window closed in the middle of a drag).
     #[allow(unsafe_code)] // nice-plug's type-erased parameter calls are `unsafe`; see SAFETY.
     pub fn end_all(&self, setter: &ParamSetter) {
         for (param, _) in self.0.take() {
@@ -142,7 +142,8 @@ impl<'a, P: Param> Slider<'a, P> {
         }
         // Let go; or pressed and let go within this frame (a click, or the second of a
         // double-click), which no frame saw held.
-        let (reset, tapped) = (bar.double_clicked(), bar.clicked() && ongoing.is_none());
+        let primary = bar.clicked_by(egui::PointerButton::Primary) && bar.interact_pointer_pos().is_some();
+        let (reset, tapped) = (bar.double_clicked(), primary && ongoing.is_none());
         if ongoing.is_none() && !reset && !tapped {
             return;
         }
@@ -180,7 +181,11 @@ impl<'a, P: Param> Slider<'a, P> {
             let mut text: String = ui.data(|d| d.get_temp(field)).unwrap_or_default();
             ui.add(TextEdit::singleline(&mut text).id(field).font(TextStyle::Monospace).desired_width(self.width));
             let (enter, escape) = ui.input(|i| (i.key_pressed(Key::Enter), i.key_pressed(Key::Escape)));
-            if enter && let Some(normalized) = self.param.string_to_normalized_value(&text) {
+            let held = self.gestures.holds(self.param);
+            if enter
+                && !held
+                && let Some(normalized) = self.param.string_to_normalized_value(&text)
+            {
                 self.setter.begin_set_parameter(self.param);
                 self.send(&mut Gesture::default(), normalized);
                 self.setter.end_set_parameter(self.param);
@@ -477,8 +482,8 @@ mod tests {
         assert_eq!(bench.asked(), [], "the secondary button");
     }
 
-    /// A drag under way as the window closes is ended then, and the editor opened again (a new
-    /// egui context) begins its next gesture afresh.
+    /// A drag the window closed on is ended through its own context, and the editor opened
+    /// again (a new egui context) begins its next gesture afresh.
     #[test]
     fn a_gesture_open_as_the_window_closes_is_ended() {
         let mut bench = Bench::new();

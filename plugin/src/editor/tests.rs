@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use egui::{MissingGlyphPolicy, Pos2, RawInput, Rect, Shape, Vec2, vec2};
 use nice_plug::context::gui::{GuiContext, GuiContextInner};
-use nice_plug::prelude::{ParamPtr, PluginApi, PluginState};
+use nice_plug::prelude::{Param, ParamPtr, PluginApi, PluginState};
 use qsa_dsp::instrument::{Mode, Monitor, factory_presets};
 
 use super::{EditorApp, SIZE};
@@ -200,9 +200,10 @@ impl GuiContextInner for Restarts {
 }
 
 /// A voice count other than the one the plugin was activated with asks the host to restart the
-/// plugin, once: the parameter at its default of 32 against an activation with 16 asks in the
-/// first frame and not again in the next ten; activated with 32 (the restart done), nothing
-/// more; and before any activation, nothing.
+/// plugin, once, after it has held for `VOICES_SETTLE`: the parameter at its default of 32
+/// against an activation with 16 asks within ten frames of 50 ms and not again in the next
+/// ten; activated with 32 (the restart done), nothing more; and before any activation,
+/// nothing.
 #[test]
 fn a_new_voice_count_asks_the_host_once_to_restart_the_plugin() {
     let shared = Arc::new(Shared::default());
@@ -210,18 +211,89 @@ fn a_new_voice_count_asks_the_host_once_to_restart_the_plugin() {
     let mut app = EditorApp::new(Arc::new(QsaParams::default()), shared.clone());
     app.gui = Some(GuiContext::new(host.clone()));
     let ctx = egui::Context::default();
-    let input =
-        RawInput { screen_rect: Some(Rect::from_min_size(Pos2::ZERO, vec2(1000.0, 775.0))), ..RawInput::default() };
+    let screen = Some(Rect::from_min_size(Pos2::ZERO, vec2(1000.0, 775.0)));
+    let mut time = 0.0;
     let mut frames = |n: usize| {
         for _ in 0..n {
-            ctx.run_ui(input.clone(), |ui| app.show(ui)).textures_delta.clear();
+            time += 0.05;
+            let input = RawInput { screen_rect: screen, time: Some(time), ..RawInput::default() };
+            ctx.run_ui(input, |ui| app.show(ui)).textures_delta.clear();
         }
         host.0.load(std::sync::atomic::Ordering::Relaxed)
     };
     assert_eq!(frames(3), 0, "before any activation");
     shared.voices.store(16, std::sync::atomic::Ordering::Relaxed);
-    assert_eq!(frames(1), 1, "activated with 16, 32 asked for");
+    assert_eq!(frames(10), 1, "activated with 16, 32 asked for");
     assert_eq!(frames(10), 1, "asked once");
     shared.voices.store(32, std::sync::atomic::Ordering::Relaxed);
     assert_eq!(frames(10), 1, "restarted with 32");
+}
+
+/// What a host was asked about gestures, in order: `(begin or end, parameter)`.
+#[derive(Default)]
+struct GestureLog(std::sync::Mutex<Vec<(&'static str, ParamPtr)>>);
+
+// nice-plug declares the parameter callbacks `unsafe`; these only record their arguments.
+#[allow(unsafe_code)]
+impl GuiContextInner for GestureLog {
+    fn plugin_api(&self) -> PluginApi {
+        PluginApi::Clap
+    }
+
+    unsafe fn raw_begin_set_parameter(&self, param: ParamPtr) {
+        self.0.lock().unwrap().push(("begin", param));
+    }
+
+    unsafe fn raw_set_parameter_normalized(&self, _: ParamPtr, _: f32) {}
+
+    unsafe fn raw_end_set_parameter(&self, param: ParamPtr) {
+        self.0.lock().unwrap().push(("end", param));
+    }
+
+    fn get_state(&self) -> PluginState {
+        PluginState { version: String::new(), params: BTreeMap::new(), fields: BTreeMap::new() }
+    }
+
+    fn set_state(&self, _: PluginState) {}
+
+    fn request_restart(&self) {}
+}
+
+/// A drag under way when the window closes is ended when the editor opens again, through the
+/// host context it began in: the editor draws its sliders, a press on the Solver's bar begins a
+/// gesture in the first window's context, and opening a second window ends it there, with
+/// nothing sent through the second.
+#[test]
+fn a_drag_the_window_closed_on_ends_when_the_editor_opens_again() {
+    let (first, second) = (Arc::new(GestureLog::default()), Arc::new(GestureLog::default()));
+    let params = Arc::new(QsaParams::default());
+    let mut app = EditorApp::new(params.clone(), Arc::new(Shared::default()));
+    app.open_with(GuiContext::new(first.clone()));
+    let ctx = egui::Context::default();
+    let screen = Some(Rect::from_min_size(Pos2::ZERO, vec2(SIZE.0 as f32, SIZE.1 as f32)));
+    let frame = |events: Vec<egui::Event>, app: &mut EditorApp| {
+        let input = RawInput { screen_rect: screen, events, ..RawInput::default() };
+        ctx.run_ui(input, |ui| app.show(ui)).textures_delta.clear();
+    };
+    for _ in 0..3 {
+        frame(vec![], &mut app);
+    }
+    // The Solver's value is drawn just right of its bar.
+    let (texts, _) = draw(&[], "", vec2(SIZE.0 as f32, SIZE.1 as f32));
+    let label = texts.iter().find(|(t, _)| t == "Solver").expect("the Solver row").1;
+    let value = texts.iter().filter(|(t, r)| t == "QSA" && (r.center().y - label.center().y).abs() < 4.0).next();
+    let value = value.expect("the Solver's value").1;
+    let at = egui::pos2(value.left() - 40.0, value.center().y);
+    let press = egui::Event::PointerButton {
+        pos: at,
+        button: egui::PointerButton::Primary,
+        pressed: true,
+        modifiers: egui::Modifiers::NONE,
+    };
+    frame(vec![egui::Event::PointerMoved(at), press], &mut app);
+    let solver = params.engine.solver.as_ptr();
+    assert_eq!(*first.0.lock().unwrap(), [("begin", solver)], "the press began a gesture");
+    app.open_with(GuiContext::new(second.clone()));
+    assert_eq!(*first.0.lock().unwrap(), [("begin", solver), ("end", solver)], "ended where it began");
+    assert!(second.0.lock().unwrap().is_empty());
 }

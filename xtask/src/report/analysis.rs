@@ -143,7 +143,7 @@ pub fn orders(rows: &[ErrorRow], cases: &[&str]) -> Vec<Order> {
                     .then(|| fit_against_reference(&points, REFERENCE_OVERSAMPLING as f64))
                     .flatten();
                 let logs: Vec<(f64, f64)> = points.iter().map(|&(k, y)| (k.log10(), y)).collect();
-                let fitted = model.map(|f| (f, "")).or_else(|| fit_line(&logs).map(|f| (f, ", line")));
+                let fitted = model.map(|f| (f, "")).or_else(|| fit_line(&logs).map(|f| (f, "; line")));
                 if let Some((fit, how)) = fitted {
                     out.push(Order {
                         case: case.to_owned(),

@@ -17,8 +17,8 @@
 //! # Against a reference at a finite rate
 //!
 //! The error against oversampling is measured against a reference that is itself a run at `K×`
-//! ([`fit_against_reference`]). A scheme whose error is `C·Δt^p` times a fixed shape differs from
-//! that reference by
+//! ([`fit_against_reference`]). For the reference's own scheme, whose error is `C·Δt^p` times a
+//! fixed shape, a run at `k×` differs from that reference by
 //!
 //! ```text
 //! ‖e_k‖ = C'·(k^−p − K^−p)

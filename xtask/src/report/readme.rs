@@ -440,8 +440,8 @@ fn readme(r: &Results, orders: &[Order]) -> String {
          Against k = 1, 2, 4, 8, IMP's error follows error ∝ k^−p − {r}^−p, since the reference is IMP itself at \
          {r}×: that model is fitted (`xtask/src/report/fit.rs`), where a straight line would read a steeper fall \
          ({biased:.2} for an exact order 2). EXP's and QSA's errors against IMP's reference mix their own error \
-         with IMP's at {r}×, and they get a straight line (marked \"line\", as IMP's where its error does not \
-         fall with k), whose order the reference's own error can bias as much. N-fits use N = {}–100 (below \
+         with IMP's at {r}×, and they get a straight line (marked \"line\", as IMP's where the model's best \
+         order lies at an end of 0.25–8), whose order the reference's own error can bias as much. N-fits use N = {}–100 (below \
          that the first segment decides the error). R² tells how well the fit holds: a low R² means the order \
          is not a useful summary there.\n",
         analysis::ORDER_MIN_SEGMENTS,
