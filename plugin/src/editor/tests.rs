@@ -281,7 +281,7 @@ fn a_drag_the_window_closed_on_ends_when_the_editor_opens_again() {
     // The Solver's value is drawn just right of its bar.
     let (texts, _) = draw(&[], "", vec2(SIZE.0 as f32, SIZE.1 as f32));
     let label = texts.iter().find(|(t, _)| t == "Solver").expect("the Solver row").1;
-    let value = texts.iter().filter(|(t, r)| t == "QSA" && (r.center().y - label.center().y).abs() < 4.0).next();
+    let value = texts.iter().find(|(t, r)| t == "QSA" && (r.center().y - label.center().y).abs() < 4.0);
     let value = value.expect("the Solver's value").1;
     let at = egui::pos2(value.left() - 40.0, value.center().y);
     let press = egui::Event::PointerButton {
