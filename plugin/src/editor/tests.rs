@@ -15,21 +15,30 @@ use super::{EditorApp, SIZE};
 use crate::meter::Shared;
 use crate::params::QsaParams;
 
-/// A host that ignores what the editor asks of it.
-struct NoHost;
+/// A host that records the gestures the editor begins and ends, by parameter, and counts its
+/// restart requests; it changes nothing.
+#[derive(Default)]
+struct Host {
+    gestures: std::sync::Mutex<Vec<(&'static str, ParamPtr)>>,
+    restarts: std::sync::atomic::AtomicUsize,
+}
 
-// nice-plug declares the parameter callbacks `unsafe`; these do nothing.
+// nice-plug declares the parameter callbacks `unsafe`; these only record their arguments.
 #[allow(unsafe_code)]
-impl GuiContextInner for NoHost {
+impl GuiContextInner for Host {
     fn plugin_api(&self) -> PluginApi {
         PluginApi::Clap
     }
 
-    unsafe fn raw_begin_set_parameter(&self, _: ParamPtr) {}
+    unsafe fn raw_begin_set_parameter(&self, param: ParamPtr) {
+        self.gestures.lock().unwrap().push(("begin", param));
+    }
 
     unsafe fn raw_set_parameter_normalized(&self, _: ParamPtr, _: f32) {}
 
-    unsafe fn raw_end_set_parameter(&self, _: ParamPtr) {}
+    unsafe fn raw_end_set_parameter(&self, param: ParamPtr) {
+        self.gestures.lock().unwrap().push(("end", param));
+    }
 
     fn get_state(&self) -> PluginState {
         PluginState { version: String::new(), params: BTreeMap::new(), fields: BTreeMap::new() }
@@ -37,7 +46,9 @@ impl GuiContextInner for NoHost {
 
     fn set_state(&self, _: PluginState) {}
 
-    fn request_restart(&self) {}
+    fn request_restart(&self) {
+        self.restarts.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
 }
 
 /// Twelve voices sounding, the loudest of `mode` with its contact at `contact` of the length.
@@ -79,7 +90,7 @@ pub(super) fn draw(monitors: &[Monitor], preset: &str, size: Vec2) -> (Vec<(Stri
     let params = QsaParams::default();
     *params.preset.write().unwrap() = preset.to_owned();
     let mut app = EditorApp::new(Arc::new(params), shared);
-    app.gui = Some(GuiContext::new(Arc::new(NoHost)));
+    app.gui = Some(GuiContext::new(Arc::new(Host::default())));
 
     let ctx = egui::Context::default();
     ctx.set_theme(egui::Theme::Dark);
@@ -171,34 +182,6 @@ fn the_editor_shows_every_parameter() {
     }
 }
 
-/// A host that counts the editor's restart requests.
-#[derive(Default)]
-struct Restarts(std::sync::atomic::AtomicUsize);
-
-// nice-plug declares the parameter callbacks `unsafe`; these do nothing.
-#[allow(unsafe_code)]
-impl GuiContextInner for Restarts {
-    fn plugin_api(&self) -> PluginApi {
-        PluginApi::Clap
-    }
-
-    unsafe fn raw_begin_set_parameter(&self, _: ParamPtr) {}
-
-    unsafe fn raw_set_parameter_normalized(&self, _: ParamPtr, _: f32) {}
-
-    unsafe fn raw_end_set_parameter(&self, _: ParamPtr) {}
-
-    fn get_state(&self) -> PluginState {
-        PluginState { version: String::new(), params: BTreeMap::new(), fields: BTreeMap::new() }
-    }
-
-    fn set_state(&self, _: PluginState) {}
-
-    fn request_restart(&self) {
-        self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    }
-}
-
 /// A voice count other than the one the plugin was activated with asks the host to restart the
 /// plugin, once, after it has held for `VOICES_SETTLE`: the parameter at its default of 32
 /// against an activation with 16 asks within ten frames of 50 ms and not again in the next
@@ -207,7 +190,7 @@ impl GuiContextInner for Restarts {
 #[test]
 fn a_new_voice_count_asks_the_host_once_to_restart_the_plugin() {
     let shared = Arc::new(Shared::default());
-    let host = Arc::new(Restarts::default());
+    let host = Arc::new(Host::default());
     let mut app = EditorApp::new(Arc::new(QsaParams::default()), shared.clone());
     app.gui = Some(GuiContext::new(host.clone()));
     let ctx = egui::Context::default();
@@ -219,7 +202,7 @@ fn a_new_voice_count_asks_the_host_once_to_restart_the_plugin() {
             let input = RawInput { screen_rect: screen, time: Some(time), ..RawInput::default() };
             ctx.run_ui(input, |ui| app.show(ui)).textures_delta.clear();
         }
-        host.0.load(std::sync::atomic::Ordering::Relaxed)
+        host.restarts.load(std::sync::atomic::Ordering::Relaxed)
     };
     assert_eq!(frames(3), 0, "before any activation");
     shared.voices.store(16, std::sync::atomic::Ordering::Relaxed);
@@ -229,43 +212,13 @@ fn a_new_voice_count_asks_the_host_once_to_restart_the_plugin() {
     assert_eq!(frames(10), 1, "restarted with 32");
 }
 
-/// What a host was asked about gestures, in order: `(begin or end, parameter)`.
-#[derive(Default)]
-struct GestureLog(std::sync::Mutex<Vec<(&'static str, ParamPtr)>>);
-
-// nice-plug declares the parameter callbacks `unsafe`; these only record their arguments.
-#[allow(unsafe_code)]
-impl GuiContextInner for GestureLog {
-    fn plugin_api(&self) -> PluginApi {
-        PluginApi::Clap
-    }
-
-    unsafe fn raw_begin_set_parameter(&self, param: ParamPtr) {
-        self.0.lock().unwrap().push(("begin", param));
-    }
-
-    unsafe fn raw_set_parameter_normalized(&self, _: ParamPtr, _: f32) {}
-
-    unsafe fn raw_end_set_parameter(&self, param: ParamPtr) {
-        self.0.lock().unwrap().push(("end", param));
-    }
-
-    fn get_state(&self) -> PluginState {
-        PluginState { version: String::new(), params: BTreeMap::new(), fields: BTreeMap::new() }
-    }
-
-    fn set_state(&self, _: PluginState) {}
-
-    fn request_restart(&self) {}
-}
-
 /// A drag under way when the window closes is ended when the editor opens again, through the
 /// host context it began in: the editor draws its sliders, a press on the Solver's bar begins a
 /// gesture in the first window's context, and opening a second window ends it there, with
 /// nothing sent through the second.
 #[test]
 fn a_drag_the_window_closed_on_ends_when_the_editor_opens_again() {
-    let (first, second) = (Arc::new(GestureLog::default()), Arc::new(GestureLog::default()));
+    let (first, second) = (Arc::new(Host::default()), Arc::new(Host::default()));
     let params = Arc::new(QsaParams::default());
     let mut app = EditorApp::new(params.clone(), Arc::new(Shared::default()));
     app.open_with(GuiContext::new(first.clone()));
@@ -292,8 +245,8 @@ fn a_drag_the_window_closed_on_ends_when_the_editor_opens_again() {
     };
     frame(vec![egui::Event::PointerMoved(at), press], &mut app);
     let solver = params.engine.solver.as_ptr();
-    assert_eq!(*first.0.lock().unwrap(), [("begin", solver)], "the press began a gesture");
+    assert_eq!(*first.gestures.lock().unwrap(), [("begin", solver)], "the press began a gesture");
     app.open_with(GuiContext::new(second.clone()));
-    assert_eq!(*first.0.lock().unwrap(), [("begin", solver), ("end", solver)], "ended where it began");
-    assert!(second.0.lock().unwrap().is_empty());
+    assert_eq!(*first.gestures.lock().unwrap(), [("begin", solver), ("end", solver)], "ended where it began");
+    assert!(second.gestures.lock().unwrap().is_empty());
 }
