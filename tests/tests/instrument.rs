@@ -1212,20 +1212,9 @@ fn hammers_meeting_partner_strings_sound_alike_however_the_host_cuts_its_buffers
     let samples = 24_000;
     let render = |sizes: &mut dyn FnMut() -> usize| {
         let mut p = Instrument::new(FS, 16, Settings { block: 256, ..Default::default() });
-        let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
-        let (mut t, mut next) = (0, 0);
-        while t < samples {
-            while next < score.len() && score[next].0 <= t {
-                p.handle(score[next].1);
-                next += 1;
-            }
-            let until = score.get(next).map_or(samples, |e| e.0);
-            let n = sizes().max(1).min(until - t).min(samples - t);
-            p.process(&mut left[t..t + n], &mut right[t..t + n]);
-            t += n;
-        }
+        let out = play(&mut p, &score, samples, sizes);
         assert_eq!(p.guard_trips(), 0);
-        left.iter().chain(&right).map(|x| x.to_bits()).collect::<Vec<_>>()
+        out.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
     };
     let reference = render(&mut || samples);
     assert!(reference.iter().any(|&x| f32::from_bits(x) != 0.0));
