@@ -466,6 +466,10 @@ fn bad_string_scenes_are_errors_naming_the_key() {
             slide.replace("finger.right.position = 0.58", "finger.right.position = 0.58\nslide.position = 0.3"),
             "automation[0].target",
         ),
+        // A damping form other than the preset's replaces it whole: both coefficients, or the
+        // missing one is named (c4 gives eta0/eta2).
+        (hammer.replace("preset = \"c4\"", "preset = \"c4\"\nb1 = 0.5"), "string.b3"),
+        (hammer.replace("preset = \"c4\"", "preset = \"c4\"\nb3 = 1e-9"), "string.b1"),
         (format!("{slide}\n[body]\nkind = \"banjo\"\n"), "body.kind"),
         (format!("{slide}\n[body]\nkind = \"guitar\"\n"), "output"),
     ];
@@ -481,7 +485,44 @@ fn bad_string_scenes_are_errors_naming_the_key() {
     );
     assert_ne!(bad, slide, "the edit must apply");
     let err = parse_scene(&bad).expect_err("slide outside").to_string();
-    assert!(err.contains("controls.slide.position") && err.contains("outside"), "{err}");
+    assert!(err.contains("automation[0].points") && err.contains("outside"), "{err}");
+}
+
+/// A damping form other than the preset's, given whole, replaces the preset's damping; in the
+/// preset's own form, a coefficient not given is the preset's.
+#[test]
+fn a_scene_replaces_or_amends_its_presets_damping() {
+    let hammer = scene_file("fig5-hammer-c4.toml");
+    let damping = |text: &str| match parse_scene(text).unwrap() {
+        SceneDescription::HammerString(d) => d.params.string.damping,
+        other => panic!("not a hammer scene: {other:?}"),
+    };
+    let Damping::Viscous { eta2, .. } = damping(&hammer) else { panic!("c4 gives eta0/eta2") };
+    let with = |extra: &str| hammer.replace("preset = \"c4\"", &format!("preset = \"c4\"\n{extra}"));
+    assert_eq!(damping(&with("b1 = 0.5\nb3 = 1e-9")), Damping::PerMode { b1: 0.5, b3: 1e-9 });
+    assert_eq!(damping(&with("eta0 = 0.7")), Damping::Viscous { eta0: 0.7, eta2 });
+}
+
+/// A slide scene whose every control is automated needs no `[controls]` table.
+#[test]
+fn a_slide_scene_with_every_control_automated_needs_no_controls_table() {
+    let phrase = scene_file("slide-phrase.toml");
+    let start = phrase.find("[controls]").expect("a [controls] table");
+    let end = start + phrase[start..].find("\n\n").expect("a blank line after it");
+    let constants: Vec<&str> = phrase[start..end].lines().skip(1).collect();
+    let mut text = format!("{}{}", &phrase[..start], &phrase[end..]);
+    for line in &constants {
+        let (target, value) = line.split_once('=').expect("key = value");
+        let value = value.split('#').next().expect("a value");
+        let (target, value) = (target.trim(), value.trim());
+        text.push_str(&format!("\n[[automation]]\ntarget = \"{target}\"\npoints = [[0.0, {value}]]\n"));
+    }
+    assert!(!constants.is_empty() && !text.contains("[controls]"), "the edit must apply");
+    let automated = render(&parse_scene(&text).unwrap(), std::iter::empty()).unwrap().frames;
+    let constant = render(&parse_scene(&phrase).unwrap(), std::iter::empty()).unwrap().frames;
+    assert_eq!(automated.len(), constant.len());
+    let first = automated.iter().zip(&constant).position(|(a, c)| a.output.to_bits() != c.output.to_bits());
+    assert_eq!(first, None, "first sample where the automated constants differ");
 }
 
 /// The real-time path retires the hammer once the string's energy can no longer reach it

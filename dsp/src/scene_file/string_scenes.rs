@@ -215,26 +215,36 @@ impl StringTable {
         if eta && per_mode {
             return Err(SceneError::invalid("string.b1", "give damping either as eta0/eta2 or as b1/b3, not both"));
         }
+        // A coefficient not given is the base's in the same form; a form other than the base's
+        // replaces its damping whole, so it needs both of its coefficients.
+        let base_damping = base.map(|b| b.damping);
+        let other_form = |given: [(&str, Option<f64>); 2], form: &str| match given.iter().find(|(_, v)| v.is_none()) {
+            Some((key, _)) if base_damping.is_some() => Err(SceneError::invalid(
+                key,
+                format!("missing: the preset gives its damping in the other form; give {form} both to replace it"),
+            )),
+            _ => Ok((0.0, 0.0)),
+        };
         let damping = if eta {
-            let (e0, e2) = match base.map(|b| b.damping) {
+            let (e0, e2) = match base_damping {
                 Some(Damping::Viscous { eta0, eta2 }) => (eta0, eta2),
-                _ => (0.0, 0.0),
+                _ => other_form([("string.eta0", self.eta0), ("string.eta2", self.eta2)], "eta0 and eta2")?,
             };
             Damping::Viscous {
                 eta0: non_negative("string.eta0", self.eta0.unwrap_or(e0))?,
                 eta2: non_negative("string.eta2", self.eta2.unwrap_or(e2))?,
             }
         } else if per_mode {
-            let (b1, b3) = match base.map(|b| b.damping) {
+            let (b1, b3) = match base_damping {
                 Some(Damping::PerMode { b1, b3 }) => (b1, b3),
-                _ => (0.0, 0.0),
+                _ => other_form([("string.b1", self.b1), ("string.b3", self.b3)], "b1 and b3")?,
             };
             Damping::PerMode {
                 b1: non_negative("string.b1", self.b1.unwrap_or(b1))?,
                 b3: non_negative("string.b3", self.b3.unwrap_or(b3))?,
             }
         } else {
-            base.map_or(Damping::LOSSLESS, |b| b.damping)
+            base_damping.unwrap_or(Damping::LOSSLESS)
         };
         let params = StringParams {
             length: positive("string.length", required("string.length", self.length, base.map(|b| b.length))?)?,
@@ -360,6 +370,7 @@ pub(super) struct SlideStringFile {
     fingers: FingersTable,
     #[serde(default)]
     control: ControlTable,
+    #[serde(default)]
     controls: ControlsTable,
     #[serde(default)]
     automation: Vec<AutomationEntry>,
@@ -406,7 +417,7 @@ struct ControlTable {
     block: Option<i64>,
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ControlsTable {
     slide: Option<PositionControl>,
@@ -520,7 +531,8 @@ impl SlideStringFile {
     fn controls(&self, length: f64, sample_rate: u32) -> Result<SlideAutomation, SceneError> {
         let constants = self.controls.values();
         let defaults = [None, None, Some(0.05 * length), Some(0.0), Some(0.9 * length), Some(0.0)];
-        let mut lanes: [Option<Breakpoints>; 6] = Default::default();
+        // Each lane with the key its values came from.
+        let mut lanes: [Option<(Breakpoints, String)>; 6] = Default::default();
         for (i, entry) in self.automation.iter().enumerate() {
             let key = format!("automation[{i}].target");
             let Some(index) = CONTROL_TARGETS.iter().position(|t| *t == entry.target) else {
@@ -551,19 +563,19 @@ impl SlideStringFile {
             }
             let lane = Breakpoints::new(points)
                 .map_err(|e| SceneError::invalid(&points_key, format!("{} (time s, value): {e}", entry.target)))?;
-            lanes[index] = Some(lane);
+            lanes[index] = Some((lane, points_key));
         }
         let mut out = Vec::with_capacity(6);
         for (index, lane) in lanes.into_iter().enumerate() {
             let target = CONTROL_TARGETS[index];
-            let key = format!("controls.{target}");
-            let lane = match lane {
+            let (lane, key) = match lane {
                 Some(lane) => lane,
                 None => {
+                    let key = format!("controls.{target}");
                     let value = constants[index].or(defaults[index]).ok_or_else(|| {
                         SceneError::invalid(&key, "missing: give a constant here or an [[automation]] for it")
                     })?;
-                    Breakpoints::constant(finite(&key, value)?)
+                    (Breakpoints::constant(finite(&key, value)?), key)
                 }
             };
             if target.ends_with("position") {
