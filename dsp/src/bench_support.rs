@@ -7,7 +7,8 @@ use crate::string::simd::{Isa, Kernel, LANES, Lanes};
 /// A measure of the vector unit's peak: `iterations` steps of `Lanes::CHAINS` independent chains
 /// `x ← x·m + c` (a multiply and an add, as in the string's loops, never fused) on chunks of
 /// [`LANES`]. Returns the flops done, `iterations · CHAINS · LANES · 2`; the result of the chains
-/// goes through [`std::hint::black_box`] so the work is kept.
+/// goes through [`std::hint::black_box`] so the work is kept. A unit this CPU lacks is measured
+/// on the portable one.
 pub fn peak_probe(isa: Isa, iterations: usize) -> f64 {
     struct Probe(usize);
     impl Kernel for Probe {
@@ -33,5 +34,6 @@ pub fn peak_probe(isa: Isa, iterations: usize) -> f64 {
             (self.0 * chains * LANES * 2) as f64
         }
     }
+    let isa = if Isa::available().contains(&isa) { isa } else { Isa::Portable };
     isa.run(Probe(iterations))
 }

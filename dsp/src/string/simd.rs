@@ -150,12 +150,14 @@ impl Isa {
         all
     }
 
-    /// Run `kernel` on this unit.
+    /// Run `kernel` on this unit. Crate-private: the unit must be one this CPU has, and a
+    /// public function given an `Isa` from outside checks it against [`Isa::available`] first.
     #[inline]
-    pub fn run<K: Kernel>(self, kernel: K) -> K::Output {
+    pub(crate) fn run<K: Kernel>(self, kernel: K) -> K::Output {
         match self {
-            // SAFETY: an `Isa` other than `Portable` comes from `detect` or `available`, which
-            // return it only when the CPU has the feature.
+            // SAFETY: an `Isa` other than `Portable` that reaches here comes from `detect` or
+            // `available`, which return it only when the CPU has the feature, or has been
+            // checked against `available` (`bench_support::peak_probe`).
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512 => unsafe { x86::run_avx512(kernel) },
             #[cfg(target_arch = "x86_64")]
