@@ -850,19 +850,19 @@ fn a_string_with_too_many_modes_or_none_at_the_scenes_rate_is_a_clear_error() {
     }
 }
 
-/// A render whose output is not finite writes nothing and says why: a string damped beyond
-/// what the scheme can step (`eta0` = 1e300 on the soft C4 scene) leaves the floats at once,
-/// and a gain of 1e300 on a finite output overflows 32-bit float. An existing output file is left
-/// as it was.
+/// A render whose output is not finite writes nothing and says why: a hammer thrown at 1e200 m/s
+/// (its `v_ref` given, so the fit is not sized for it) leaves the floats at once, and a gain of
+/// 1e300 on a finite output overflows 32-bit float. An existing output file is left as it was.
 #[test]
 fn a_render_that_is_not_finite_writes_nothing_and_says_why() {
     let dir = TempDir::new().unwrap();
     let out = dir.path().join("out.wav");
     fs::write(&out, b"kept").unwrap();
     let soft = fs::read_to_string(fig4_path().with_file_name("hammer-c4-soft.toml")).unwrap();
-    let damped = edit(&soft, "eta0 = 8.0 ", "eta0 = 1e300 ");
+    let thrown =
+        edit(&edit(&soft, "velocity = 1.0 ", "velocity = 1e200 "), "segments = 13", "segments = 13\nv_ref = 1.0");
     for (text, why) in [
-        (damped, "beyond what the scheme can simulate"),
+        (thrown, "beyond what the scheme can simulate"),
         (edit(BASE, "gain = 1.0", "gain = 1e300"), "exceeds 32-bit float"),
     ] {
         let scene = write_scene(dir.path(), "case.toml", &text);

@@ -209,29 +209,39 @@ mod tests {
     }
 
     /// An overdamped mode with a decay rate far beyond the sample rate (σΔt ≈ 2000, where
-    /// `e^{−σΔt}` underflows to 0 and `cosh(γΔt)` overflows) gets finite coefficients, and its
-    /// recursion `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}` has `P` within rounding of the exact
-    /// `½(e^{(γ−σ)Δt} + e^{(−γ−σ)Δt})`, computed here with the slowest part alone.
+    /// `e^{−σΔt}` underflows to 0 and `cosh(γΔt)` overflows, and σ = 1e160/s, whose square
+    /// overflows) gets finite coefficients, and its recursion `ũ^{n+1} = 2P ũ^n − Q ũ^{n−1}` has
+    /// `P` within rounding of the exact `½(e^{(γ−σ)Δt} + e^{(−γ−σ)Δt})`, computed here with the
+    /// slowest part alone, its rate `γ − σ = −ω0²/(σ + γ)` by its Taylor series in `(ω0/σ)²`
+    /// (its next term is below 1e-16 of the rate for `(ω0/σ)² < 1e-5`, as here).
     #[test]
     fn overdamped_modes_with_huge_damping_stay_finite() {
-        let mut p = c4();
-        p.damping = Damping::Viscous { eta0: 1e8, eta2: 0.0 };
-        let mut s = ModalString::new(p, 44100.0).unwrap();
-        assert!(s.modes() > 0);
-        for i in 0..s.modes() {
-            let (a, b, c) = (s.coef_a[i], s.coef_b[i], s.coef_c[i]);
-            assert!(a.is_finite() && b.is_finite() && c.is_finite(), "mode {i}: A {a} B {b} C {c}");
-            let (sigma, omega0) = (s.decay_rates()[i], s.angular_frequencies()[i]);
-            let gamma = (sigma * sigma - omega0 * omega0).sqrt();
-            let slow = 0.5 * ((gamma - sigma) / 44100.0).exp();
-            assert!((0.5 * a - slow).abs() <= 1e-12 * slow.max(f64::MIN_POSITIVE), "mode {i}: P {} vs {slow}", 0.5 * a);
+        for eta0 in [1e8, 1e160] {
+            let mut p = c4();
+            p.damping = Damping::Viscous { eta0, eta2: 0.0 };
+            let mut s = ModalString::new(p, 44100.0).unwrap();
+            assert!(s.modes() > 0);
+            for i in 0..s.modes() {
+                let (a, b, c) = (s.coef_a[i], s.coef_b[i], s.coef_c[i]);
+                let (k, r) = (s.stiffness()[i], s.resistance[i]);
+                let finite = [a, b, c, k, r].iter().all(|x| x.is_finite());
+                assert!(finite, "eta0 {eta0:e}, mode {i}: A {a} B {b} C {c} K {k} R {r}");
+                let (sigma, omega0) = (s.decay_rates()[i], s.angular_frequencies()[i]);
+                let x = (omega0 / sigma).powi(2);
+                assert!(x < 1e-5, "the series needs ω0 ≪ σ");
+                let rate = -omega0 * omega0 / (2.0 * sigma) * (1.0 + x / 4.0 + x * x / 8.0);
+                let slow = 0.5 * (rate / 44100.0).exp();
+                let tolerance = 1e-12 * slow.max(f64::MIN_POSITIVE);
+                assert!((0.5 * a - slow).abs() <= tolerance, "eta0 {eta0:e}, mode {i}: P {} vs {slow}", 0.5 * a);
+            }
+            let ones = vec![1e-3; s.modes()];
+            s.set_state(&ones, &ones);
+            let pickup = s.vector();
+            let mut out = [0.0; 128];
+            s.free_steps(&pickup, &mut out);
+            let decays = s.state().iter().all(|u| u.is_finite() && u.abs() <= 1e-3);
+            assert!(decays && out.iter().all(|y| y.is_finite()), "eta0 {eta0:e}: the state decays and stays finite");
         }
-        let ones = vec![1e-3; s.modes()];
-        s.set_state(&ones, &ones);
-        let pickup = s.vector();
-        let mut out = [0.0; 128];
-        s.free_steps(&pickup, &mut out);
-        assert!(s.state().iter().all(|u| u.is_finite() && u.abs() <= 1e-3), "the state decays and stays finite");
     }
 
     /// With an extra decay rate the free vibration of a mode is `e^{−(σ+σ_e)t} cos(ωt)` with the

@@ -43,9 +43,13 @@ impl Mode {
             decay * (self.omega * dt).cos()
         } else {
             // e^{−σΔt} cosh(γΔt) as the mean of two decaying exponentials (0 < γ < σ): the
-            // product form gives 0·∞ = NaN once σΔt passes about 710.
-            let gamma = (self.sigma * self.sigma - self.omega0 * self.omega0).sqrt();
-            0.5 * ((gamma - self.sigma) * dt).exp() + 0.5 * ((-gamma - self.sigma) * dt).exp()
+            // product form gives 0·∞ = NaN once σΔt passes about 710. With `r = ω0/σ`,
+            // `γ = σ√((1 − r)(1 + r))` and the slow rate `γ − σ = −ω0 r/(1 + γ/σ)`: σ is never
+            // squared (σ² overflows past 1.3e154/s) and γ − σ is not a difference of near equals.
+            let r = self.omega0 / self.sigma;
+            let root = ((1.0 - r) * (1.0 + r)).sqrt();
+            let (slow, fast) = (-self.omega0 * r / (1.0 + root), -self.sigma * (1.0 + root));
+            0.5 * (slow * dt).exp() + 0.5 * (fast * dt).exp()
         };
         (p, decay * decay)
     }
