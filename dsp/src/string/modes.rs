@@ -6,8 +6,12 @@
 //!
 //! ```text
 //! A = 2P,   B = 1 + Q,   C = Δt²(1 + 2P + Q)/(4m̃)
-//! K̂ = (4m̃/Δt²)(1 − 2P + Q)/(1 + 2P + Q),   R̂ = (4m̃/Δt)(1 − Q)/(1 + 2P + Q)
+//! K̂ = (4m̃/Δt²)(1 − 2P + Q)/(1 + 2P + Q) = (B − A)/C
+//! R̂ = (4m̃/Δt)(1 − Q)/(1 + 2P + Q) = Δt(2 − B)/C
 //! ```
+//!
+//! `K̂` and `R̂` are computed by the second forms, from `A`, `B` and `C` as stored
+//! ([`Coefficients::new`]), so the energy balance closes on the recursion actually stepped.
 
 use super::{MAX_MODES, StringParams};
 
@@ -123,15 +127,15 @@ impl Coefficients {
         Self::new(p * d, q * (d * d), dt, modal_mass)
     }
 
+    /// `K̂` and `R̂` are those of the recursion as stored, `ũ^{n+1} = Aũ^n − (B − 1)ũ^{n−1} + CF`
+    /// with `A`, `B` and `C` rounded: matching it to the scheme gives `K̂ = (B − A)/C` and
+    /// `R̂ = Δt(2 − B)/C`, whose differences are exact. From the unrounded `P` and `Q` instead,
+    /// `1 − 2P + Q` would differ from the stepped `B − A` by up to `ε`, a relative `ε/(ωΔt)²` in
+    /// `K̂` (1e-9 for a 10 Hz mode at 192 kHz), and the books would not close on the steps taken.
     #[inline]
     pub(crate) fn new(p: f64, q: f64, dt: f64, modal_mass: f64) -> Self {
-        let den = 1.0 + 2.0 * p + q;
-        Self {
-            a: 2.0 * p,
-            b: 1.0 + q,
-            c: dt * dt * den / (4.0 * modal_mass),
-            stiffness: 4.0 * modal_mass / (dt * dt) * (1.0 - 2.0 * p + q) / den,
-            resistance: 4.0 * modal_mass / dt * (1.0 - q) / den,
-        }
+        let (a, b) = (2.0 * p, 1.0 + q);
+        let c = dt * dt * (1.0 + 2.0 * p + q) / (4.0 * modal_mass);
+        Self { a, b, c, stiffness: (b - a) / c, resistance: dt * (2.0 - b) / c }
     }
 }
