@@ -118,7 +118,7 @@ impl QsaSolver {
         let m = if p > st.k { p - 1 } else { p };
         let e = st.yp - sp.knot(m);
         let b = st.z - 2.0 * e + st.q * sp.knot_slope(m);
-        let c = e * e - st.z * e + st.q * (sp.knot_potential(m) - st.v_yp);
+        let c = e * e - st.z * e + st.q * knot_rise(sp, m, st);
         let t = if st.g0 < 0.0 { larger_root(a, b, c) } else { smaller_root(a, b, c) };
         t - e
     }
@@ -164,7 +164,7 @@ impl Search<'_> {
         if s == 0.0 {
             return if st.g0 < 0.0 { Sign::Below } else { Sign::Above };
         }
-        let lambda = s * (s + st.z) + st.q * (self.spline.knot_potential(j) - st.v_yp);
+        let lambda = s * (s + st.z) + st.q * knot_rise(self.spline, j, st);
         if lambda == 0.0 {
             Sign::Root
         } else if (lambda < 0.0) != (s < 0.0) {
@@ -289,6 +289,20 @@ impl ContactSolver for QsaSolver {
     }
 }
 
+/// `V(y_j) − V̂(yp)` (J). At the two knots that bound `yp`'s own segment `k` (`j = k − 1, k`) it
+/// is that segment's quadratic, `s_j(D_j − A_k s_j)` with `s_j = y_j − yp`: near a knot the two
+/// potentials are nearly equal and their difference loses every digit, which could give a sign
+/// test the wrong sign and the root the wrong segment (docs/physics.md §3.5).
+#[inline]
+fn knot_rise(spline: &QuadSpline, j: usize, st: &StepData) -> f64 {
+    if st.k >= 1 && (j + 1 == st.k || j == st.k) {
+        let s = spline.knot(j) - st.yp;
+        s * (spline.knot_slope(j) - spline.curvature(st.k) * s)
+    } else {
+        spline.knot_potential(j) - st.v_yp
+    }
+}
+
 /// The larger root of `a x² + b x + c` (a > 0), without cancellation; `b² − 4ac` is clamped at 0
 /// (a negative discriminant can only come from rounding here).
 #[inline]
@@ -324,6 +338,46 @@ mod tests {
             assert!(l <= h);
             assert!((l - lo).abs() <= 1e-6 * lo.abs().max(1e-300) || (h - hi).abs() <= 1e-6 * hi.abs());
         }
+    }
+
+    /// `y^{n−1}` an ulp or a few past a knot: the sign tests at the two knots around it must not
+    /// difference two nearly equal potentials (every digit lost, the sign noise). Every search
+    /// then finds the segment `y^{n+1}` lands in, and all three give the same bits, for
+    /// `y^{n−1}` from 3 ulps below to 3 above each interior knot, on a C4-like felt.
+    #[test]
+    fn a_step_from_next_to_a_knot_finds_the_segment_it_lands_in() {
+        let law = PowerLaw::new(4.5e9, 2.5).unwrap();
+        let spline = QuadSpline::new(law, 8e-4, 6).unwrap();
+        let (q, z) = (1.7312762516664185e-7, -5.040192616168495e-6);
+        let mut cases = 0;
+        for j in 1..spline.segments() {
+            let mut yp = spline.knot(j);
+            for _ in 0..3 {
+                yp = yp.next_down();
+            }
+            for _ in 0..7 {
+                let problem = ContactProblem { y_prev: yp, y_now: yp, z, q };
+                let mut found = Vec::new();
+                for search in [SegmentSearch::Linear, SegmentSearch::Binary, SegmentSearch::WarmStart] {
+                    let mut qsa = QsaSolver::with_search(spline.clone(), search);
+                    qsa.start(yp, yp);
+                    let s = qsa.solve(&problem).s;
+                    let landed = spline.segment_of(yp + s);
+                    // A root on a knot belongs to either segment.
+                    let on_knot = (yp + s) == spline.knot(landed) || (yp + s) == spline.knot(landed.saturating_sub(1));
+                    assert!(
+                        qsa.last_segment() == landed || on_knot,
+                        "{search:?}, knot {j}, yp {yp:e}: segment {} but y lands in {landed}",
+                        qsa.last_segment()
+                    );
+                    found.push(s.to_bits());
+                }
+                assert!(found.windows(2).all(|w| w[0] == w[1]), "knot {j}, yp {yp:e}: the searches differ");
+                yp = yp.next_up();
+                cases += 1;
+            }
+        }
+        assert_eq!(cases, 35);
     }
 
     #[test]
