@@ -1924,9 +1924,6 @@ fn busy_session() -> Score {
         (900, Event::PitchBend { channel: 1, value: -0.7 }),
         (1_300, Event::ChannelPressure { channel: 2, value: 0.8 }),
         (1_700, Event::ModWheel { channel: 0, value: 0.5 }),
-        (1_800, Event::RegisteredParameter { channel: 0, controller: 101, value: 0 }),
-        (1_800, Event::RegisteredParameter { channel: 0, controller: 100, value: 0 }),
-        (1_800, Event::RegisteredParameter { channel: 0, controller: 6, value: 12 }),
         (2_100, Event::NoteOnWithId { channel: 3, key: 60, velocity: 0.9, voice: 7 }),
         (2_200, Event::NoteTuning { note: NoteTarget::voice(7), semitones: 1.5 }),
         (2_500, on(57, 1.0)),
@@ -1934,19 +1931,40 @@ fn busy_session() -> Score {
         (3_700, Event::PolyPressure { channel: 0, key: 57, value: 0.6 }),
         (4_400, on(57, 0.2)),
     ]);
+    score.extend(told().into_iter().map(|(_, e)| (1_800, e)));
     score.sort_by_key(|e| e.0);
     score
+}
+
+/// The controller's configuration the busy session sends: channel 1's pitch-bend sensitivity at
+/// 12 semitones, and an upper MPE zone of two members (channels 14 and 15), whose per-note range
+/// is then set to 24 semitones on channel 15.
+fn told() -> Score {
+    let rpn = |channel, controller, value| (0, Event::RegisteredParameter { channel, controller, value });
+    vec![
+        rpn(0, 101, 0),
+        rpn(0, 100, 0),
+        rpn(0, 6, 12),
+        rpn(15, 101, 0),
+        rpn(15, 100, 6),
+        rpn(15, 6, 2),
+        rpn(14, 101, 0),
+        rpn(14, 100, 0),
+        rpn(14, 6, 24),
+    ]
 }
 
 /// `Instrument::reset` (what a host's reset calls) leaves the instrument as it was made: after a
 /// busy session cut off at a sample off the control blocks' grid, with notes, pedals and
 /// controllers still held, and the pickup and its resonance gliding to where the settings last
 /// moved them, what follows is the same, to the bit, as on an instrument just made with the
-/// settings in force, whether or not a buffer was rendered between the settings' change and
-/// the reset (a host loads state or flushes parameters while stopped, then resets). In both
+/// settings in force and told the same controller configuration (which a reset keeps: a
+/// controller sends it once), whether or not a buffer was rendered between the settings' change
+/// and the reset (a host loads state or flushes parameters while stopped, then resets). In both
 /// modes, at 44.1 and 48 kHz, with control blocks of 64, 37 and 16 samples, and in random
 /// buffers. The notes that sounded end at sample 0, and the reset allocates nothing (a host
-/// resets on the audio thread).
+/// resets on the audio thread). In slide mode the kept configuration is heard: the bends after
+/// differ from those of an instrument never told it.
 #[test]
 fn a_reset_instrument_renders_as_one_just_made() {
     let after: Score = vec![
@@ -1956,16 +1974,24 @@ fn a_reset_instrument_renders_as_one_just_made() {
         (2_900, Event::Sustain { channel: 0, depth: 1.0 }),
         (3_000, on(57, 0.5)),
         (3_050, on(64, 0.4)),
+        (3_100, Event::NoteOn { channel: 13, key: 50, velocity: 0.6 }),
+        (3_400, Event::PitchBend { channel: 13, value: 0.2 }),
         (5_000, off(57)),
     ];
+    let told_then_after: Score = told().into_iter().chain(after.iter().copied()).collect();
     for fs in [44_100.0, FS] {
         for mode in [Mode::Piano, Mode::Slide] {
             for block in [64, 37, 16] {
                 let settings = Settings { mode, block, ..Default::default() };
                 let what = format!("{mode:?} at {fs} Hz, control blocks of {block}");
                 let samples = (0.25 * fs) as usize;
-                let fresh = play(&mut Instrument::new(fs, 12, settings), &after, samples, || 256);
+                let fresh = play(&mut Instrument::new(fs, 12, settings), &told_then_after, samples, || 256);
                 assert!(rms(&fresh) > 1e-4, "{what}: the notes after are silent");
+                if mode == Mode::Slide {
+                    let untold = play(&mut Instrument::new(fs, 12, settings), &after, samples, || 256);
+                    let moved = untold.iter().zip(&fresh).map(|(a, b)| f64::from(a - b).abs()).fold(0.0, f64::max);
+                    assert!(moved > 1e-3, "{what}: the configuration changes the bends by only {moved}");
+                }
                 for rendered in [true, false] {
                     let what = format!(
                         "{what}, {} between the settings and the reset",
@@ -2077,6 +2103,42 @@ fn reset_all_controllers_moves_each_controller_of_its_channel_to_rest() {
         assert_eq!(first, None, "{mode:?}: differs from the controllers moved to rest from this sample on");
         let moved = render(&untouched).iter().zip(&reference).map(|(a, b)| f64::from(a - b).abs()).fold(0.0, f64::max);
         assert!(moved > 1e-3, "{mode:?}: the controllers at rest change the sound by only {moved}");
+    }
+}
+
+/// CC121 on an MPE zone's master channel rests the mod wheel and channel pressure it spoke for
+/// on its member channels too: to the bit, as the master's mod wheel and pressure moved to 0 by
+/// their own messages. A slide note on a member channel, its hand on the mod wheel or on the
+/// channel pressure, lifts its slide as it would then (and the reset changes the sound).
+#[test]
+fn reset_all_controllers_on_a_zones_master_rests_what_it_spoke_for() {
+    let zone = |at| {
+        [(101, 0), (100, 6), (6, 3)]
+            .map(|(controller, value)| (at, Event::RegisteredParameter { channel: 0, controller, value }))
+    };
+    for source in [HandSource::ModWheel, HandSource::ChannelPressure] {
+        let held: Score = zone(0)
+            .into_iter()
+            .chain([
+                (10, Event::NoteOn { channel: 2, key: 52, velocity: 0.8 }),
+                (20, Event::ModWheel { channel: 0, value: 0.9 }),
+                (20, Event::ChannelPressure { channel: 0, value: 0.9 }),
+            ])
+            .collect();
+        let after = |at_reset: &[Event]| -> Score {
+            held.iter().copied().chain(at_reset.iter().map(|&e| (6_000, e))).collect()
+        };
+        let reset = after(&[Event::ResetControllers { channel: 0 }]);
+        let at_rest =
+            after(&[Event::ModWheel { channel: 0, value: 0.0 }, Event::ChannelPressure { channel: 0, value: 0.0 }]);
+        let settings = Settings { mode: Mode::Slide, hand_source: source, ..Default::default() };
+        let render = |score: &Score| play(&mut Instrument::new(FS, 8, settings), score, 14_400, || 64);
+        let reference = render(&at_rest);
+        let heard = render(&reset);
+        let first = heard.iter().zip(&reference).position(|(a, b)| a.to_bits() != b.to_bits());
+        assert_eq!(first, None, "{source:?}: differs from the master's controllers moved to rest from this sample on");
+        let moved = render(&after(&[])).iter().zip(&reference).map(|(a, b)| f64::from(a - b).abs()).fold(0.0, f64::max);
+        assert!(moved > 1e-3, "{source:?}: the controllers at rest change the sound by only {moved}");
     }
 }
 

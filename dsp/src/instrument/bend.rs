@@ -3,7 +3,8 @@
 //!
 //! - **Pitch-bend sensitivity** (RPN 0): CC101 = 0 and CC100 = 0 select it, CC6 sets its
 //!   semitones and CC38 its cents. A full bend on that channel then moves the slide that far;
-//!   a channel never told follows the `Bend range` setting.
+//!   a channel never told follows the `Bend range` setting. Sent on a member channel of an MPE
+//!   zone, it sets every member channel of the zone (the per-note range is the zone's).
 //! - **MPE configuration** (RPN 6, sent on MIDI channel 1 or 16, the zone's master channel): CC6
 //!   gives the number of member channels of the lower zone (channels 2 up) or of the upper zone
 //!   (channels 15 down), 0 ending the zone. As the MPE specification asks, configuring a zone sets
@@ -60,14 +61,35 @@ impl Bends {
             (98 | 99, _) => self.selected[c] = NULL,
             (101, (_, lsb)) => self.selected[c] = (value, lsb),
             (100, (msb, _)) => self.selected[c] = (msb, value),
-            (6, SENSITIVITY) => self.ranges[c] = Some(f64::from(value)),
+            (6, SENSITIVITY) => self.set_sensitivity(c, f64::from(value)),
             (38, SENSITIVITY) => {
                 let semitones = self.ranges[c].map_or(0.0, f64::trunc);
-                self.ranges[c] = Some(semitones + f64::from(value) / 100.0);
+                self.set_sensitivity(c, semitones + f64::from(value) / 100.0);
             }
             (6, MPE_CONFIGURATION) if c == 0 || c == 15 => self.configure_zone(c, value.min(15)),
             _ => {}
         }
+    }
+
+    /// Channel `c`'s sensitivity at `semitones`; on a member channel of a configured zone, every
+    /// member's (the MPE specification's per-note range is the zone's, and controllers send it
+    /// on one member channel only).
+    fn set_sensitivity(&mut self, c: usize, semitones: f64) {
+        match self.master(c as u8) {
+            Some(master) => {
+                let master = usize::from(master);
+                for m in Self::members_of(master, self.members[usize::from(master == 15)]) {
+                    self.ranges[m] = Some(semitones);
+                }
+            }
+            None => self.ranges[c] = Some(semitones),
+        }
+    }
+
+    /// No parameter selected on any channel; the sensitivities and the zones stay (the device's
+    /// configuration, which a controller sends once, as reset-all-controllers keeps it).
+    pub(crate) fn deselect_all(&mut self) {
+        self.selected = [NULL; 16];
     }
 
     /// Reset-all-controllers on `channel`: no parameter selected; the values stay.
@@ -264,6 +286,42 @@ mod tests {
         send(&mut b, 0, &[(101, 0), (100, 6), (6, 3)]);
         send(&mut b, 15, &[(101, 0), (100, 6), (6, 2)]);
         assert_eq!((spoken(&b, 0), spoken(&b, 15), spoken(&b, 2)), (vec![0, 1, 2, 3], vec![15, 14, 13], vec![2]));
+    }
+
+    /// A sensitivity sent on one member channel of a zone sets every member of that zone (JUCE's
+    /// `MPEMessages` sends the per-note range on the first member channel only), and not the
+    /// master, the other zone, or a channel outside both.
+    #[test]
+    fn a_sensitivity_sent_on_one_member_channel_sets_the_whole_zone() {
+        let mut b = Bends::default();
+        send(&mut b, 0, &[(101, 0), (100, 6), (6, 3)]);
+        send(&mut b, 15, &[(101, 0), (100, 6), (6, 2)]);
+        send(&mut b, 1, &[(101, 0), (100, 0), (6, 24), (38, 50)]);
+        let ranges = |b: &Bends| (0..16).map(|c| b.range(c)).collect::<Vec<_>>();
+        let mut want = vec![None; 16];
+        want[0] = Some(MPE_MASTER_RANGE);
+        want[1..=3].fill(Some(24.5));
+        want[15] = Some(MPE_MASTER_RANGE);
+        want[13..=14].fill(Some(MPE_MEMBER_RANGE));
+        assert_eq!(ranges(&b), want);
+        // On a channel outside both zones, that channel alone.
+        send(&mut b, 6, &[(101, 0), (100, 0), (6, 7)]);
+        want[6] = Some(7.0);
+        assert_eq!(ranges(&b), want);
+    }
+
+    /// Deselecting every channel's parameter (the instrument's reset) keeps the sensitivities and
+    /// the zones: data entry then sets nothing until a parameter is selected again.
+    #[test]
+    fn deselecting_keeps_the_sensitivities_and_zones() {
+        let mut b = Bends::default();
+        send(&mut b, 0, &[(101, 0), (100, 6), (6, 3)]);
+        send(&mut b, 5, &[(101, 0), (100, 0), (6, 5)]);
+        let kept = b.clone();
+        b.deselect_all();
+        assert_eq!((b.ranges, b.members), (kept.ranges, kept.members));
+        send(&mut b, 5, &[(6, 9)]);
+        assert_eq!(b.range(5), Some(5.0), "nothing selected");
     }
 
     /// A non-registered parameter (CC99, CC98) deselects the registered one: its data (a GS

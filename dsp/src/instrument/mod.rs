@@ -611,14 +611,16 @@ impl Instrument {
     /// Return to the state the instrument was made in, without allocating: every voice silent,
     /// the pedals and every channel's controllers at rest, the output stage empty and the clock
     /// at zero, so that the control blocks start again at the next sample. What follows renders
-    /// to the bit as on an instrument just made at this sample rate with these settings: a host
-    /// that resets the instrument before each bounce gets the same bounce each time. The notes
-    /// that were sounding end at sample 0 ([`Self::drain_ended`]); the counts of steals, sheds
-    /// and guard trips go on.
+    /// to the bit as on an instrument just made at this sample rate with these settings and
+    /// told the controller's configuration: the pitch-bend sensitivities and MPE zones stay, as
+    /// reset-all-controllers keeps them (a controller sends them once, and hosts reset at every
+    /// start of processing). A host that resets the instrument before each bounce gets the same
+    /// bounce each time. The notes that were sounding end at sample 0
+    /// ([`Self::drain_ended`]); the counts of steals, sheds and guard trips go on.
     pub fn reset(&mut self) {
         self.handle_event(Event::AllSoundOff);
         self.channels = [ChannelState::default(); 16];
-        self.bends = Bends::default();
+        self.bends.deselect_all();
         self.pressed.iter_mut().for_each(|keys| keys.fill(Press::default()));
         self.presses = 0;
         self.now = 0;
@@ -712,6 +714,10 @@ impl Instrument {
                 let channel = channel & 15;
                 let c = usize::from(channel);
                 self.channels[c] = ChannelState { timbre: self.channels[c].timbre, ..ChannelState::default() };
+                // A zone's master spoke for its members' mod wheel and pressure: they rest too.
+                for m in self.bends.spoken_for(channel).skip(1) {
+                    (self.channels[m].mod_wheel, self.channels[m].pressure) = (0.0, 0.0);
+                }
                 self.bends.reset_controllers(channel);
                 self.sustain[c] = 0.0;
                 self.soft[c] = false;
