@@ -214,6 +214,53 @@ fn a_pressure_expression_presses_only_its_note() {
     presses_only_its_note(settings, &pressed, expression, "pressure");
 }
 
+/// A slide following keys that glides back to a key still held, when the key played over it is
+/// let go, plays that key's note again with its id: the pressure expression sent to it before
+/// (kept while the other note played) and the one sent to it after reach it, rendering exactly
+/// as the same pressures sent as MIDI poly aftertouch; without them the slide lifts.
+#[test]
+fn a_note_returned_to_keeps_its_pressure_expressions() {
+    let settings = Settings { hand_source: HandSource::PolyPressure, follow_key: true, ..Default::default() };
+    let render = |score: &Score| play(&mut slide(settings), score, 28_800, 256);
+    let played = |first: Event, second: Event, later: Event| -> Score {
+        vec![
+            (0, on(1, 45, 1)),
+            (0, first),
+            (4_800, on(1, 52, 2)),
+            (4_800, second),
+            (9_600, Event::NoteOff { channel: 1, key: 52 }),
+            (19_200, later),
+        ]
+    };
+    let expression = |id, value| Event::NotePressure { note: NoteTarget::voice(id), value };
+    let aftertouch = |key, value| Event::PolyPressure { channel: 1, key, value };
+    let by_id = render(&played(expression(1, 0.8), expression(2, 0.8), expression(1, 0.3)));
+    let midi = render(&played(aftertouch(45, 0.8), aftertouch(52, 0.8), aftertouch(45, 0.3)));
+    let first = by_id.iter().zip(&midi).position(|(a, b)| a.to_bits() != b.to_bits());
+    assert_eq!(first, None, "the expressions differ from poly aftertouch from this sample on");
+    let lifted = render(&played(expression(1, 0.8), expression(2, 0.8), expression(3, 0.3)));
+    let rms = |x: &[f32]| (x.iter().map(|&v| f64::from(v).powi(2)).sum::<f64>() / x.len() as f64).sqrt();
+    let diff: Vec<f32> = by_id[19_200..].iter().zip(&lifted[19_200..]).map(|(a, b)| a - b).collect();
+    let change = rms(&diff) / rms(&by_id[19_200..]);
+    println!("the later expression changes {change:.2} of the rms");
+    assert!(change > 0.1, "the expression after the return changed only {change} of the rms");
+}
+
+/// A choke that names the note a slide following keys plays over a key still held fades that
+/// voice out, as a choke does: silent (below 1e-6 of its peak) from 10 ms after it, rather than
+/// gliding back to the held key and sounding on.
+#[test]
+fn a_choked_legato_note_falls_silent_rather_than_returning() {
+    let settings = Settings { follow_key: true, ..Default::default() };
+    let score: Score =
+        vec![(0, on(1, 45, 1)), (4_800, on(1, 52, 2)), (9_600, Event::Choke { note: NoteTarget::voice(2) })];
+    let out = play(&mut slide(settings), &score, 19_200, 256);
+    let peak = out.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    let after = out[9_600 + 480..].iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    println!("peak {peak:.3e}, after the choke {after:.3e}");
+    assert!(peak > 1e-3 && after <= 1e-6 * peak, "{after:e} of a peak {peak:e} sounds on after the choke");
+}
+
 /// Note 2 (key 57, voice 22, channel 3) pressed by `expression` under `settings` renders as
 /// `pressed`: with note 1 (key 50, voice 11, channel 2) the pair is the sum of the notes alone,
 /// within 1e-6 of its peak; pressed, the note sounds at its key (220 Hz within 1 %), and

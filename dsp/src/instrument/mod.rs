@@ -366,7 +366,8 @@ struct Press {
     /// The host's note id: a note-off or choke by id alone finds its key held down though the
     /// note ended early (its voice taken by another).
     id: Option<i32>,
-    /// The latest poly pressure since, 0..=1: a slide voice that returns to the key takes it.
+    /// The latest poly pressure or pressure expression since, 0..=1: a slide voice that returns
+    /// to the key takes it.
     pressure: f64,
 }
 
@@ -662,8 +663,11 @@ impl Instrument {
             }
             Event::Release { note } => self.keys_up(&self.addressed_keys(note)),
             Event::Choke { note } => {
-                self.keys_up(&self.addressed_keys(note));
+                // Faded first: a choked slide following keys lets go rather than gliding back to
+                // a key still held.
+                let keys = self.addressed_keys(note);
                 self.choke(note);
+                self.keys_up(&keys);
             }
             Event::PitchBend { channel, value } => self.channels[usize::from(channel & 15)].bend = unit(value, -1.0),
             Event::ChannelPressure { channel, value } => self.set_controller(channel, value, |c| &mut c.pressure),
@@ -689,6 +693,15 @@ impl Instrument {
             }
             Event::NotePressure { note, value } => {
                 let value = unit(value, 0.0);
+                // Kept by key too, as poly pressure is: a slide that returns to a key held with
+                // this note takes it.
+                for (c, keys) in self.addressed_keys(note).iter().enumerate() {
+                    for (k, press) in self.pressed[c].iter_mut().enumerate() {
+                        if keys >> k & 1 == 1 {
+                            press.pressure = value;
+                        }
+                    }
+                }
                 self.each_slide(note, |v, _| v.poly_pressure = value);
             }
             Event::NoteBrightness { note, value: raw } => {
@@ -804,8 +817,9 @@ impl Instrument {
             match latest {
                 Some(key) if follow && v.key_down => {
                     // The released note ends; the voice plays the held key's, whose own note
-                    // ended when this one took its voice: a note without an id, which events
-                    // for the key reach.
+                    // ended (and was reported) when this one took its voice: a note without an
+                    // id, which events for the key reach, and those for the id the key was
+                    // pressed with (`each_slide`).
                     v.return_to(key, pressed[usize::from(key)].pressure);
                     self.notes.start(offset + j, Note { voice: None, channel: v.strike.channel, key }, self.now);
                 }
@@ -859,12 +873,21 @@ impl Instrument {
     }
 
     /// Apply `f` (with the latest settings, those a note struck now takes) to the slide voices
-    /// playing the addressed notes.
+    /// playing the addressed notes: a target naming an id reaches too the note a voice returned
+    /// to (following keys), in the book without an id, when its key was pressed with that id.
     fn each_slide(&mut self, target: NoteTarget, mut f: impl FnMut(&mut SlideVoice, &Settings)) {
         let (offset, settings) = (self.voices.len(), self.note_settings());
-        for (i, _) in self.notes.addressed(target) {
-            if let Some(v) = i.checked_sub(offset).and_then(|j| self.slides.get_mut(j)) {
-                f(v, &settings);
+        let pressed = &self.pressed;
+        let returned = |note: &Note| {
+            note.voice.is_none()
+                && target
+                    .voice
+                    .is_some_and(|id| pressed[usize::from(note.channel)][usize::from(note.key)].id == Some(id))
+                && NoteTarget { voice: None, ..target }.matches(note)
+        };
+        for j in self.notes.live_in(offset..offset + self.slides.len()) {
+            if self.notes.get(offset + j).is_some_and(|note| target.matches(&note) || returned(&note)) {
+                f(&mut self.slides[j], &settings);
             }
         }
     }
