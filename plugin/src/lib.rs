@@ -36,7 +36,10 @@
 //!
 //! State (parameters) is saved by the framework with the plugin's version, which `filter_state`
 //! sees first: it brings every number into its parameter's range (a corrupt value to the
-//! default), and it is where later releases migrate old state.
+//! default), gives a parameter the state leaves out its default (the player's settings stay), and
+//! it is where later releases migrate old state. A value of the wrong JSON type (an `i32` of
+//! 64.5, say) fails the framework's parse before that: such a state does not load at all, and
+//! the instance keeps what it had.
 
 pub mod editor;
 pub mod meter;
@@ -207,8 +210,23 @@ impl Plugin for QsaStrings {
     /// into its parameter's range, and one that is not finite (a corrupt state: JSON reads 1e39
     /// as an `f32` infinity) becomes the default, since the framework stores saved values as
     /// they are. The engine then never hears a value the parameter cannot take, and the state
-    /// the host saves next can be read back.
+    /// the host saves next can be read back. A parameter the state leaves out (one an older
+    /// version did not have, or a hand-made state) takes its default, as the framework would
+    /// otherwise leave it where the instance had it; the player's settings
+    /// ([`PLAYER_SETTINGS`](qsa_dsp::instrument::PLAYER_SETTINGS)) stay as the player set them.
     fn filter_state(state: &mut PluginState) {
+        for spec in &qsa_dsp::instrument::PARAMETERS {
+            if qsa_dsp::instrument::PLAYER_SETTINGS.contains(&spec.id) || state.params.contains_key(spec.id) {
+                continue;
+            }
+            let default = spec.default_plain();
+            let value = match spec.kind {
+                ParamKind::Float { .. } => ParamValue::F32(default),
+                ParamKind::Bool { .. } => ParamValue::Bool(default != 0.0),
+                ParamKind::Int { .. } | ParamKind::Choice { .. } => ParamValue::I32(default as i32),
+            };
+            state.params.insert(spec.id.to_owned(), value);
+        }
         for (id, value) in &mut state.params {
             let Some(spec) = param_spec(id) else { continue };
             match value {

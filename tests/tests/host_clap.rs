@@ -950,6 +950,33 @@ fn a_state_from_a_later_version_loads_what_it_can() {
     assert!(audio.peak() > AUDIBLE, "the instrument plays after a later version's state");
 }
 
+/// A state that leaves parameters out (an older version's, or a hand-made one) gives each its
+/// default rather than the value the instance had: a float (width), a choice (the guitar's
+/// body), a switch (the limiter) and a whole number (control block). The player's settings it
+/// leaves out (voices) stay as the player set them.
+#[test]
+fn a_state_that_leaves_parameters_out_gives_them_their_defaults() {
+    let ids = ["width", "sbody", "limit", "nb", "voices"];
+    let mut fresh = Plugin::at_48k(&release_bundle(), &[]);
+    let defaults: Vec<f64> = ids.iter().map(|id| fresh.value(clap_id(id)).expect(id)).collect();
+    let moved: Vec<Ev> = ids.iter().zip(&defaults).map(|(id, d)| param(id, if *d > 0.5 { 0.0 } else { 1.0 })).collect();
+    let mut p = Plugin::at_48k(&release_bundle(), &moved);
+    let set: Vec<f64> = ids.iter().map(|id| p.value(clap_id(id)).expect(id)).collect();
+    assert!(set.iter().zip(&defaults).all(|(s, d)| s != d), "every value moved: {set:?} from {defaults:?}");
+    let saved = p.save();
+    let mut state: serde_json::Value = serde_json::from_slice(&saved[8..]).expect("the state is JSON after its length");
+    let params = state["params"].as_object_mut().expect("a params object");
+    for id in ids {
+        assert!(params.remove(id).is_some(), "{id} was saved");
+    }
+    let body = serde_json::to_vec(&state).expect("JSON");
+    assert!(p.load(&[&(body.len() as u64).to_le_bytes()[..], &body].concat()), "the state loads");
+    for (i, id) in ids.iter().enumerate() {
+        let want = if *id == "voices" { set[i] } else { defaults[i] };
+        assert_eq!(p.value(clap_id(id)), Some(want), "{id}");
+    }
+}
+
 /// A state whose numbers lie beyond their parameters' ranges (a hand-edited or corrupt preset)
 /// plays them at the ranges' ends: a gain of 1000 (the limiter off) sounds as +12 dB, to the bit,
 /// not louder. A number too large for an `f32` (1e39, which reads as infinity) takes the

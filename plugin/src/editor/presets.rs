@@ -2,7 +2,7 @@
 //! grouped by category, previous and next buttons, and the current preset's description.
 //!
 //! Choosing a preset sets every parameter it sets ([`Preset::sets`]: all but the player's settings,
-//! voices and the overload guard, that its file leaves out) as the host's own gestures (begin,
+//! voices, the overload guard and the half pedal's range, that its file leaves out) as the host's own gestures (begin,
 //! set, end for each parameter, found by id in the parameter map), so hosts record it as
 //! automation and undo. The chosen preset's id is kept in [`QsaParams::preset`], a persistent
 //! field, so it comes back with the saved state; the name is marked " *" once a parameter the
@@ -82,7 +82,9 @@ pub fn section(ui: &mut Ui, params: &QsaParams, setter: &ParamSetter) {
     });
     let about = match current {
         Some(i) => format!("{}: {}", presets[i].category, presets[i].description),
-        None => "Factory presets set every parameter; the menu lists them by category.".to_owned(),
+        None => "Factory presets set every parameter but the player's settings (voices, overload guard, \
+         half pedal); the menu lists them by category."
+            .to_owned(),
     };
     // A little narrower than the column: a wrapped line's glyphs may overhang its width.
     ui.scope(|ui| {
