@@ -25,6 +25,7 @@ impl ModalString {
         forces: [(&[f64], f64); K],
         output: &[f64],
     ) -> (f64, StringEnergy) {
+        debug_assert!(self.history_ready, "advance follows history");
         let (projection, [step2, k_sum2, r_diff2]) = kernel::advance_monitored(
             &mut self.u_prev,
             &self.u_now,

@@ -434,6 +434,9 @@ pub fn free_run(isa: Isa, a: &[f64], b: &[f64], up: &mut [f64], un: &mut [f64], 
             *o = s.sum(s.add(s.load(&sum[0]), s.load(&sum[1])));
         }
     }
+    // One length for every array: a short one would leave the modes past it unstepped.
+    let n = up.len();
+    debug_assert!([a.len(), b.len(), un.len(), out.len()].iter().all(|&m| m == n), "free_run: unequal lengths");
     isa.run(FreeRun { a: chunks(a), b: chunks(b), up: chunks_mut(up), un: chunks_mut(un), out: chunks(out), outputs })
 }
 
