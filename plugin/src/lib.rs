@@ -18,7 +18,9 @@
 //!   pressure and CC74 can press it (per channel, so MPE works); in piano mode CC74 voices the
 //!   felt of the hammers struck on its channel.
 //! - `reset` (each activation and start of processing) returns the engine to how it was made
-//!   ([`Instrument::reset`]): what follows is a new instance's output, to the bit.
+//!   ([`Instrument::reset`]): what follows is a new instance's output, to the bit, but for the
+//!   controller's configuration (pitch-bend sensitivities and MPE zones), which stays, through a
+//!   change of sample rate or voice count too.
 //! - Per note: in slide mode CLAP and VST3 tuning expressions move the note's slide, CLAP
 //!   pressure expressions (nice-plug delivers them, like MIDI poly aftertouch and VST3 poly
 //!   pressure, as `PolyPressure`) are its poly pressure, CLAP and VST3 brightness expressions are
@@ -259,7 +261,12 @@ impl Plugin for QsaStrings {
         let fs = f64::from(buffer_config.sample_rate);
         let reuse = self.engine.as_ref().is_some_and(|e| e.sample_rate() == fs && e.voices() == voices);
         if !reuse {
-            self.engine = Some(Instrument::new(fs, voices, self.params.settings()));
+            let mut engine = Instrument::new(fs, voices, self.params.settings());
+            // The controller told the old engine its configuration once; the new one keeps it.
+            if let Some(old) = &self.engine {
+                engine.keep_controller_configuration(old);
+            }
+            self.engine = Some(engine);
         }
         if let Some(engine) = &self.engine {
             context.set_latency_samples(engine.latency() as u32);

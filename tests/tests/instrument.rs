@@ -2024,6 +2024,33 @@ fn a_reset_instrument_renders_as_one_just_made() {
     }
 }
 
+/// An instrument made anew in another's place (another sample rate or voice count) that keeps
+/// the other's controller configuration plays, to the bit, as one told that configuration
+/// itself: the bends on the member channel of an MPE zone and on a channel given its own
+/// sensitivity move the slide as far (and without it, they do not).
+#[test]
+fn an_instrument_made_anew_keeps_the_controller_configuration() {
+    let settings = Settings { mode: Mode::Slide, ..Default::default() };
+    let after: Score = vec![
+        (0, on(57, 0.6)),
+        (0, Event::NoteOn { channel: 13, key: 50, velocity: 0.6 }),
+        (300, Event::PitchBend { channel: 0, value: 0.2 }),
+        (300, Event::PitchBend { channel: 13, value: 0.2 }),
+    ];
+    let mut old = Instrument::new(44_100.0, 12, settings);
+    let _ = play(&mut old, &told(), 64, || 64);
+    let mut anew = Instrument::new(FS, 8, settings);
+    anew.keep_controller_configuration(&old);
+    let kept = play(&mut anew, &after, 9_600, || 256);
+    let told_then_after: Score = told().into_iter().chain(after.iter().copied()).collect();
+    let reference = play(&mut Instrument::new(FS, 8, settings), &told_then_after, 9_600, || 256);
+    let first = kept.iter().zip(&reference).position(|(a, b)| a.to_bits() != b.to_bits());
+    assert_eq!(first, None, "differs from an instrument told the configuration from this sample on");
+    let untold = play(&mut Instrument::new(FS, 8, settings), &after, 9_600, || 256);
+    let moved = untold.iter().zip(&reference).map(|(a, b)| f64::from(a - b).abs()).fold(0.0, f64::max);
+    assert!(moved > 1e-3, "the configuration changes the bends by only {moved}");
+}
+
 /// A reset instrument chooses the voices for its next notes, and ends them, as one just made:
 /// with control blocks shorter than the span over which a voice weighs its energy, the voices
 /// cut off mid-span by the reset and the keys they sounded leave no trace. Two voices sounding

@@ -261,6 +261,27 @@ fn a_choked_legato_note_falls_silent_rather_than_returning() {
     assert!(peak > 1e-3 && after <= 1e-6 * peak, "{after:e} of a peak {peak:e} sounds on after the choke");
 }
 
+/// A choke by the id a held key was pressed with reaches the slide voice that glided back to
+/// that key (following keys) when the key played over it was let go: the voice fades out,
+/// silent (below 1e-6 of its peak) from 10 ms after the choke, instead of sounding on.
+#[test]
+fn a_choke_by_id_reaches_a_note_returned_to() {
+    let settings = Settings { follow_key: true, ..Default::default() };
+    let score: Score = vec![
+        (0, on(1, 45, 1)),
+        (4_800, on(1, 52, 2)),
+        (9_600, Event::NoteOff { channel: 1, key: 52 }),
+        (14_400, Event::Choke { note: NoteTarget::voice(1) }),
+    ];
+    let out = play(&mut slide(settings), &score, 24_000, 256);
+    let peak = out.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    let before = out[13_000..14_400].iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    let after = out[14_400 + 480..].iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    println!("peak {peak:.3e}, before the choke {before:.3e}, after {after:.3e}");
+    assert!(before > 0.01 * peak, "the returned note sounds before the choke");
+    assert!(after <= 1e-6 * peak, "{after:e} of a peak {peak:e} sounds on after the choke");
+}
+
 /// Note 2 (key 57, voice 22, channel 3) pressed by `expression` under `settings` renders as
 /// `pressed`: with note 1 (key 50, voice 11, channel 2) the pair is the sum of the notes alone,
 /// within 1e-6 of its peak; pressed, the note sounds at its key (220 Hz within 1 %), and

@@ -5,8 +5,8 @@
 //! `cargo xtask presets --vst3 DIR` also writes each as a VST3 preset file, `DIR/<name>.vstpreset`,
 //! for a host's own preset browser. Such a file holds the plugin's state as the plugin saves it
 //! (the VST3 SDK's preset format, below) with the parameters the preset sets: the player's
-//! settings (voices, overload guard, half pedal range) are left out unless the preset names them, so loading one
-//! keeps them, as choosing the preset in the editor does.
+//! settings (voices, overload guard, half-pedal range) are left out unless the preset names
+//! them, so loading one keeps them, as choosing the preset in the editor does.
 //!
 //! ```text
 //! "VST3"  version (i32 = 1)  class id (32 hex digits)  offset of the chunk list (i64)

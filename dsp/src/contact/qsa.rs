@@ -157,6 +157,7 @@ struct Search<'a> {
 type Located = (usize, bool);
 
 impl Search<'_> {
+    #[inline(always)]
     fn sign(&mut self, j: usize) -> Sign {
         self.tests += 1;
         let st = self.st;

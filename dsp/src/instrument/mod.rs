@@ -616,9 +616,9 @@ impl Instrument {
     /// the pedals and every channel's controllers at rest, the output stage empty and the clock
     /// at zero, so that the control blocks start again at the next sample. What follows renders
     /// to the bit as on an instrument just made at this sample rate with these settings and
-    /// told the controller's configuration: the pitch-bend sensitivities and MPE zones stay, as
-    /// reset-all-controllers keeps them (a controller sends them once, and hosts reset at every
-    /// start of processing). A host that resets the instrument before each bounce gets the same
+    /// told the controller's configuration, with no parameter number selected: the pitch-bend
+    /// sensitivities and MPE zones stay, as reset-all-controllers keeps them (a controller sends
+    /// them once, and hosts reset at every start of processing). A host that resets the instrument before each bounce gets the same
     /// bounce each time. The notes that were sounding end at sample 0
     /// ([`Self::drain_ended`]); the counts of steals, sheds and guard trips go on.
     pub fn reset(&mut self) {
@@ -642,6 +642,14 @@ impl Instrument {
         self.sides.reset();
         self.output.set_gain(settings.gain);
         self.output.reset();
+    }
+
+    /// Take `other`'s controller configuration (pitch-bend sensitivities and MPE zones, no
+    /// parameter number selected), as a reset keeps it: for an instrument made anew in its place
+    /// (another sample rate or voice count).
+    pub fn keep_controller_configuration(&mut self, other: &Instrument) {
+        self.bends = other.bends.clone();
+        self.bends.deselect_all();
     }
 
     /// Handle one event at the current sample.
@@ -695,11 +703,11 @@ impl Instrument {
                 let value = unit(value, 0.0);
                 // Kept by key too, as poly pressure is: a slide that returns to a key held with
                 // this note takes it.
-                for (c, keys) in self.addressed_keys(note).iter().enumerate() {
-                    for (k, press) in self.pressed[c].iter_mut().enumerate() {
-                        if keys >> k & 1 == 1 {
-                            press.pressure = value;
-                        }
+                for (c, &keys) in self.addressed_keys(note).iter().enumerate() {
+                    let mut keys = keys;
+                    while keys != 0 {
+                        self.pressed[c][keys.trailing_zeros() as usize].pressure = value;
+                        keys &= keys - 1;
                     }
                 }
                 self.each_slide(note, |v, _| v.poly_pressure = value);
@@ -730,7 +738,8 @@ impl Instrument {
                 let channel = channel & 15;
                 let c = usize::from(channel);
                 self.channels[c] = ChannelState { timbre: self.channels[c].timbre, ..ChannelState::default() };
-                // A zone's master spoke for its members' mod wheel and pressure: they rest too.
+                // A zone's master speaks for its members' mod wheel and pressure: theirs rest too
+                // (whoever sent them: a channel does not record it).
                 for m in self.bends.spoken_for(channel).skip(1) {
                     (self.channels[m].mod_wheel, self.channels[m].pressure) = (0.0, 0.0);
                 }
@@ -854,15 +863,15 @@ impl Instrument {
     /// Fade out the voices of the notes `target` addresses and let them fall silent
     /// ([`Event::Choke`]).
     fn choke(&mut self, target: NoteTarget) {
-        let (fs, pianos) = (self.sample_rate, self.voices.len());
+        let fs = self.sample_rate;
         for (i, _) in self.notes.addressed(target) {
-            match self.voices.get_mut(i) {
-                Some(voice) => voice.choke(fs),
-                None => {
-                    self.slides[i - pianos].shed(fs);
-                }
+            if let Some(voice) = self.voices.get_mut(i) {
+                voice.choke(fs);
             }
         }
+        self.each_slide(target, |v, _| {
+            v.shed(fs);
+        });
     }
 
     /// Set a channel controller (0..=1, NaN is 0) that `field` picks, on `channel` and on the
@@ -875,6 +884,7 @@ impl Instrument {
     /// Apply `f` (with the latest settings, those a note struck now takes) to the slide voices
     /// playing the addressed notes: a target naming an id reaches too the note a voice returned
     /// to (following keys), in the book without an id, when its key was pressed with that id.
+    /// Expressions and chokes reach slide voices through here.
     fn each_slide(&mut self, target: NoteTarget, mut f: impl FnMut(&mut SlideVoice, &Settings)) {
         let (offset, settings) = (self.voices.len(), self.note_settings());
         let pressed = &self.pressed;

@@ -577,6 +577,21 @@ mod tests {
         assert!(worst <= 2.0 * walk, "the books open by {worst:.2e} of the start, against {walk:.2e}");
     }
 
+    /// An oscillator with neither spring nor loss (`ω0 = σ = 0`, a free mass) gets finite
+    /// coefficients: `P = 1`, `Q = 1`, so `K̂ = 0` and `R̂ = 0`, and it drifts at its speed.
+    #[test]
+    fn a_free_mass_has_finite_coefficients() {
+        let mut bank = ModalBank::with_capacity(1, 48_000.0);
+        bank.push_oscillator(0.0, 0.0, 1.0).expect("room for one");
+        bank.finish();
+        assert_eq!((bank.coef_a[0], bank.coef_b[0], bank.stiffness[0], bank.resistance[0]), (2.0, 2.0, 0.0, 0.0));
+        bank.set_state(&[0.0], &[1e-6]);
+        bank.history::<0>([]);
+        let output = vec![0.0; bank.padded_len()];
+        bank.advance_monitored::<0>([], &output);
+        assert_eq!(bank.state(0..1).1[0], 2e-6, "it moves on at its speed");
+    }
+
     /// The split weighing is the mode-by-mode weighing of each part, to rounding (1e-13 of the
     /// whole; the sums run in another order), wherever the split falls: at either end, on a
     /// chunk's edge or inside one; and it gives the same bits on every instruction set.

@@ -50,7 +50,8 @@ impl Mode {
             // product form gives 0·∞ = NaN once σΔt passes about 710. With `r = ω0/σ`,
             // `γ = σ√((1 − r)(1 + r))` and the slow rate `γ − σ = −ω0 r/(1 + γ/σ)`: σ is never
             // squared (σ² overflows past 1.3e154/s) and γ − σ is not a difference of near equals.
-            let r = self.omega0 / self.sigma;
+            // σ = 0 here only with ω0 = 0 (a mode at rest with no spring and no loss): r = 0.
+            let r = if self.sigma > 0.0 { self.omega0 / self.sigma } else { 0.0 };
             let root = ((1.0 - r) * (1.0 + r)).sqrt();
             let (slow, fast) = (-self.omega0 * r / (1.0 + root), -self.sigma * (1.0 + root));
             0.5 * (slow * dt).exp() + 0.5 * (fast * dt).exp()
@@ -129,7 +130,8 @@ impl Coefficients {
 
     /// `K̂` and `R̂` are those of the recursion as stored, `ũ^{n+1} = Aũ^n − (B − 1)ũ^{n−1} + CF`
     /// with `A`, `B` and `C` rounded: matching it to the scheme gives `K̂ = (B − A)/C` and
-    /// `R̂ = Δt(2 − B)/C`, whose differences are exact. From the unrounded `P` and `Q` instead,
+    /// `R̂ = Δt(2 − B)/C`, whose differences are exact where they cancel (`2 − B` always, `B − A`
+    /// for a mode well below Nyquist). From the unrounded `P` and `Q` instead,
     /// `1 − 2P + Q` would differ from the stepped `B − A` by up to `ε`, a relative `ε/(ωΔt)²` in
     /// `K̂` (1e-9 for a 10 Hz mode at 192 kHz), and the books would not close on the steps taken.
     #[inline]

@@ -1,10 +1,10 @@
 //! The preset section of the editor (first column, under Output): the factory presets in a menu
 //! grouped by category, previous and next buttons, and the current preset's description.
 //!
-//! Choosing a preset sets every parameter it sets ([`Preset::sets`]: all but the player's settings,
-//! voices, the overload guard and the half pedal's range, that its file leaves out) as the host's own gestures (begin,
-//! set, end for each parameter, found by id in the parameter map), so hosts record it as
-//! automation and undo. The chosen preset's id is kept in [`QsaParams::preset`], a persistent
+//! Choosing a preset sets every parameter it sets ([`Preset::sets`]: all but the player's
+//! settings, voices, the overload guard and the half-pedal range, that its file leaves out) as
+//! the host's own gestures (begin, set, end for each parameter, found by id in the parameter
+//! map), so hosts record it as automation and undo. The chosen preset's id is kept in [`QsaParams::preset`], a persistent
 //! field, so it comes back with the saved state; the name is marked " *" once a parameter the
 //! preset sets differs from it.
 
@@ -83,7 +83,7 @@ pub fn section(ui: &mut Ui, params: &QsaParams, setter: &ParamSetter) {
     let about = match current {
         Some(i) => format!("{}: {}", presets[i].category, presets[i].description),
         None => "Factory presets set every parameter but the player's settings (voices, overload guard, \
-         half pedal); the menu lists them by category."
+         half-pedal range); the menu lists them by category."
             .to_owned(),
     };
     // A little narrower than the column: a wrapped line's glyphs may overhang its width.
