@@ -9,8 +9,9 @@
 //! - **Newton** from `s = −z` with `G'(s) = 1 + q·(V'(yp+s) − DG)/s`, replaced by
 //!   `1 + ½·q·V''(yp)` when `|s| ≤ 10⁻⁶·max(|yp|, |yp+s|)`. After each evaluation the bracket
 //!   shrinks on the side given by the sign of G. Convergence (`|Δs| ≤ 10⁻¹⁵·max(|s|, |z|)`) is
-//!   tested *before* the bracket fallback (the step is replaced by the bracket midpoint only if
-//!   it leaves the closed bracket); iteration also stops when the bracket is 10⁻¹⁵-narrow, or
+//!   tested *before* the bracket fallback (the step is replaced by the bracket midpoint if it
+//!   leaves the open bracket, or lands on an end already evaluated: the first bracket's lower end
+//!   is a valid point to step onto); iteration also stops when the bracket is 10⁻¹⁵-narrow, or
 //!   after 100 iterations.
 //!
 //! The iteration count is data dependent; [`ContactSolver::last_work`] reports it (mean 3.9, max 4
@@ -75,6 +76,8 @@ impl ContactSolver for NewtonSolver {
             return ContactSolution { s: -z, force: 0.0 };
         }
         let (mut lo, mut hi) = (-z - push, -z);
+        // Whether `lo` is a point already evaluated (the start `hi` always is).
+        let mut lo_evaluated = false;
         let mut s = hi;
         for iteration in 1..=MAX_ITERATIONS {
             self.last_iterations = iteration;
@@ -82,7 +85,7 @@ impl ContactSolver for NewtonSolver {
             if g > 0.0 {
                 hi = s;
             } else if g < 0.0 {
-                lo = s;
+                (lo, lo_evaluated) = (s, true);
             } else {
                 break;
             }
@@ -92,9 +95,11 @@ impl ContactSolver for NewtonSolver {
                 s = next;
                 break;
             }
-            // The bracket's ends are valid points (`G(lo) ≤ 0 ≤ G(hi)`): a step onto one, as the
-            // first step onto `lo` when `G′` rounds to 1, is a Newton step like any other.
-            s = if (lo..=hi).contains(&next) { next } else { 0.5 * (lo + hi) };
+            // The first bracket's lower end is a valid point not yet evaluated (`G ≤ 0` there):
+            // a step onto it, as the first step when `G′` rounds to 1, is a Newton step like any
+            // other. A step onto an end already evaluated would cycle between the ends.
+            let inside = (next > lo && next < hi) || (next == lo && !lo_evaluated);
+            s = if inside { next } else { 0.5 * (lo + hi) };
             if hi - lo <= TOLERANCE * max_abs(lo, hi) {
                 break;
             }
