@@ -407,7 +407,9 @@ fn mass_barrier(id: String, law: PowerLaw, fs: u32, segments: usize, mass: f64, 
 /// the plain and wound strings of pianos and guitars (a piano's C4: 0.62 m, 670 N, 6.3 g/m,
 /// EI 9.8e-3 N·m²; a guitar's low E: 0.65 m, 100 N, 5.9 g/m). A string must also be one the
 /// scene at `fs` (Hz) can hold ([`ModalString::new`] accepts it: at most 4096 modes below
-/// Nyquist), or it is drawn again.
+/// Nyquist) and that sounds at every rate it may run at, `fs` or down to 22.05 kHz (a mode below
+/// the lower Nyquist: a short, stiff bar's first mode lies far above its flexible fundamental),
+/// or it is drawn again.
 fn random_string(rng: &mut Pcg64, fs: f64) -> StringParams {
     loop {
         let string = StringParams {
@@ -417,7 +419,8 @@ fn random_string(rng: &mut Pcg64, fs: f64) -> StringParams {
             bending_stiffness: log_uniform(rng, 1e-7, 0.2),
             damping: Damping::PerMode { b1: log_uniform(rng, 0.05, 20.0), b3: log_uniform(rng, 1e-11, 1e-7) },
         };
-        if (20.0..=5000.0).contains(&string.fundamental()) && ModalString::new(string, fs).is_ok() {
+        let sounds = ModalString::modes_below(string, fs.min(22_050.0), 20_000.0).is_ok_and(|n| n > 0);
+        if (20.0..=5000.0).contains(&string.fundamental()) && sounds && ModalString::new(string, fs).is_ok() {
             return string;
         }
     }
