@@ -618,9 +618,10 @@ impl Instrument {
     /// to the bit as on an instrument just made at this sample rate with these settings and
     /// told the controller's configuration, with no parameter number selected: the pitch-bend
     /// sensitivities and MPE zones stay, as reset-all-controllers keeps them (a controller sends
-    /// them once, and hosts reset at every start of processing). A host that resets the instrument before each bounce gets the same
-    /// bounce each time. The notes that were sounding end at sample 0
-    /// ([`Self::drain_ended`]); the counts of steals, sheds and guard trips go on.
+    /// them once, and hosts reset at every start of processing). A host that resets the
+    /// instrument before each bounce gets the same bounce each time. The notes that were
+    /// sounding end at sample 0 ([`Self::drain_ended`]); the counts of steals, sheds and guard
+    /// trips go on.
     pub fn reset(&mut self) {
         self.handle_event(Event::AllSoundOff);
         self.channels = [ChannelState::default(); 16];
