@@ -704,8 +704,7 @@ impl Instrument {
                 let value = unit(value, 0.0);
                 // Kept by key too, as poly pressure is: a slide that returns to a key held with
                 // this note takes it.
-                for (c, &keys) in self.addressed_keys(note).iter().enumerate() {
-                    let mut keys = keys;
+                for (c, mut keys) in self.addressed_keys(note).into_iter().enumerate() {
                     while keys != 0 {
                         self.pressed[c][keys.trailing_zeros() as usize].pressure = value;
                         keys &= keys - 1;

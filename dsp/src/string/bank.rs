@@ -554,15 +554,9 @@ mod tests {
         bank.finish();
         let omega = (omega0 * omega0 - sigma * sigma).sqrt();
         let exact = |n: f64| 1e-3 * (-sigma * n / fs).exp() * (omega * n / fs + 0.3).cos();
-        let padded = bank.padded_len();
-        let pad = |x: f64| {
-            let mut v = vec![0.0; padded];
-            v[0] = x;
-            v
-        };
         bank.set_state(&[exact(0.0)], &[exact(1.0)]);
         let start = bank.energy();
-        let output = pad(0.0);
+        let output = vec![0.0; bank.padded_len()];
         let (mut dissipated, mut worst) = (0.0, 0.0f64);
         let steps = 20_000;
         let walk = (steps as f64).sqrt() * 2.0 * f64::EPSILON / (omega / fs);
