@@ -136,4 +136,27 @@ mod tests {
         assert!(residual.abs() <= 4.0 * f64::EPSILON * problem.z.abs(), "G(s) = {residual:e}");
         assert!(imp.last_work() <= 4, "{} evaluations", imp.last_work());
     }
+
+    /// From this state (met in the stability sweep, a hammer on a string) the Newton step from
+    /// one end of the bracket lands on the other, already evaluated, and from there back: taken
+    /// each time, the iteration would cycle between the two ends to the cap of 100. Replaced by
+    /// the midpoint, it converges as from any other bracket, within the sweep's largest count
+    /// for IMP (8), to a residual within the rounding of evaluating `G`'s three terms, each of
+    /// about `|z|` here (a few ulps of `z` each).
+    #[test]
+    fn a_newton_step_onto_an_evaluated_end_is_replaced_rather_than_cycling() {
+        let mut imp = NewtonSolver::new(PowerLaw::new(39639.715022169294, 1.1646319038117756).unwrap());
+        let problem = ContactProblem {
+            y_prev: 0.007158911489581048,
+            y_now: 0.007119217480823404,
+            z: -6.251578300960471e-5,
+            q: 1.1425180048612067e-6,
+        };
+        imp.start(problem.y_prev, problem.y_now);
+        let solution = imp.solve(&problem);
+        let residual = imp.residual(problem.y_prev, problem.z, problem.q, solution.s);
+        println!("{} evaluations, residual {residual:e}", imp.last_work());
+        assert!(residual.abs() <= 8.0 * f64::EPSILON * problem.z.abs(), "G(s) = {residual:e}");
+        assert!(imp.last_work() <= 8, "{} evaluations", imp.last_work());
+    }
 }
