@@ -64,8 +64,9 @@ fn slide_phrase_plays_in_slide_mode() {
 
 /// Bad input is an error naming what is wrong, and writes nothing: not a MIDI file, one cut short
 /// (a note's track ending before its header says) or with a corrupt event, a header of 0 ticks per
-/// quarter note, a tempo of 0, a render of more samples than the renderer holds (590 s at
-/// 768 kHz, 3.6 GB), an unknown parameter id, a value that is not a number.
+/// quarter note or (SMPTE) per frame, a tempo of 0, a tempo event shorter than its 3 bytes, a file
+/// beyond 16 MiB, a render of more samples than the renderer holds (590 s at 768 kHz, 3.6 GB), an
+/// unknown parameter id, a value that is not a number.
 #[test]
 fn bad_midi_input_is_refused() {
     let dir = tempfile::tempdir().unwrap();
@@ -83,6 +84,13 @@ fn bad_midi_input_is_refused() {
     untimed[12..14].copy_from_slice(&[0, 0]);
     let untimed = file("untimed.mid", &untimed);
     let stopped = file("stopped.mid", &smf(&[0, 0xff, 0x51, 3, 0, 0, 0, 0, 0x90, 60, 100, 0, 0xff, 0x2f, 0]));
+    let short_tempo = file("short.mid", &smf(&[0, 0xff, 0x51, 2, 0x0f, 0x42, 0, 0x90, 60, 100, 0, 0xff, 0x2f, 0]));
+    let mut frameless = whole.clone();
+    frameless[12..14].copy_from_slice(&[0xe7, 0]);
+    let frameless = file("frameless.mid", &frameless);
+    let mut huge = whole.clone();
+    huge.resize(16 * 1024 * 1024 + 1, 0);
+    let huge = file("huge.mid", &huge);
     let midi = |path: &std::path::Path, out: &str| RenderArgs {
         midi: Some(path.to_owned()),
         out: Some(dir.path().join(out)),
@@ -93,6 +101,9 @@ fn bad_midi_input_is_refused() {
         (midi(&corrupt, "corrupt.wav"), "malformed"),
         (midi(&untimed, "untimed.wav"), "0 ticks per quarter note"),
         (midi(&stopped, "stopped.wav"), "tempo of 0"),
+        (midi(&short_tempo, "short.wav"), "a tempo event of 2 bytes"),
+        (midi(&frameless, "frameless.wav"), "0 ticks per frame"),
+        (midi(&huge, "huge-file.wav"), "at most 16777216"),
         (
             RenderArgs { rate: Some(768_000), tail: Some(590.0), ..midi(&file("whole.mid", &whole), "huge.wav") },
             "at most 6e7",
@@ -145,7 +156,17 @@ fn midi_files_with_garbage_events_render_safely_or_are_refused() {
             body.push(rng.random_range(0..40u8)); // delta time, one byte
             match rng.random_range(0..10) {
                 0 => body.extend_from_slice(&[0xf0, 3, rng.random(), rng.random(), 0xf7]),
-                1 => body.extend_from_slice(&[0xff, rng.random_range(0x10..0x7f), 2, rng.random(), rng.random()]),
+                // Unknown meta events (a tempo's type, 0x51, given two bytes would be corrupt).
+                1 => {
+                    let kind = rng.random_range(0x10..0x7f);
+                    body.extend_from_slice(&[
+                        0xff,
+                        if kind == 0x51 { 0x52 } else { kind },
+                        2,
+                        rng.random(),
+                        rng.random(),
+                    ]);
+                }
                 2 => {
                     let tempo: u32 = if rng.random_bool(0.5) { 1 } else { 0x00ff_ffff };
                     body.extend_from_slice(&[0xff, 0x51, 3]);
@@ -192,4 +213,66 @@ fn midi_files_with_garbage_events_render_safely_or_are_refused() {
     }
     println!("{rendered} rendered, {refused} refused");
     assert!(rendered >= 3, "the well-formed files with garbage events render");
+}
+
+/// The summary line of a MIDI render holds every key of a scene render's (in the same order,
+/// `null` where a MIDI render does not measure it), so that one reader takes both.
+#[test]
+fn a_midi_summary_has_every_key_of_a_scene_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let keys = |args: RenderArgs| {
+        let mut stdout = Vec::new();
+        run(&args, &mut stdout).expect("renders");
+        let json: serde_json::Value = serde_json::from_slice(&stdout).unwrap();
+        json.as_object().unwrap().keys().cloned().collect::<Vec<String>>()
+    };
+    let scene_keys = keys(RenderArgs {
+        scene: Some(scene("fig4-mass-barrier.toml")),
+        out: Some(dir.path().join("scene.wav")),
+        ..RenderArgs::default()
+    });
+    let midi_keys = keys(midi_args("piano-phrase.mid", dir.path().join("midi.wav")));
+    let shared: Vec<&String> = midi_keys.iter().filter(|k| scene_keys.contains(k)).collect();
+    assert_eq!(shared, scene_keys.iter().collect::<Vec<_>>(), "MIDI summary keys {midi_keys:?}");
+}
+
+/// The tracks of a format 2 file are independent patterns and play one after another: of two
+/// tracks, each a quarter note (0.5 s at the default tempo), the second starts where the first
+/// ended, at 24,000 samples at 48 kHz, not with it. Those of a format 1 file play together.
+#[test]
+fn the_tracks_of_a_format_2_file_play_one_after_another() {
+    use xtask::render::midi::timed_messages;
+    let track = |key: u8| {
+        let body = [0, 0x90, key, 100, 0x83, 0x60, 0x80, key, 0, 0, 0xff, 0x2f, 0];
+        let mut out = b"MTrk".to_vec();
+        out.extend_from_slice(&(body.len() as u32).to_be_bytes());
+        out.extend_from_slice(&body);
+        out
+    };
+    let file = |format: u8| {
+        let mut out = b"MThd\0\0\0\x06\0".to_vec();
+        out.extend_from_slice(&[format, 0, 2, 0x01, 0xe0]);
+        out.extend(track(60));
+        out.extend(track(64));
+        out
+    };
+    let note_on = |messages: &[(u64, [u8; 3])], key: u8| {
+        messages.iter().find(|(_, m)| m[0] == 0x90 && m[1] == key).map(|&(at, _)| at)
+    };
+    let sequential = timed_messages(&file(2), 48_000.0).unwrap();
+    assert_eq!((note_on(&sequential, 60), note_on(&sequential, 64)), (Some(0), Some(24_000)));
+    let together = timed_messages(&file(1), 48_000.0).unwrap();
+    assert_eq!((note_on(&together, 60), note_on(&together, 64)), (Some(0), Some(0)));
+}
+
+/// With no tail, the render still reaches the last event's sample: the last note the summary
+/// counts is handed to the engine rather than left past the end.
+#[test]
+fn a_render_without_a_tail_reaches_the_last_event() {
+    use xtask::render::midi::{render, score};
+    let bytes = smf(&[0x83, 0x60, 0x90, 60, 100, 0, 0xff, 0x2f, 0]);
+    let score = score(&bytes, 48_000.0).unwrap();
+    assert_eq!((score.notes, score.events.last().map(|e| e.0)), (1, Some(24_000)));
+    let (left, right, _) = render(&score, &Default::default(), 48_000.0, 0.0, 512);
+    assert_eq!((left.len(), right.len()), (24_001, 24_001));
 }

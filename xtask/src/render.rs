@@ -276,7 +276,7 @@ pub(crate) fn check_output_path(path: &Path, scene: &Path) -> Result<(), RenderE
     };
     if same {
         return Err(RenderError::Output(format!(
-            "refusing to overwrite the scene file {} with output",
+            "refusing to overwrite the input file {} with output",
             scene.display()
         )));
     }

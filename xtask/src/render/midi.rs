@@ -1,15 +1,17 @@
 //! `cargo xtask render --midi FILE.mid`: a MIDI file through the instrument engine, exactly as
 //! the plugin plays it.
 //!
-//! Every track is merged into one timeline; times follow the file's tempo map (metrical files) or
-//! its SMPTE rate, and land on the nearest sample. Channel messages become engine events with
+//! The tracks of a format 0 or 1 file play together, merged into one timeline; those of a
+//! format 2 file (independent patterns) play one after another, each from where the one before
+//! it ended. Times follow the file's tempo map (metrical files) or its SMPTE rate, and land on the
+//! nearest sample. Channel messages become engine events with
 //! [`event_from_midi`], the conversion a host and the plugin apply, and the parameters come from
 //! [`ParamValues`] (the defaults, or a factory preset's with `--preset`) with `--mode` and
 //! `--set ID=VALUE` applied, so the samples equal those of the plugin given
 //! the same parameters and events at the same samples. The render runs until the last event
-//! plus `--tail` seconds.
+//! plus `--tail` seconds, and always includes the last event's sample.
 
-use midly::{MetaMessage, MidiMessage, Smf, Timing, TrackEventKind};
+use midly::{Format, MetaMessage, MidiMessage, Smf, Timing, TrackEventKind};
 use qsa_dsp::instrument::{Event, Instrument, ParamValues, event_from_midi, factory_presets, find_preset};
 
 /// A MIDI file turned into engine events at sample offsets.
@@ -20,6 +22,11 @@ pub struct Score {
     /// Notes the file plays.
     pub notes: usize,
 }
+
+/// Largest MIDI file read (bytes): far beyond any performance (a 600 s render of a
+/// thousand events a second takes about 2 MB), and small enough that the parsed events and the
+/// timeline made from them (about 100 bytes an event) stay within a few hundred MB.
+pub const MAX_FILE_BYTES: usize = 16 << 20;
 
 /// Most samples a MIDI render may ask for: the render holds about 16 bytes a sample (both
 /// channels, and the WAV made from them), so this bounds its memory near 1 GB.
@@ -36,26 +43,34 @@ pub enum MidiError {
 /// The channel messages of `bytes` (a standard MIDI file) with their sample offsets at
 /// `sample_rate` (Hz): `(sample, [status, data1, data2])`, in time order (file order within a tick).
 pub fn timed_messages(bytes: &[u8], sample_rate: f64) -> Result<Vec<(u64, [u8; 3])>, MidiError> {
+    if bytes.len() > MAX_FILE_BYTES {
+        return Err(MidiError::Parse(format!("{} bytes; at most {MAX_FILE_BYTES} (16 MiB)", bytes.len())));
+    }
     // Parsed strictly (midly's `strict`): a corrupt or cut file is refused, not played in part.
     let smf = Smf::parse(bytes).map_err(|e| MidiError::Parse(e.to_string()))?;
-    if let Timing::Metrical(tpb) = smf.header.timing
-        && tpb.as_int() == 0
-    {
-        return Err(MidiError::Parse("the header gives 0 ticks per quarter note".into()));
+    match smf.header.timing {
+        Timing::Metrical(tpb) if tpb.as_int() == 0 => {
+            return Err(MidiError::Parse("the header gives 0 ticks per quarter note".into()));
+        }
+        Timing::Timecode(_, 0) => return Err(MidiError::Parse("the header gives 0 ticks per frame".into())),
+        _ => {}
     }
+    let sequential = smf.header.format == Format::Sequential;
     // (tick, track, index in track, kind)
     let mut timeline = Vec::new();
+    let mut start: u64 = 0;
     for (track, events) in smf.tracks.iter().enumerate() {
-        let mut tick: u64 = 0;
+        let mut tick = if sequential { start } else { 0 };
         for (index, e) in events.iter().enumerate() {
             tick += u64::from(e.delta.as_int());
             timeline.push((tick, track, index, e.kind));
         }
+        start = tick;
     }
     timeline.sort_by_key(|&(tick, track, index, _)| (tick, track, index));
     let seconds_per_tick_at = |tempo_us: f64| match smf.header.timing {
         Timing::Metrical(tpb) => tempo_us * 1e-6 / f64::from(tpb.as_int().max(1)),
-        Timing::Timecode(fps, sub) => 1.0 / (f64::from(fps.as_f32()) * f64::from(sub.max(1))),
+        Timing::Timecode(fps, sub) => 1.0 / (f64::from(fps.as_f32()) * f64::from(sub)),
     };
     let mut tempo = 500_000.0;
     let (mut last_tick, mut seconds) = (0u64, 0.0f64);
@@ -68,6 +83,13 @@ pub fn timed_messages(bytes: &[u8], sample_rate: f64) -> Result<Vec<(u64, [u8; 3
                 return Err(MidiError::Parse(format!("a tempo of 0 µs per quarter note at tick {tick}")));
             }
             TrackEventKind::Meta(MetaMessage::Tempo(t)) => tempo = f64::from(t.as_int()),
+            // A tempo event holds three bytes; shorter, it is corrupt (midly leaves it unknown).
+            TrackEventKind::Meta(MetaMessage::Unknown(0x51, data)) => {
+                return Err(MidiError::Parse(format!(
+                    "a tempo event of {} bytes at tick {tick}; a tempo takes 3",
+                    data.len()
+                )));
+            }
             TrackEventKind::Midi { channel, message } => {
                 let (status, d1, d2) = match message {
                     MidiMessage::NoteOff { key, vel } => (0x80, key.as_int(), vel.as_int()),
@@ -103,8 +125,8 @@ pub fn score(bytes: &[u8], sample_rate: f64) -> Result<Score, MidiError> {
     Ok(Score { events, notes })
 }
 
-/// Render `score` with `params` at `sample_rate` (Hz) until the last event plus `tail` seconds,
-/// in calls of `chunk` samples (split at every event). Returns left and right channels and the
+/// Render `score` with `params` at `sample_rate` (Hz) until the last event plus `tail` seconds
+/// (at least through the last event's sample, so that it acts), in calls of `chunk` samples (split at every event). Returns left and right channels and the
 /// wall-clock seconds spent in the engine.
 pub fn render(
     score: &Score,
@@ -125,8 +147,8 @@ pub fn render_signals(
     (tail, chunks): (f64, &mut dyn FnMut() -> usize),
     raw: bool,
 ) -> (Vec<f32>, Vec<f32>, f64) {
-    let end = score.events.last().map_or(0, |e| e.0) + (tail.max(0.0) * sample_rate).round() as u64;
-    let samples = end.max(1) as usize;
+    let last = score.events.last().map_or(0, |e| e.0);
+    let samples = (last + (tail.max(0.0) * sample_rate).round() as u64).max(last + 1) as usize;
     let mut engine = Instrument::new(sample_rate, params.voices.clamp(1, 128) as usize, params.settings());
     engine.set_raw_output(raw);
     let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
@@ -165,6 +187,8 @@ pub struct MidiSummary {
     /// Notes played.
     pub contacts: usize,
     /// Not measured.
+    pub contact_duration: Option<f64>,
+    /// Not measured.
     pub peak_force: Option<f64>,
     /// Not measured.
     pub max_compression: Option<f64>,
@@ -172,6 +196,10 @@ pub struct MidiSummary {
     pub rebound_velocity: Option<f64>,
     /// Not measured.
     pub energy_drift_rel: Option<f64>,
+    /// Not measured.
+    pub max_work: Option<u32>,
+    /// Not measured.
+    pub mean_contact_work: Option<f64>,
     /// Largest output sample magnitude (full scale 1).
     pub peak: f64,
     /// Wall-clock time of the engine (s).
@@ -266,10 +294,13 @@ pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSumma
         samples,
         contact_samples: None,
         contacts: score.notes,
+        contact_duration: None,
         peak_force: None,
         max_compression: None,
         rebound_velocity: None,
         energy_drift_rel: None,
+        max_work: None,
+        mean_contact_work: None,
         peak: left.iter().chain(&right).fold(0.0f32, |m, v| m.max(v.abs())).into(),
         wall_seconds: wall,
         rtf: wall / (samples as f64 / fs),
