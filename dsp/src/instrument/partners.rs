@@ -7,7 +7,8 @@
 //! 3rd). With the pedal up, those of them without a damper (from E6 up) still ring. Each key
 //! carries those strings on its own soundboard, coupled exactly as its unison is
 //! (`crate::scene::UnisonCore`, "Sympathetic partners"): a partner is a key's unison moving in
-//! phase, the motion a bridge drives, as one string of the unison's mass and tension, with its
+//! phase, the motion a bridge drives, as one string of the unison's mass, tension and bending
+//! stiffness together (so with the key's own partials), with its
 //! lowest [`PARTNER_MODES`] modes up to the highest one a partial of the struck key meets.
 
 use crate::instrument::{PianoVoice, Settings};
@@ -93,6 +94,7 @@ impl PartnerTable {
             let s = piano_note(key).strings.max(1) as f64;
             p.linear_density *= s;
             p.tension *= s;
+            p.bending_stiffness *= s;
             // Up to the PARTNER_MODES-th partial (stretched a little by inharmonicity).
             let f0 = p.fundamental();
             let band = (PARTNER_MODES as f64 + 0.3) * f0;
@@ -206,6 +208,28 @@ fn meeting(own: &[f64], w: &[f64], tolerance: f64) -> Option<(usize, usize)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A partner is its key's unison moving in phase: every mode it keeps rings at the frequency
+    /// of that mode of the key's own string (as the voice tunes it, before the unison's spread),
+    /// to rounding (1e-12), on every key, however bright the strings; a partner with the unison's
+    /// mass and tension but one string's bending stiffness would have `1/S` of its inharmonicity,
+    /// C7's fundamental 4.9 cents flat.
+    #[test]
+    fn a_partner_rings_at_its_keys_own_partials() {
+        for brightness in [0.25, 1.0, 4.0] {
+            let settings = Settings { brightness, ..Settings::default() };
+            let table = PartnerTable::new(48_000.0, &settings);
+            for (index, key) in PARTNER_KEYS.enumerate() {
+                let partner = table.string(index);
+                let mut own = ModalString::with_capacity(PARTNER_MODES + 1);
+                own.retune(PianoVoice::string_for(key, &settings), 48_000.0, 21_600.0).unwrap();
+                let kept = &partner.angular_frequencies()[..partner.modes()];
+                for (i, (w, w_own)) in kept.iter().zip(own.angular_frequencies()).enumerate() {
+                    assert!((w / w_own - 1.0).abs() < 1e-12, "key {key}, mode {}: {w} against {w_own}", i + 1);
+                }
+            }
+        }
+    }
 
     /// C3's partners are the keys whose partials its own meet: C4, G4, C5 and E5 above (its 2nd to
     /// 5th partials), C2 and F1 below (its fundamental is their 2nd and 3rd), and no key a

@@ -1299,6 +1299,7 @@ mod tests {
         let mut p = note.string;
         p.linear_density *= note.strings as f64;
         p.tension *= note.strings as f64;
+        p.bending_stiffness *= note.strings as f64;
         let mut s = ModalString::with_capacity(PARTNER_MODES + 1);
         s.retune(p, FS, 4.3 * p.fundamental()).unwrap();
         s
