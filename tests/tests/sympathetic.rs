@@ -19,9 +19,9 @@ fn fall(x: &[f64], from: f64, key: u8) -> f64 {
 /// C3 held with the pedal down against the same C3 with the pedal up: the difference is what the
 /// other keys' free strings add (and what C3's own partials give up to them). Over 1–3 s it is at
 /// least 15 dB stronger at the pitch of each of C4, G4, C5 and E5 (C3's 2nd to 5th partials) than
-/// at the pitch of its upper neighbour, whose partials C3 does not meet (measured 32.9, 43.4, 45.0
+/// at the pitch of its upper neighbour, whose partials C3 does not meet (measured 32.4, 43.7, 44.1
 /// and 17.7 dB); and each of those strings is heard: its part is at most 30 dB below everything
-/// the piano sounds at that pitch (measured −1.2, 5.5, 5.4 and −7.1 dB: the partner and the
+/// the piano sounds at that pitch (measured −1.7, 10.3, 4.1 and −9.6 dB: the partner and the
 /// partial it shares beat).
 #[test]
 fn c3_sets_the_strings_of_its_partials_ringing() {
@@ -41,8 +41,8 @@ fn c3_sets_the_strings_of_its_partials_ringing() {
 /// The pedal pressed 0.25 s after C3 is struck (the usual legato pedalling) still sets the
 /// strings of its partials ringing: against the pedal up, over 1–3 s, the difference is at least
 /// 15 dB stronger at the pitch of each of C4, G4 and C5 than at its upper neighbour's (measured
-/// 34.2, 43.4 and 43.8 dB), and within 6 dB of what the pedal down from the strike gives them
-/// (measured +0.5, −1.1 and +1.4 dB): the partials have lost little by then, and the partners'
+/// 33.8, 43.9 and 42.9 dB), and within 6 dB of what the pedal down from the strike gives them
+/// (measured +0.6, −0.8 and +1.7 dB): the partials have lost little by then, and the partners'
 /// dampers lift within the damper's time constant (10 ms).
 #[test]
 fn the_pedal_pressed_after_the_strike_sets_the_partners_ringing() {
@@ -66,7 +66,7 @@ fn the_pedal_pressed_after_the_strike_sets_the_partners_ringing() {
 /// The strings from E6 up have no dampers, so they ring with a key's partials even with the pedal
 /// up: C5 struck and let go after 0.2 s, its own strings silenced by their damper, still sounds
 /// 0.5–1.5 s later at the pitch of G6 and C7 (its 3rd and 4th partials meet their 1st): there,
-/// at least 15 dB above the pitch of their upper neighbours (measured 43.3 and 22.1 dB), where
+/// at least 15 dB above the pitch of their upper neighbours (measured 43.2 and 37.2 dB), where
 /// with dampers on every key nothing would sound.
 #[test]
 fn the_strings_without_dampers_ring_with_the_pedal_up() {
@@ -81,7 +81,7 @@ fn the_strings_without_dampers_ring_with_the_pedal_up() {
 /// 0.3–1 s and 1.3–2.3 s the level at the pitch of C6 (C5's 2nd partial, a string with a damper)
 /// falls at least 30 dB more than at the pitch of C7 (its 4th, a string without one): at both,
 /// C5's own partial falls silent, and the partner without a damper rings on (measured: C6 falls
-/// 106.4 dB, C7 47.2 dB).
+/// 91.7 dB, C7 32.1 dB).
 #[test]
 fn lifting_the_pedal_damps_only_the_partners_with_dampers() {
     let out = played(72, true, 0.1, 1.0, 2.3);
@@ -94,7 +94,7 @@ fn lifting_the_pedal_damps_only_the_partners_with_dampers() {
 /// with the pedal up: C3 struck and let go after 0.2 s, with C4 or G4 held down (pressed as
 /// softly as MIDI can, before C3 or 0.1 s after it), still sounds 0.5–1.5 s later at the held
 /// key's pitch (C3's 2nd and 3rd partials), at least 15 dB above the pitch a semitone higher, as
-/// for the pedal (measured 32.1 and 33.8 dB, pressed before or after). With C♯4
+/// for the pedal (measured 32.0 and 33.8–34.0 dB, pressed before or after). With C♯4
 /// held, whose strings no partial of C3 meets, what C3 adds there is at least 60 dB below what it
 /// adds at C4's pitch with C4 held (measured: nothing; C3's voice ends as it would alone).
 #[test]
@@ -119,7 +119,7 @@ fn a_held_key_rings_with_the_partials_of_a_staccato_note() {
 /// Letting a held key go lets its damper down on its strings as a partner too: C3 struck and let
 /// go after 0.2 s with C4 held down (pressed as softly as MIDI can), C4 let go after 1 s or held
 /// on. Between 0.5–1 s and 1.3–2.3 s, what C3 adds at C4's pitch falls at least 30 dB more when
-/// C4 is let go than when it is held (measured: 179.9 dB, C3's voice ending, against 13.7 dB).
+/// C4 is let go than when it is held (measured: 173.8 dB, C3's voice ending, against 13.7 dB).
 #[test]
 fn letting_a_held_key_go_damps_its_strings_as_a_partner() {
     let c3 =
@@ -135,8 +135,8 @@ fn letting_a_held_key_go_damps_its_strings_as_a_partner() {
 /// held down (pressed as softly as MIDI can), C3 let go after 0.1 s, the pedal lifted after 1 s.
 /// Between 0.3–1 s and 1.3–2.3 s what C3 adds at the pitch of G4 (a partner whose damper falls
 /// with the pedal, and none of whose modes C4's strings share) falls at least 30 dB more than at
-/// C4's (one whose key holds its damper off) (measured: G4 falls 56.0 dB, to where C4's ring leaks
-/// into its pitch; C4 7.5 dB).
+/// C4's (one whose key holds its damper off) (measured: G4 falls 55.5 dB, to where C4's ring leaks
+/// into its pitch; C4 8.1 dB).
 #[test]
 fn lifting_the_pedal_leaves_the_held_keys_strings_ringing() {
     let pedal = [(0.0, Event::Sustain { channel: 0, depth: 1.0 }), (1.0, Event::Sustain { channel: 0, depth: 0.0 })];
@@ -153,7 +153,7 @@ fn lifting_the_pedal_leaves_the_held_keys_strings_ringing() {
 /// pressed as softly as MIDI can and C3 struck, both held, then E5 struck at 0.1 s (taking C4's
 /// voice, the quieter) and C3 let go at 0.2 s. With C4 still held, C3 sounds 0.5–1.5 s later at
 /// C4's pitch at least 30 dB louder than with C4 let go at 0.15 s: its strings stay free on C3's
-/// bridge (measured 51.6 dB; 0.0 when a key counted as held only while a voice played it).
+/// bridge (measured 49.7 dB; 0.0 when a key counted as held only while a voice played it).
 #[test]
 fn a_key_stays_held_when_its_voice_is_taken() {
     let at_c4 = |release: bool| {

@@ -1292,7 +1292,7 @@ mod tests {
         core
     }
 
-    /// Key `key`'s unison as one partner string (its mass and tension together), up to the
+    /// Key `key`'s unison as one partner string (its mass, tension and bending stiffness together), up to the
     /// modes below 4.3 times its fundamental.
     fn partner(key: u8) -> ModalString {
         let note = crate::preset::piano_note(key);
@@ -1538,7 +1538,7 @@ mod tests {
     }
 
     /// With partner strings on the bridge (C5 and G5, whose fundamentals C4's 2nd and 3rd
-    /// partials meet, each its unison's mass and tension in one string), a strike and 1 s of
+    /// partials meet, each its unison's mass, tension and bending stiffness in one string), a strike and 1 s of
     /// ringing keep `H + losses` at its initial value to 1e-9 relative, for each solver; the
     /// partners take energy from the key (measured 0.3 % of it at 1 s), as nothing else gives them
     /// any; and the real-time path, which retires the hammer, gives the monitored output to 1e-9
