@@ -1292,8 +1292,8 @@ mod tests {
         core
     }
 
-    /// Key `key`'s unison as one partner string (its mass, tension and bending stiffness together), up to the
-    /// modes below 4.3 times its fundamental.
+    /// Key `key`'s unison as one partner string (its mass, tension and bending stiffness
+    /// together), up to the modes below 4.3 times its fundamental.
     fn partner(key: u8) -> ModalString {
         let note = crate::preset::piano_note(key);
         let mut p = note.string;
@@ -1538,11 +1538,11 @@ mod tests {
     }
 
     /// With partner strings on the bridge (C5 and G5, whose fundamentals C4's 2nd and 3rd
-    /// partials meet, each its unison's mass, tension and bending stiffness in one string), a strike and 1 s of
-    /// ringing keep `H + losses` at its initial value to 1e-9 relative, for each solver; the
-    /// partners take energy from the key (measured 0.3 % of it at 1 s), as nothing else gives them
-    /// any; and the real-time path, which retires the hammer, gives the monitored output to 1e-9
-    /// of its peak.
+    /// partials meet, each its unison's mass, tension and bending stiffness in one string), a
+    /// strike and 1 s of ringing keep `H + losses` at its initial value to 1e-9 relative, for each
+    /// solver; the partners take energy from the key (measured 0.1 % of it at 1 s), as nothing
+    /// else gives them any; and the real-time path, which retires the hammer, gives the monitored
+    /// output to 1e-9 of its peak.
     #[test]
     fn partner_strings_ring_from_the_key_and_keep_the_energy_balance() {
         let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
@@ -1579,7 +1579,7 @@ mod tests {
     /// Partners added to a ringing key (the pedal pressed after the strike) start at rest on the
     /// bridge's line: the energy steps up by exactly their static share of the bridge's motion,
     /// `½Σm_L(δ_t−b)² + ½Σk_L(μ_t−b)²`, and from there `H + losses` holds to 1e-9 of the peak
-    /// energy over 0.75 s while they take up energy from the key (measured 0.3 % at the end); the
+    /// energy over 0.75 s while they take up energy from the key (measured 0.2 % at the end); the
     /// real-time path, given the partners at the same step, gives the monitored output to 1e-9 of
     /// its peak. The same when the key already rings with a partner that has no damper (C7, from
     /// the strike): the new ones join beside it, which keeps its state.
