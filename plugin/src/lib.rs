@@ -262,9 +262,10 @@ impl Plugin for QsaStrings {
         let reuse = self.engine.as_ref().is_some_and(|e| e.sample_rate() == fs && e.voices() == voices);
         if !reuse {
             let mut engine = Instrument::new(fs, voices, self.params.settings());
-            // The controller told the old engine its configuration once; the new one keeps it.
-            if let Some(old) = &self.engine {
-                engine.keep_controller_configuration(old);
+            // The controller told the old engine its configuration once; the new one keeps it,
+            // and reports the end of the old one's notes at its first sample.
+            if let Some(old) = &mut self.engine {
+                engine.take_over(old);
             }
             self.engine = Some(engine);
         }

@@ -1218,6 +1218,23 @@ fn clap_note_ends_are_reported() {
     assert_eq!(silenced.note_ends, [(100, -1, 1, 62)], "all sound off ends the MIDI note at once");
 }
 
+/// A note sounding when the host activates the plugin again reports its end at the first sample
+/// after, whether the engine is kept (the same rate and voices: it is reset) or made anew (another
+/// sample rate): a slide note with id 5 held, then the plugin reactivated at 48 kHz and at
+/// 44.1 kHz.
+#[test]
+fn a_note_sounding_at_a_reactivation_reports_its_end() {
+    let bundle = release_bundle();
+    for rate in [48_000.0, 44_100.0] {
+        let mut p = Plugin::at_48k(&bundle, &[param("mode", 1.0)]);
+        let held = p.render_blocks(&[(0, on_id(0, 50, 5))], 4_800, 512);
+        assert!(held.note_ends.is_empty(), "{:?}", held.note_ends);
+        p.reactivate_at(rate);
+        let after = p.render_blocks(&[], 512, 512);
+        assert_eq!(after.note_ends, [(0, 5, 0, 50)], "reactivated at {rate} Hz");
+    }
+}
+
 /// CLAP note-offs with wildcards, or naming a note by its id alone, are, to the bit, a note-off
 /// for each key they address at that sample: every key of channel 0, the note with id 7, every
 /// note. Notes on three channels, released under no pedal, so each release changes the sound.

@@ -653,6 +653,19 @@ impl Instrument {
         self.bends.deselect_all();
     }
 
+    /// Take over from `old`, an instrument this one replaces (a host's new sample rate or voice
+    /// count): keep its controller configuration ([`keep_controller_configuration`]), and end its
+    /// notes, those still sounding and those ended but not yet drained, queued here at sample 0
+    /// ([`Self::drain_ended`]), so that the host hears of every note's end as after a
+    /// [`reset`](Self::reset). Allocates nothing, but belongs with making an instrument, off the
+    /// audio thread.
+    ///
+    /// [`keep_controller_configuration`]: Self::keep_controller_configuration
+    pub fn take_over(&mut self, old: &mut Instrument) {
+        self.keep_controller_configuration(old);
+        self.notes.take_ends_from(&mut old.notes, 0);
+    }
+
     /// Handle one event at the current sample.
     pub fn handle(&mut self, event: Event) {
         self.handle_event(event);

@@ -193,6 +193,15 @@ impl NoteBook {
         self.live_in(0..self.live.len()).filter_map(move |i| self.get(i).filter(|n| target.matches(n)).map(|n| (i, n)))
     }
 
+    /// End every live note of `old` and queue its ended notes here at sample `at`, oldest first
+    /// (as many as the queue holds).
+    pub(crate) fn take_ends_from(&mut self, old: &mut NoteBook, at: u64) {
+        old.end_all(0);
+        for ended in old.drain_ended() {
+            self.push(ended.note, at);
+        }
+    }
+
     /// Queue an ended note, unless the queue is full. Never allocates.
     fn push(&mut self, note: Note, at: u64) {
         if self.ended.len() < self.ended.capacity() {
