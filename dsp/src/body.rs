@@ -583,7 +583,7 @@ impl Body {
             }
             self.clock = (self.clock + run.len()) % REST_CHECK;
             done = end;
-            if self.clock % FLUSH_INTERVAL == 0 && !self.resting {
+            if self.clock.is_multiple_of(FLUSH_INTERVAL) && !self.resting {
                 self.flush_quiet_modes();
                 if self.clock == 0 && self.is_silent() {
                     self.rest_modes();

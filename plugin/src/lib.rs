@@ -278,6 +278,10 @@ impl Plugin for QsaStrings {
         true
     }
 
+    fn deactivate(&mut self) {
+        self.tap.rest();
+    }
+
     fn reset(&mut self) {
         if let Some(engine) = &mut self.engine {
             // Parameters set while the plugin was not processing (a state loaded, a host's flush

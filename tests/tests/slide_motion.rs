@@ -557,7 +557,8 @@ fn lifting_the_slide_off_a_note_lifts_the_trailing_finger_without_a_click() {
             let base = Settings { slide_body: body, block, ..Default::default() };
             let lift = 24_000;
             let out = play_slide(base, &[(lift, Settings { hand_height: 3e-3, ..base })], 50, 57_600);
-            let (click, at) = click_strength(&out, FS, &[0..4_800]);
+            let attack = 0..4_800;
+            let (click, at) = click_strength(&out, FS, std::slice::from_ref(&attack));
             let rms = |x: &[f64]| 10.0 * (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).log10();
             let (before, after) = (rms(&out[9_600..lift]), rms(&out[lift + 14_400..]));
             println!(
