@@ -1483,6 +1483,27 @@ fn a_lifted_slide_leaves_the_open_string_wherever_it_hovers() {
     }
 }
 
+/// The finger plucks the part of the string that sounds: with A4 played (the slide at 0.75 of
+/// the string), `Pluck position` at 0.5 or 0.6, both behind the slide, plucks halfway from the
+/// slide to the bridge, so the two notes are the same to the bit, sound at the note's pitch
+/// (within 1 %, as [`slide_follows_the_played_key`]) and within 6 dB of the note plucked at 0.95
+/// (measured +2.7 dB); a finger left at 0.5 or 0.6 plucked the dead part of the string, behind
+/// the slide.
+#[test]
+fn a_pluck_set_behind_the_slide_plucks_between_the_slide_and_the_bridge() {
+    let render = |pluck_position: f64| {
+        let settings = Settings { pluck_position, ..Default::default() };
+        play(&mut slide(settings), &vec![(0, on(69, 0.8))], 24_000, || 256)
+    };
+    let behind = render(0.6);
+    assert!(behind == render(0.5), "the plucks set at 0.5 and 0.6 differ");
+    let (f, expected) = (slide_pitch(&behind, slide_key_pitch(69)), slide_key_pitch(69));
+    let against = rms_db(&behind) - rms_db(&render(0.95));
+    println!("A4 plucked with the setting behind the slide: {f:.2} Hz (expected {expected:.2}), {against:+.1} dB");
+    assert!((f / expected - 1.0).abs() < 0.01, "{f} Hz vs {expected} Hz");
+    assert!(against.abs() < 6.0, "{against:+.1} dB against the pluck at 0.95");
+}
+
 /// Following keys, a slide voice on one channel plays legato as a monophonic keyboard does: of
 /// A2, D3 and E3 pressed in turn and held, letting go of E3 glides back to D3, the latest key
 /// still held (not the lowest), and letting go of D3 to A2, each without a pluck, the note sounding

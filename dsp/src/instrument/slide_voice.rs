@@ -54,7 +54,9 @@
 //!   corner of the force inside it, the pieces blocks of the core's of their own); note-off lays
 //!   the finger on, its force rising to 0.3 N over [`MUTE_TIME`], muting the string, and the hand
 //!   stills the slide as the finger lands (damping it at least [`MUTE_HAND_DAMPING`]). The finger
-//!   follows the `pluck_position` setting at the slide's speed limits, as it may be pressing;
+//!   follows the `pluck_position` setting at the slide's speed limits, as it may be pressing,
+//!   and plucks between the slide and the bridge: where the slide stands beyond the setting's
+//!   place, halfway from the slide to the bridge ([`pluck_point`]);
 //! - switching `follow_key` under a sounding note leaves the slide where it is, which then
 //!   glides to where the new choice puts it.
 //!
@@ -191,6 +193,14 @@ pub const LANDING_ACCELERATION: f64 = HAND_ACCELERATION / 4.0;
 /// How far above the string (m) the hand has slowed down to [`LANDING_SPEED`]: the slide lags
 /// the hand on its spring, and the hand's plan changes its speed block by block.
 pub const LANDING_MARGIN: f64 = 0.5e-3;
+
+/// Where the right finger plucks (m from the nut) on a string of `length` (m) with the slide at
+/// `x_o` (m): at `pluck_position` of the length, or, where the slide stands beyond that, halfway
+/// from the slide to the bridge, so that the finger always plucks the part of the string that
+/// sounds (a player's hand moves towards the bridge as the slide nears it).
+pub fn pluck_point(pluck_position: f64, x_o: f64, length: f64) -> f64 {
+    (pluck_position * length).max(0.5 * (x_o + length))
+}
 
 /// The reach of `hand` towards `target` (m) with the slide `gap` (m) above the string under it:
 /// lowering the slide, the hand speeds up and slows down at most at `LANDING_ACCELERATION`
@@ -652,7 +662,7 @@ impl SlideVoice {
             hand_height: HAND_RANGE.0,
             left_position: (x_o - TRAIL).max(0.002),
             left_force: 0.0,
-            right_position: settings.pluck_position * length,
+            right_position: pluck_point(settings.pluck_position, x_o, length),
             right_force: 0.0,
         }
     }
@@ -932,7 +942,8 @@ impl SlideVoice {
     /// first travels there from where the voice last sounded.
     fn lift_to(&mut self, x_o: f64, settings: &Settings) {
         self.slide_motion = Motion::at_rest(x_o);
-        let (left_position, right_position) = ((x_o - TRAIL).max(0.002), settings.pluck_position * self.length);
+        let (left_position, right_position) =
+            ((x_o - TRAIL).max(0.002), pluck_point(settings.pluck_position, x_o, self.length));
         self.right = Motion::at_rest(right_position);
         self.mute = 0.0;
         self.live.0 = SlideControls { slide_position: x_o, left_position, right_position, ..self.live.0 };
@@ -1031,7 +1042,8 @@ impl SlideVoice {
                 REST_FORCE * landed
             }
         };
-        self.right.approach(settings.pluck_position * self.length, span, SLIDE_REACH, Passing::Never);
+        let plucking = pluck_point(settings.pluck_position, self.slide_motion.position, self.length);
+        self.right.approach(plucking, span, SLIDE_REACH, Passing::Never);
         // The trailing finger rests on the string while the hand holds the slide on it.
         if self.hand.position <= 0.0 {
             self.trail_down = true;
