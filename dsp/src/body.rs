@@ -536,8 +536,9 @@ impl Body {
     /// mean acceleration. A body at rest given no force stays at rest at no cost (it does not
     /// even look at its modes, which matters when a call is a single sample). A ringing body's
     /// quiet modes are flushed to rest on a fixed grid of the samples it steps (every 64), and
-    /// the body is tested for silence on it (every 1024) and brought to rest once silent: the same samples come out however the input is cut into calls (unless
-    /// forces beyond any instrument's overflow the state, which silences the rest of the call).
+    /// the body is tested for silence on it (every 1024) and brought to rest once silent: the
+    /// same samples come out however the input is cut into calls (unless forces beyond any
+    /// instrument's overflow the state, which silences the rest of the call).
     pub fn process(&mut self, io: &mut [f64]) {
         // A force that is not finite (no voice hands one on) is dropped, sample by sample.
         io.iter_mut().filter(|f| !f.is_finite()).for_each(|f| *f = 0.0);

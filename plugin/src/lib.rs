@@ -279,7 +279,7 @@ impl Plugin for QsaStrings {
     }
 
     fn deactivate(&mut self) {
-        self.tap.rest();
+        self.tap.rest(self.engine.as_ref());
     }
 
     fn reset(&mut self) {

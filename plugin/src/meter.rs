@@ -94,13 +94,16 @@ impl Tap {
     }
 
     /// Come to rest as the plugin stops processing (deactivated): the load and its peak at 0 and
-    /// a snapshot of no voice sounding, so that the editor does not show the last call's figures
+    /// a snapshot of no voice sounding, which keeps `engine`'s counts of sheds and guard trips
+    /// (they go on across activations), so that the editor does not show the last call's figures
     /// while nothing runs, and the load measured after the next activation starts afresh.
-    pub fn rest(&mut self) {
+    pub fn rest(&mut self, engine: Option<&Instrument>) {
         self.load = 0.0;
         self.shared.load.store(0.0, Ordering::Relaxed);
         self.shared.peak.store(0.0, Ordering::Relaxed);
-        let _ = self.shared.monitors.force_push(Monitor::default());
+        let counts = engine.map_or((0, 0), |e| (e.shed_count(), e.guard_trips()));
+        let idle = Monitor { shed: counts.0, guard_trips: counts.1, ..Monitor::default() };
+        let _ = self.shared.monitors.force_push(idle);
         self.shared.repaint.request_repaint();
         self.countdown = 0;
     }
@@ -204,27 +207,32 @@ mod tests {
 
     /// A tap brought to rest (the plugin deactivated while a note sounds and the load is 45 %)
     /// leaves the editor a load and peak of 0 and, newest in the queue, a snapshot of no voice
-    /// sounding; the next call's load is measured from 0, not from the old load.
+    /// sounding with the engine's counts of sheds (here 1) kept; the next call's load is measured
+    /// from 0, not from the old load.
     #[test]
     fn a_tap_at_rest_shows_nothing_running() {
         let fs = 48_000.0;
         let mut engine = Instrument::new(fs, 4, Settings::default());
         engine.handle(Event::NoteOn { channel: 0, key: 60, velocity: 0.8 });
+        engine.handle(Event::NoteOn { channel: 0, key: 64, velocity: 0.8 });
         let shared = Arc::new(Shared::default());
         let mut tap = Tap::new(shared.clone());
         let (mut left, mut right) = (vec![0.0f32; 480], vec![0.0f32; 480]);
+        engine.process(&mut left, &mut right);
+        engine.shed_voices(1);
         for _ in 0..100 {
             engine.process(&mut left, &mut right);
             tap.after_process(480, Duration::from_secs_f64(0.45 * 0.01), Some(&engine));
         }
         assert!(shared.load.load(Ordering::Relaxed) > 0.4);
-        tap.rest();
+        assert_eq!(engine.shed_count(), 1);
+        tap.rest(Some(&engine));
         assert_eq!((shared.load.load(Ordering::Relaxed), shared.peak.load(Ordering::Relaxed)), (0.0, 0.0));
         let mut newest = None;
         while let Some(m) = shared.monitors.pop() {
             newest = Some(m);
         }
-        assert_eq!(newest.map(|m| m.sounding), Some(0));
+        assert_eq!(newest.map(|m| (m.sounding, m.shed)), Some((0, 1)));
         tap.after_process(480, Duration::ZERO, None);
         assert_eq!(shared.load.load(Ordering::Relaxed), 0.0);
     }

@@ -309,10 +309,10 @@ fn attacks(score: &Score) -> Vec<std::ops::Range<usize>> {
 /// much later: the windows left out run from where each new note's hammer is thrown, in output
 /// time (the limiter's latency later), for 8 ms (the hammer's impact), and the stolen voice's fade
 /// lies before them, under the notes that keep sounding. The fades are judged, not hidden: a step
-/// of 5 % of the peak in the middle of one is found there above the threshold. (Mid-note the
-/// detector finds 1 %; in a fade the next note's attack lies within the detector's 10 ms reach
-/// and lifts the neighbourhood's median, so a 1 % step scores 17.9 dB there at N_b = 1, and 5 %
-/// 31.8–34.2 dB at N_b = 1, 64 and 256.)
+/// of 5 % of the peak in the middle of one is found there above the threshold. (After a damper
+/// lands the detector finds 2 %; in a fade the next note's attack lies within the detector's
+/// 10 ms reach and lifts the neighbourhood's median, so a 1 % step scores 17.9 dB there at
+/// N_b = 1, and 5 % 31.8–34.2 dB at N_b = 1, 64 and 256.)
 #[test]
 fn stealing_keeps_the_pool_and_the_stolen_voices_fade_without_a_click() {
     let voices = 3;

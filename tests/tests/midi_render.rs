@@ -223,8 +223,12 @@ fn a_midi_summary_has_every_key_of_a_scene_summary() {
     let keys = |args: RenderArgs| {
         let mut stdout = Vec::new();
         run(&args, &mut stdout).expect("renders");
-        let json: serde_json::Value = serde_json::from_slice(&stdout).unwrap();
-        json.as_object().unwrap().keys().cloned().collect::<Vec<String>>()
+        let line = String::from_utf8(stdout).unwrap();
+        let json: serde_json::Value = serde_json::from_str(&line).unwrap();
+        // In the order the line gives them (the parsed map sorts them).
+        let mut keys: Vec<String> = json.as_object().unwrap().keys().cloned().collect();
+        keys.sort_by_key(|k| line.find(&format!("\"{k}\":")));
+        keys
     };
     let scene_keys = keys(RenderArgs {
         scene: Some(scene("fig4-mass-barrier.toml")),

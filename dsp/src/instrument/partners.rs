@@ -8,8 +8,8 @@
 //! carries those strings on its own soundboard, coupled exactly as its unison is
 //! (`crate::scene::UnisonCore`, "Sympathetic partners"): a partner is a key's unison moving in
 //! phase, the motion a bridge drives, as one string of the unison's mass, tension and bending
-//! stiffness together (so with the key's own partials), with its
-//! lowest [`PARTNER_MODES`] modes up to the highest one a partial of the struck key meets.
+//! stiffness together (so with the key's own partials), with its lowest [`PARTNER_MODES`] modes
+//! up to the highest one a partial of the struck key meets.
 
 use crate::instrument::{PianoVoice, Settings};
 use crate::preset::piano_note;

@@ -1540,9 +1540,9 @@ mod tests {
     /// With partner strings on the bridge (C5 and G5, whose fundamentals C4's 2nd and 3rd
     /// partials meet, each its unison's mass, tension and bending stiffness in one string), a
     /// strike and 1 s of ringing keep `H + losses` at its initial value to 1e-9 relative, for each
-    /// solver; the partners take energy from the key (measured 0.1 % of it at 1 s), as nothing
-    /// else gives them any; and the real-time path, which retires the hammer, gives the monitored
-    /// output to 1e-9 of its peak.
+    /// solver; the partners take energy from the key, at least 0.01 % of it at 1 s (measured
+    /// 0.118 %), as nothing else gives them any; and the real-time path, which retires the
+    /// hammer, gives the monitored output to 1e-9 of its peak.
     #[test]
     fn partner_strings_ring_from_the_key_and_keep_the_energy_balance() {
         let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
@@ -1558,9 +1558,9 @@ mod tests {
             let peak = frames.iter().map(|f| f.energy).fold(start, f64::max);
             let drift = frames.iter().map(|f| (f.balance() - start).abs()).fold(0.0, f64::max) / peak;
             let share = scene.core().partners_energy() / scene.core().own_energy();
-            println!("{name}: drift {drift:.2e}; the partners hold {:.1} % of the key's energy at 1 s", 100.0 * share);
+            println!("{name}: drift {drift:.2e}; the partners hold {:.3} % of the key's energy at 1 s", 100.0 * share);
             assert!(drift < 1e-9, "{name}: {drift:e}");
-            assert!(share > 1e-3, "{name}: {share}");
+            assert!(share > 1e-4, "{name}: {share}");
             frames
         }
         let frames = check(HammerUnison::new(keyed(), qsa()), "qsa", n);

@@ -126,8 +126,9 @@ pub fn score(bytes: &[u8], sample_rate: f64) -> Result<Score, MidiError> {
 }
 
 /// Render `score` with `params` at `sample_rate` (Hz) until the last event plus `tail` seconds
-/// (at least through the last event's sample, so that it acts), in calls of `chunk` samples (split at every event). Returns left and right channels and the
-/// wall-clock seconds spent in the engine.
+/// (at least through the last event's sample, so that it acts), in calls of `chunk` samples
+/// (split at every event). Returns left and right channels and the wall-clock seconds spent in
+/// the engine.
 pub fn render(
     score: &Score,
     params: &ParamValues,
@@ -227,7 +228,13 @@ pub fn apply_set(params: &mut ParamValues, assignment: &str) -> Result<(), Strin
 /// `render --midi`: read, render, write the WAV; return the summary.
 pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSummary, super::RenderError> {
     use super::RenderError;
-    let bytes = std::fs::read(path).map_err(|source| RenderError::Read { path: path.to_owned(), source })?;
+    let read = |source| RenderError::Read { path: path.to_owned(), source };
+    // A file far beyond any performance is refused before it is read into memory.
+    let size = std::fs::metadata(path).map_err(read)?.len();
+    if size > MAX_FILE_BYTES as u64 {
+        return Err(RenderError::Midi(format!("{}: {size} bytes; at most {MAX_FILE_BYTES} (16 MiB)", path.display())));
+    }
+    let bytes = std::fs::read(path).map_err(read)?;
     let mut params = match &args.preset {
         None => ParamValues::default(),
         Some(name) => preset_values(name).map_err(RenderError::Midi)?,
