@@ -42,13 +42,15 @@ fn off(key: u8) -> Event {
     Event::NoteOff { channel: 0, key }
 }
 
-/// A short phrase for either mode: two legato notes with a bend, a fortissimo four-note chord
-/// under the pedal, then a note with the mod wheel up (which presses the slide when the mod wheel
-/// is the hand).
+/// A short phrase for either mode: two legato notes with a bend, the mod wheel raised half-way
+/// with the second, a fortissimo four-note chord under the pedal, then a note with the mod wheel
+/// all the way up (where the mod wheel is the hand, the first note sounds the open string, the
+/// slide rattles on the second and the chord, and presses on the last).
 fn phrase() -> Vec<(f64, Event)> {
     let bend = |t, value| (t, Event::PitchBend { channel: 0, value });
     let mut events = vec![
         (0.0, on(52, 0.8)),
+        (0.3, Event::ModWheel { channel: 0, value: 0.5 }),
         (0.3, on(55, 0.7)),
         (0.32, off(52)),
         bend(0.45, 0.5),

@@ -750,13 +750,13 @@ fn out_pointing_at_the_scene_file_is_refused() {
     let dir = TempDir::new().unwrap();
     let scene = write_scene(dir.path(), "case.toml", BASE);
     let out = render_to(&scene, &scene, &[]);
-    assert_refused(&out, "scene file", dir.path(), &scene, BASE, &["case.toml"]);
+    assert_refused(&out, "input file", dir.path(), &scene, BASE, &["case.toml"]);
 
     // The same file by another spelling.
     let other = dir.path().join(".").join("sub").join("..").join("case.toml");
     fs::create_dir(dir.path().join("sub")).unwrap();
     let out = render_to(&scene, &other, &["--csv"]);
-    assert_refused(&out, "scene file", dir.path(), &scene, BASE, &["case.toml", "sub"]);
+    assert_refused(&out, "input file", dir.path(), &scene, BASE, &["case.toml", "sub"]);
 }
 
 #[cfg(unix)]
@@ -767,7 +767,7 @@ fn out_through_a_symlink_to_the_scene_file_is_refused() {
     let link = dir.path().join("link.wav");
     std::os::unix::fs::symlink(&scene, &link).unwrap();
     let out = render_to(&scene, &link, &[]);
-    assert_refused(&out, "scene file", dir.path(), &scene, BASE, &["case.toml", "link.wav"]);
+    assert_refused(&out, "input file", dir.path(), &scene, BASE, &["case.toml", "link.wav"]);
 }
 
 /// `--out` through a symbolic link writes the file it names and keeps the link.
@@ -879,14 +879,14 @@ fn default_output_that_would_be_the_scene_is_refused() {
     let dir = TempDir::new().unwrap();
     let scene = write_scene(dir.path(), "case.wav", BASE);
     let out = render_cmd(&scene, &[]);
-    assert_refused(&out, "scene file", dir.path(), &scene, BASE, &["case.wav"]);
+    assert_refused(&out, "input file", dir.path(), &scene, BASE, &["case.wav"]);
 
     // A scene file named *.csv and --csv: the CSV path is the scene itself; the WAV is not
     // written either.
     let dir = TempDir::new().unwrap();
     let scene = write_scene(dir.path(), "case.csv", BASE);
     let out = render_to(&scene, &dir.path().join("case.wav"), &["--csv"]);
-    assert_refused(&out, "scene file", dir.path(), &scene, BASE, &["case.csv"]);
+    assert_refused(&out, "input file", dir.path(), &scene, BASE, &["case.csv"]);
 }
 
 #[test]
