@@ -120,6 +120,17 @@ impl ContactSolver for NewtonSolver {
 mod tests {
     use super::*;
 
+    /// `problem` solved by IMP on `law`: the evaluations it took and the residual `G(s)` at the
+    /// increment it returned.
+    fn solved(law: PowerLaw, problem: &ContactProblem) -> (u32, f64) {
+        let mut imp = NewtonSolver::new(law);
+        imp.start(problem.y_prev, problem.y_now);
+        let solution = imp.solve(problem);
+        let residual = imp.residual(problem.y_prev, problem.z, problem.q, solution.s);
+        println!("{} evaluations, residual {residual:e}", imp.last_work());
+        (imp.last_work(), residual)
+    }
+
     /// Where `G'` is within rounding of 1 (a soft felt, `qV''` tiny), the first Newton step from
     /// `s = −z` lands exactly on the bracket's lower end `−z − q·DG`, which is a valid point
     /// (`G ≤ 0` there). Taken, it converges as Newton does, in at most 4 evaluations; refused for
@@ -127,14 +138,10 @@ mod tests {
     /// root either way satisfies `G(s) = 0` to the tolerance.
     #[test]
     fn a_newton_step_onto_the_brackets_end_is_taken() {
-        let mut imp = NewtonSolver::new(PowerLaw::new(1e5, 3.0).unwrap());
         let problem = ContactProblem { y_prev: 2e-5, y_now: 2e-5, z: -5e-6, q: 2.712673611111111e-9 };
-        imp.start(problem.y_prev, problem.y_now);
-        let solution = imp.solve(&problem);
-        let residual = imp.residual(problem.y_prev, problem.z, problem.q, solution.s);
-        println!("{} evaluations, residual {residual:e}", imp.last_work());
+        let (evaluations, residual) = solved(PowerLaw::new(1e5, 3.0).unwrap(), &problem);
         assert!(residual.abs() <= 4.0 * f64::EPSILON * problem.z.abs(), "G(s) = {residual:e}");
-        assert!(imp.last_work() <= 4, "{} evaluations", imp.last_work());
+        assert!(evaluations <= 4, "{evaluations} evaluations");
     }
 
     /// From this state (met in the stability sweep, a hammer on a string) the Newton step from
@@ -145,18 +152,14 @@ mod tests {
     /// about `|z|` here (a few ulps of `z` each).
     #[test]
     fn a_newton_step_onto_an_evaluated_end_is_replaced_rather_than_cycling() {
-        let mut imp = NewtonSolver::new(PowerLaw::new(39639.715022169294, 1.1646319038117756).unwrap());
         let problem = ContactProblem {
             y_prev: 0.007158911489581048,
             y_now: 0.007119217480823404,
             z: -6.251578300960471e-5,
             q: 1.1425180048612067e-6,
         };
-        imp.start(problem.y_prev, problem.y_now);
-        let solution = imp.solve(&problem);
-        let residual = imp.residual(problem.y_prev, problem.z, problem.q, solution.s);
-        println!("{} evaluations, residual {residual:e}", imp.last_work());
+        let (evaluations, residual) = solved(PowerLaw::new(39639.715022169294, 1.1646319038117756).unwrap(), &problem);
         assert!(residual.abs() <= 8.0 * f64::EPSILON * problem.z.abs(), "G(s) = {residual:e}");
-        assert!(imp.last_work() <= 8, "{} evaluations", imp.last_work());
+        assert!(evaluations <= 8, "{evaluations} evaluations");
     }
 }

@@ -194,6 +194,12 @@ pub const LANDING_ACCELERATION: f64 = HAND_ACCELERATION / 4.0;
 /// the hand on its spring, and the hand's plan changes its speed block by block.
 pub const LANDING_MARGIN: f64 = 0.5e-3;
 
+/// How much of its force a finger landing over [`MUTE_TIME`] on a raised cosine presses with,
+/// `fraction` (0 to 1) of the way through its landing: `(1 − cos πx)/2`.
+fn landed(fraction: f64) -> f64 {
+    0.5 * (1.0 - (std::f64::consts::PI * fraction).cos())
+}
+
 /// Where the right finger plucks (m from the nut) on a string of `length` (m) with the slide at
 /// `x_o` (m): at `pluck_position` of the length or halfway from the slide to the bridge,
 /// whichever is nearer the bridge, so that the finger always plucks the part of the string that
@@ -1035,7 +1041,7 @@ impl SlideVoice {
             None if self.key_down => 0.0,
             None => {
                 self.mute += span;
-                let landed = 0.5 * (1.0 - (std::f64::consts::PI * (self.mute / MUTE_TIME).min(1.0)).cos());
+                let landed = landed((self.mute / MUTE_TIME).min(1.0));
                 slide.damping = slide.damping.max(MUTE_HAND_DAMPING * landed);
                 REST_FORCE * landed
             }
@@ -1055,7 +1061,7 @@ impl SlideVoice {
             slide_position: x_o,
             hand_height: hand.to,
             left_position: (x_o - TRAIL).max(0.002),
-            left_force: REST_FORCE * 0.5 * (1.0 - (std::f64::consts::PI * self.trailing).cos()),
+            left_force: REST_FORCE * landed(self.trailing),
             right_position: self.right.position,
             right_force,
         };
