@@ -1101,8 +1101,12 @@ impl PianoVoice {
             return;
         }
         if self.guard_fade.is_fading() {
+            // The guard's fade has silenced the old note; a note waiting for the voice starts on
+            // it now, from rest, its steal fade no longer needed.
+            let waiting = self.pending.map(|strike| (strike, self.pending_released));
             self.trip();
-            return;
+            let Some((strike, released)) = waiting else { return };
+            (self.pending, self.pending_released) = (Some(strike), released);
         }
         let fs = self.core.string().sample_rate();
         self.heard.close((LOUDNESS_WINDOW * fs).ceil() as usize);
@@ -1386,6 +1390,41 @@ mod tests {
             assert!(voice.sounding, "key {key}: the new note sounds");
             assert_eq!(voice.guard_trips(), 1, "key {key}");
             assert_eq!(heard, expected, "key {key}: as on a fresh voice");
+        }
+    }
+
+    /// A note that steals a voice the guard is fading, held or let go while it waits, sounds in
+    /// full at the next block as on a fresh voice: the old note's trip is counted, and the fade
+    /// the guard began has silenced the voice already.
+    #[test]
+    fn a_note_stealing_a_voice_during_a_guard_fade_sounds_as_on_a_fresh_voice() {
+        for released in [false, true] {
+            let (mut voice, settings) = struck(20);
+            voice.reference_energy *= 1e-6;
+            let mut out = [0.0; 64];
+            voice.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
+            voice.render(&mut out);
+            let strike = Strike { channel: 0, key: 62, velocity: 0.7, shifted: false, timbre: None };
+            voice.steal(strike, FS, 0);
+            if released {
+                voice.key_up(0, 62);
+            }
+            let mut fresh = PianoVoice::new(200, FS);
+            fresh.play(strike, &settings, 0);
+            if released {
+                fresh.key_up(0, 62);
+            }
+            let (mut heard, mut expected) = ([0.0; 256], [0.0; 256]);
+            for (v, out) in [(&mut voice, &mut heard), (&mut fresh, &mut expected)] {
+                for block in out.chunks_mut(64) {
+                    v.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
+                    v.render(block);
+                }
+            }
+            assert!(voice.sounding, "released {released}: the new note sounds");
+            assert_eq!(voice.guard_trips(), 1, "released {released}");
+            assert_eq!(voice.key_down, !released, "released {released}");
+            assert_eq!(heard, expected, "released {released}: as on a fresh voice");
         }
     }
 
