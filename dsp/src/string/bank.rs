@@ -281,7 +281,8 @@ impl ModalBank {
 
     /// Hold every mode still under the static force `force(i)` (N) on it:
     /// `u_i^{n−1} = u_i^n = C_i force(i)/(B_i − A_i)`, which is `force(i)/K̂_i` (with any extra
-    /// decay), the scheme's own equilibrium. Never allocates.
+    /// decay), the scheme's own equilibrium; 0 for a mode whose `K̂` is 0 (a free mass). Never
+    /// allocates.
     pub fn rest_under(&mut self, force: impl Fn(usize) -> f64) {
         let coefficients = (&self.coef_a[..], &self.coef_b[..], &self.coef_c[..]);
         super::step::hold_still(coefficients, self.modes, (&mut self.u_prev, &mut self.u_now), force);

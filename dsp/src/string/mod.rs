@@ -24,9 +24,10 @@
 //! A = 2P,   B = 1 + Q,   C = Δt²(1 + 2P + Q)/(4m̃)
 //! ```
 //!
-//! `K̂` diverges for an undamped mode at Nyquist, so the string keeps exactly the modes with
-//! `ω_i < π·fs` (strict); `ω_i` increases with `i`, so counting stops at the first failure
-//! (an overdamped mode, which does not ring, is kept while `ω0_i < π·fs`).
+//! `K̂` diverges for an undamped mode at Nyquist, so the string keeps the modes with
+//! `ω_i < π·fs` (strict) whose `1 + 2P + Q`, which `C` is proportional to, is at least `10⁻⁶`
+//! (rounded, it would reach 0 within about `3e-9` of Nyquist); counting stops at the first
+//! failure (an overdamped mode, which does not ring, is kept while `ω0_i < π·fs`).
 //!
 //! # Energy (docs/physics.md §6.3)
 //!
@@ -149,6 +150,47 @@ mod tests {
         // docs/physics.md §8.2: M = 34 / 56 / 59 / 90 / 132 for the C4 string.
         for (fs, m) in [(22050.0, 34), (44100.0, 56), (48000.0, 59), (96000.0, 90), (192000.0, 132)] {
             assert_eq!(ModalString::new(c4(), fs).unwrap().modes(), m, "fs = {fs}");
+        }
+    }
+
+    /// A lossless harmonic string whose 441st mode falls on Nyquist but for rounding (50 Hz at
+    /// 44.1 kHz, 96 kHz and 88.2 kHz with 100 Hz): that mode would have `C = 0` and `K̂ = ∞`, so
+    /// the string keeps the modes below it, each with a finite, positive `C` and `K̂` and at
+    /// least `10⁻⁶` in `1 + 2P + Q`, and its energy at rest is 0 and struck is finite.
+    #[test]
+    fn a_mode_a_rounding_below_nyquist_is_left_out() {
+        for (f0, fs) in [(50.0_f64, 44100.0), (50.0, 88200.0), (100.0, 88200.0)] {
+            let (length, linear_density) = (0.65, 0.006);
+            let tension = (2.0 * length * f0).powi(2) * linear_density;
+            let p =
+                StringParams { length, tension, linear_density, bending_stiffness: 0.0, damping: Damping::LOSSLESS };
+            let mut s = ModalString::new(p, fs).unwrap();
+            assert_eq!(s.modes(), (fs / (2.0 * f0)) as usize - 1, "f0 {f0}, fs {fs}");
+            for i in 0..s.modes() {
+                let (a, b, c, k) = (s.coef_a[i], s.coef_b[i], s.coef_c[i], s.stiffness()[i]);
+                assert!(c > 0.0 && c.is_finite() && k > 0.0 && k.is_finite(), "mode {}: C {c}, K {k}", i + 1);
+                assert!(a + b >= 1e-6, "mode {}: 1 + 2P + Q = {}", i + 1, a + b);
+            }
+            assert_eq!(s.energy(), 0.0);
+            let ones = vec![1e-6; s.modes()];
+            s.set_state(&vec![0.0; s.modes()], &ones);
+            assert!(s.energy().is_finite() && s.energy() > 0.0, "f0 {f0}, fs {fs}: {}", s.energy());
+        }
+    }
+
+    /// Damping so heavy that `P` rounds to 1 leaves the modes no stiffness in their recursion
+    /// (`B = A`): held under a force they stay at 0 rather than at `f/0`.
+    #[test]
+    fn a_mode_without_stiffness_rests_at_zero_under_a_force() {
+        let mut p = c4();
+        p.damping = Damping::Viscous { eta0: 1e18, eta2: 0.0 };
+        let mut s = ModalString::new(p, 44100.0).unwrap();
+        assert!((0..s.modes()).any(|i| s.coef_b[i] == s.coef_a[i]), "the case arises");
+        s.rest_under(|_| 1.0);
+        for (i, (&now, &before)) in s.state().iter().zip(s.previous_state()).enumerate() {
+            let k = s.coef_b[i] - s.coef_a[i];
+            let expected = if k > 0.0 { s.coef_c[i] / k } else { 0.0 };
+            assert!(now.is_finite() && now == expected && before == now, "mode {}: {now}", i + 1);
         }
     }
 

@@ -60,19 +60,36 @@ impl Mode {
     }
 }
 
-/// The modes of a string that ring strictly below Nyquist and a frequency limit, in order.
-/// `ω_i` increases with `i`, so the sequence stops at the first mode that fails (an overdamped
-/// mode, which does not ring, is kept while `ω0_i` is below the limit).
+/// The least `1 + 2P + Q` a kept mode may have: a mode this close to Nyquist (an undamped one
+/// within `10⁻³` rad of `π` per step, 7 Hz at 44.1 kHz) is left out. `C` is proportional to it
+/// and `K̂ = (B − A)/C`, so its rounding (`ε` absolute) is a relative error of `ε/10⁻⁶ = 2.2e-10`
+/// at most in `C` and `K̂`, inside the energy balance's 1e-9; at `ωΔt → π` it would round to 0
+/// and make `K̂` infinite.
+const MIN_HEADROOM: f64 = 1e-6;
+
+/// Angle per step (rad) above which a mode's headroom `1 + 2P + Q` is checked: below it the
+/// headroom is at least `2(1 + cos 3) = 0.02` for any damping.
+const NEAR_NYQUIST: f64 = 3.0;
+
+/// The modes of a string that ring strictly below Nyquist and a frequency limit, in order, with
+/// at least [`MIN_HEADROOM`] in `1 + 2P + Q`. The sequence stops at the first mode that fails
+/// (an overdamped mode, which does not ring, is kept while `ω0_i` is below the limit). `ω_i`
+/// increases with `i` up to the limit unless the damping grows as fast as the frequency (`η2`):
+/// then `ω_i` falls again towards overdamping, and modes far above the limit, decaying faster
+/// than `π·fs` per second, may ring below it again; they are left out.
 pub(super) struct ModeCounter<'a> {
     params: &'a StringParams,
     /// π·min(fs, 2 f_max) (rad/s).
     limit: f64,
+    /// Time step (s).
+    dt: f64,
     i: usize,
 }
 
 impl<'a> ModeCounter<'a> {
     pub(super) fn new(params: &'a StringParams, sample_rate: f64, max_frequency: f64) -> Self {
-        Self { params, limit: std::f64::consts::PI * sample_rate.min(2.0 * max_frequency), i: 0 }
+        let limit = std::f64::consts::PI * sample_rate.min(2.0 * max_frequency);
+        Self { params, limit, dt: 1.0 / sample_rate, i: 0 }
     }
 
     /// Number of modes, counting at most `MAX_MODES + 1`.
@@ -100,7 +117,14 @@ impl Iterator for ModeCounter<'_> {
         if !(omega < self.limit) || !omega0.is_finite() || (!underdamped && omega0 >= self.limit) {
             return None;
         }
-        Some(Mode { beta, omega0, omega, sigma, underdamped })
+        let mode = Mode { beta, omega0, omega, sigma, underdamped };
+        if underdamped && omega * self.dt > NEAR_NYQUIST {
+            let (p, q) = mode.recursion(self.dt);
+            if !(1.0 + 2.0 * p + q >= MIN_HEADROOM) {
+                return None;
+            }
+        }
+        Some(mode)
     }
 }
 

@@ -90,7 +90,8 @@ impl ModalString {
 
     /// Hold the string still under the static modal forces `force(i)` (N, mode `i` from 0):
     /// `ũ_i^{n−1} = ũ_i^n = C_i force(i)/(B_i − A_i)`, which is `force(i)/K̂_i`, the scheme's own
-    /// equilibrium (a state its update leaves where it is under those forces). Never allocates.
+    /// equilibrium (a state its update leaves where it is under those forces); 0 for a mode whose
+    /// `K̂` is 0. Never allocates.
     pub fn rest_under(&mut self, force: impl Fn(usize) -> f64) {
         let coefficients = (&self.coef_a[..], &self.coef_b[..], &self.coef_c[..]);
         hold_still(coefficients, self.modes(), (&mut self.u_prev, &mut self.u_now), force);
@@ -173,8 +174,9 @@ impl ModalString {
 
 /// The first `modes` entries of `(u^{n−1}, u^n)` held still under the static forces `force(i)`
 /// (N): the recursion `u^{n+1} = 2P_i u^n − Q_i u^{n−1} + C_i f_i`, with the coefficients
-/// `(A_i, B_i, C_i) = (2P_i, 1 + Q_i, C_i)`, leaves `u_i = C_i f_i/(B_i − A_i)` where it is. The
-/// padding beyond them is zeroed.
+/// `(A_i, B_i, C_i) = (2P_i, 1 + Q_i, C_i)`, leaves `u_i = C_i f_i/(B_i − A_i)` where it is. A
+/// mode without stiffness in its recursion (`B_i = A_i`: a free mass, or damping so heavy that
+/// `P_i` rounds to 1) has no such rest and is held at 0. The padding beyond them is zeroed.
 pub(super) fn hold_still(
     (a, b, c): (&[f64], &[f64], &[f64]),
     modes: usize,
@@ -182,7 +184,8 @@ pub(super) fn hold_still(
     force: impl Fn(usize) -> f64,
 ) {
     for i in 0..modes {
-        let u = c[i] * force(i) / (b[i] - a[i]);
+        let stiffness = b[i] - a[i];
+        let u = if stiffness > 0.0 { c[i] * force(i) / stiffness } else { 0.0 };
         u_prev[i] = u;
         u_now[i] = u;
     }
