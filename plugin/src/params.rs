@@ -154,15 +154,16 @@ pub fn poly_offset(id: u32, normalized: f32) -> Option<(NoteParam, f32)> {
 /// A framework parameter built from its [`ParamSpec`], whose plain value it reports as
 /// [`ParamSpec::get`] gives it (choices as their index, switches 0 or 1).
 trait FromSpec {
-    /// The parameter `spec` describes: name, range, default, unit, display, step, poly modulation.
-    fn from_spec(spec: &ParamSpec) -> Self;
+    /// The parameter `spec` describes: name, range, default, unit, display, step, poly modulation,
+    /// and text entry as [`ParamSpec::parse_typed`] reads it (no NaN, units optional).
+    fn from_spec(spec: &'static ParamSpec) -> Self;
 
     /// The current plain value.
     fn plain(&self) -> f32;
 }
 
 impl FromSpec for FloatParam {
-    fn from_spec(spec: &ParamSpec) -> Self {
+    fn from_spec(spec: &'static ParamSpec) -> Self {
         let ParamKind::Float { min, max, default, unit, scale, display, step, poly } = spec.kind else {
             panic!("{} is not a continuous parameter", spec.id)
         };
@@ -180,11 +181,13 @@ impl FromSpec for FloatParam {
                 util::db_to_gain(default),
             ),
         };
-        let mut param = FloatParam::new(spec.name, default, range).with_unit(unit);
+        let mut param = FloatParam::new(spec.name, default, range)
+            .with_unit(unit)
+            .with_string_to_value(Arc::new(|text| spec.parse_typed(text).map(|shown| spec.to_plain(shown))));
         param = match (scale, display) {
-            (Scale::Decibels, ValueDisplay::Rounded(digits)) => param
-                .with_value_to_string(formatters::v2s_f32_gain_to_db(digits))
-                .with_string_to_value(formatters::s2v_f32_gain_to_db()),
+            (Scale::Decibels, ValueDisplay::Rounded(digits)) => {
+                param.with_value_to_string(formatters::v2s_f32_gain_to_db(digits))
+            }
             (_, ValueDisplay::Rounded(digits)) => param.with_value_to_string(formatters::v2s_f32_rounded(digits)),
             (_, ValueDisplay::Scientific(digits)) => {
                 param.with_value_to_string(Arc::new(move |v| format!("{v:.digits$e}")))
@@ -210,11 +213,13 @@ impl FromSpec for FloatParam {
 const AT_ACTIVATION: [&str; 1] = ["voices"];
 
 impl FromSpec for IntParam {
-    fn from_spec(spec: &ParamSpec) -> Self {
+    fn from_spec(spec: &'static ParamSpec) -> Self {
         let ParamKind::Int { min, max, default, unit } = spec.kind else {
             panic!("{} is not a whole-number parameter", spec.id)
         };
-        let param = IntParam::new(spec.name, default, IntRange::Linear { min, max }).with_unit(unit);
+        let param = IntParam::new(spec.name, default, IntRange::Linear { min, max })
+            .with_unit(unit)
+            .with_string_to_value(Arc::new(|text| spec.parse_typed(text).map(|v| v as i32)));
         if AT_ACTIVATION.contains(&spec.id) { param.non_automatable() } else { param }
     }
 
@@ -224,9 +229,10 @@ impl FromSpec for IntParam {
 }
 
 impl FromSpec for BoolParam {
-    fn from_spec(spec: &ParamSpec) -> Self {
+    fn from_spec(spec: &'static ParamSpec) -> Self {
         let ParamKind::Bool { default } = spec.kind else { panic!("{} is not a switch", spec.id) };
         BoolParam::new(spec.name, default)
+            .with_string_to_value(Arc::new(|text| spec.parse_typed(text).map(|v| v != 0.0)))
     }
 
     fn plain(&self) -> f32 {
@@ -235,7 +241,7 @@ impl FromSpec for BoolParam {
 }
 
 impl<T: Enum + PartialEq + 'static> FromSpec for EnumParam<T> {
-    fn from_spec(spec: &ParamSpec) -> Self {
+    fn from_spec(spec: &'static ParamSpec) -> Self {
         let ParamKind::Choice { default, .. } = spec.kind else { panic!("{} is not a choice", spec.id) };
         EnumParam::new(spec.name, T::from_index(default))
     }
@@ -495,6 +501,41 @@ mod tests {
             let near = |a: f32, b: f32| (a - b).abs() <= 1e-6 * a.abs().max(b.abs()).max(1.0);
             assert!(near(bottom, min) && near(top, max), "{id}: range {bottom}..={top}, table {min}..={max}");
         }
+    }
+
+    /// Text typed into a host's or the editor's field reaches a parameter as
+    /// [`ParamSpec::parse_typed`] reads it: NaN and words change nothing (the framework's own
+    /// reading passed NaN on and turned a switch off at any word but `true` or `on`), a unit
+    /// may follow without its space, and the value is clamped to the range.
+    #[test]
+    #[allow(unsafe_code)] // nice-plug's type-erased parameter calls are `unsafe`; see SAFETY.
+    fn typed_text_sets_finite_values_and_refuses_the_rest() {
+        let params = QsaParams::default();
+        let map = params.param_map();
+        let param = |id: &str| map.iter().find(|(i, _, _)| i == id).map(|(_, p, _)| *p).unwrap();
+        let typed = |id: &str, text: &str| {
+            // SAFETY: the pointer comes from the parameter map of `params`, alive to the test's end.
+            unsafe { param(id).string_to_normalized_value(text) }
+        };
+        let plain = |id: &str, normalized: f32| {
+            // SAFETY: as above.
+            unsafe { param(id).preview_plain(normalized) }
+        };
+        for (id, text) in [("glide", "nan"), ("glide", "NaN ms"), ("gain", "nan"), ("gain", "-inf"), ("nb", "x")] {
+            assert_eq!(typed(id, text), None, "{id}: {text:?}");
+        }
+        for text in ["yes", "1x", ""] {
+            assert_eq!(typed("limit", text), None, "limit: {text:?}");
+        }
+        assert_eq!(typed("limit", "1").map(|n| plain("limit", n)), Some(1.0));
+        assert_eq!(typed("limit", "Off").map(|n| plain("limit", n)), Some(0.0));
+        let near = |a: f32, b: f32| (a - b).abs() <= 1e-5 * b.abs();
+        let read = typed("glide", "120ms").map(|n| plain("glide", n));
+        assert!(read.is_some_and(|v| near(v, 120.0)), "glide: {read:?}");
+        let read = typed("gain", "-6dB").map(|n| plain("gain", n));
+        assert!(read.is_some_and(|v| near(v, util::db_to_gain(-6.0))), "gain: {read:?}");
+        assert_eq!(typed("nb", "6.5").map(|n| plain("nb", n)), Some(7.0));
+        assert_eq!(typed("nb", "1e9 smp").map(|n| plain("nb", n)), Some(plain("nb", 1.0)), "clamped");
     }
 
     /// The table at the top of this file is the parameter table's, row by row.

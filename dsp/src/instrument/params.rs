@@ -601,6 +601,21 @@ pub fn param_spec(id: &str) -> Option<&'static ParamSpec> {
     PARAMETERS.iter().find(|p| p.id == id)
 }
 
+/// A finite number typed with or without `unit` after it ([`ParamSpec::parse_typed`]).
+fn typed_number(text: &str, unit: &str) -> Option<f32> {
+    let unit = unit.trim();
+    let aliases: &[&str] = if unit == "×" { &["×", "x"] } else { &[unit] };
+    let number = (aliases.iter())
+        .filter(|unit| !unit.is_empty())
+        .find_map(|unit| {
+            let at = text.len().checked_sub(unit.len())?;
+            (text.is_char_boundary(at) && text[at..].eq_ignore_ascii_case(unit)).then(|| text[..at].trim_end())
+        })
+        .unwrap_or(text);
+    let number = if number.contains('.') { number.to_owned() } else { number.replacen(',', ".", 1) };
+    number.parse::<f32>().ok().filter(|v| v.is_finite())
+}
+
 impl ParamSpec {
     /// The default as a plain value (what [`ParamSpec::get`] gives for it).
     pub fn default_plain(&self) -> f32 {
@@ -646,6 +661,23 @@ impl ParamSpec {
                     }
                 })
             }
+        }
+    }
+
+    /// The value of `text` typed by hand into a field that shows this parameter, in its shown
+    /// unit, as a host's or the editor's text entry reads it: what [`parse`](Self::parse) reads,
+    /// and also a number followed by the parameter's unit (with or without its space, in any
+    /// letter case; `x` for `×`), a decimal comma, a whole number written with decimals
+    /// (rounded) and a switch's `On`/`Off` in any case. `None` for anything else, NaN and
+    /// infinities included, so that a slip of the keyboard changes nothing. Not range-checked
+    /// (the framework clamps); choices are left to the framework, which reads their names.
+    pub fn parse_typed(&self, text: &str) -> Option<f32> {
+        let text = text.trim();
+        match self.kind {
+            ParamKind::Float { unit, .. } => typed_number(text, unit),
+            ParamKind::Int { unit, .. } => typed_number(text, unit).map(f32::round),
+            ParamKind::Bool { .. } => self.parse(&text.to_ascii_lowercase()).ok(),
+            ParamKind::Choice { .. } => None,
         }
     }
 
@@ -965,6 +997,43 @@ impl ParamValues {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Text typed by hand reads as a number with or without its unit, a decimal comma, a whole
+    /// number rounded, a switch in any case; NaN, infinities, other words and a bare unit read as
+    /// nothing.
+    #[test]
+    fn typed_text_reads_as_a_finite_value_or_nothing() {
+        let spec = |id| param_spec(id).unwrap();
+        let cases: [(&str, &str, Option<f32>); 24] = [
+            ("glide", "50", Some(50.0)),
+            ("glide", " 50 ms ", Some(50.0)),
+            ("glide", "50ms", Some(50.0)),
+            ("glide", "50 MS", Some(50.0)),
+            ("glide", "12,5", Some(12.5)),
+            ("glide", "1e2", Some(100.0)),
+            ("glide", "nan", None),
+            ("glide", "NaN ms", None),
+            ("glide", "inf", None),
+            ("glide", "-infinity", None),
+            ("glide", "ms", None),
+            ("glide", "fast", None),
+            ("gain", "-6 dB", Some(-6.0)),
+            ("gain", "-6db", Some(-6.0)),
+            ("gain", "-inf dB", None),
+            ("kappa", "1.5e9 N/m^a", Some(1.5e9)),
+            ("hard", "1.5×", Some(1.5)),
+            ("hard", "1.5X", Some(1.5)),
+            ("nb", "6.5 smp", Some(7.0)),
+            ("nb", "64", Some(64.0)),
+            ("limit", "On", Some(1.0)),
+            ("limit", "0", Some(0.0)),
+            ("limit", "yes", None),
+            ("mode", "slide", None),
+        ];
+        for (id, text, expected) in cases {
+            assert_eq!(spec(id).parse_typed(text), expected, "{id}: {text:?}");
+        }
+    }
 
     /// A value outside a parameter's range is refused with the range, and the value kept; the
     /// ends of the range are accepted.
