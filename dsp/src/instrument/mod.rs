@@ -2092,19 +2092,22 @@ mod tests {
 
     /// The half pedal's zone is where the player sets it, its ends in either order: C2 let go at
     /// 0.2 s under the pedal at depths around the ends of the zones 0.3 to 0.9, 0.9 to 0.3 and
-    /// 0.5 to 0.5 (a switch) is bit for bit as with the pedal up below the zone and down above
-    /// it, and within the zone is neither (the dampers hover: its swing at 4 s lies between).
+    /// the switches at 0.5, at the full travel and at none is bit for bit as with the pedal up
+    /// below the zone and down above it (a switch from its point on), and within the zone is
+    /// neither (the dampers hover: its swing at 4 s lies between).
     #[test]
     fn the_half_pedal_zone_lies_where_the_player_sets_it() {
         let key = 36;
         let (up, down) = (swings_under_the_pedal(key, 0.0), swings_under_the_pedal(key, 1.0));
-        let zones = [(0.3, 0.9), (0.9, 0.3), (0.5, 0.5)];
+        let zones = [(0.3, 0.9), (0.9, 0.3), (0.5, 0.5), (1.0, 1.0), (0.0, 0.0)];
         for (from, to) in zones {
             let settings = Settings { half_pedal_from: from, half_pedal_to: to, ..Settings::default() };
             let (rest, clear) = (from.min(to) as f32, from.max(to) as f32);
             let swings = |depth: f32| swings_under_the_pedal_with(key, depth, settings);
-            assert_eq!(swings(rest - 0.01), up, "zone {from}–{to}: resting below it");
-            assert_eq!(swings(clear + 0.01), down, "zone {from}–{to}: clear above it");
+            // A switch clears from its point on: at the full travel for one there.
+            let above = if clear > rest { clear + 0.01 } else { clear };
+            assert_eq!(swings((rest - 0.01).max(0.0)), up, "zone {from}–{to}: resting below it");
+            assert_eq!(swings(above.clamp(0.01, 1.0)), down, "zone {from}–{to}: clear above it");
             if clear > rest {
                 let within = swings(0.5 * (rest + clear));
                 println!("zone {from}–{to}: at 4 s {:.3e} m (up {:.3e}, down {:.3e})", within[39], up[39], down[39]);

@@ -323,13 +323,16 @@ pub const HOVER_LIFTS: (f64, f64) = (2e-6, 2e-3);
 /// on them) up to the zone's lower end, the pedal's lost motion; infinite (clear of any motion)
 /// from its upper end; in between from [`HOVER_LIFTS`]`.0` to `.1` in equal ratios, so that
 /// equal steps of the pedal move the level at which it holds a string by equal steps in dB.
+/// With both ends at one point the pedal is a switch there: up to it resting, pressed on from
+/// it clear, so that a switch at the full travel clears at the full travel and one at none
+/// rests with the pedal up.
 pub fn damper_lift(depth: f64, settings: &Settings) -> f64 {
     let (from, to) = (settings.half_pedal_from, settings.half_pedal_to);
     let (rest, clear) = (from.min(to), from.max(to));
-    if !(depth > rest) {
-        0.0
-    } else if depth >= clear {
+    if depth >= clear && depth > 0.0 {
         f64::INFINITY
+    } else if !(depth > rest) {
+        0.0
     } else {
         let (low, high) = HOVER_LIFTS;
         low * (high / low).powf((depth - rest) / (clear - rest))
