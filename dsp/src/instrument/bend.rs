@@ -2,7 +2,8 @@
 //! (MIDI 1.0's RPN protocol) and the zones of MPE.
 //!
 //! - **Pitch-bend sensitivity** (RPN 0): CC101 = 0 and CC100 = 0 select it, CC6 sets its
-//!   semitones and CC38 its cents. A full bend on that channel then moves the slide that far;
+//!   semitones and CC38 its cents (sent alone, the cents refine the semitones the channel has,
+//!   the setting's if never told). A full bend on that channel then moves the slide that far;
 //!   a channel never told follows the `Bend range` setting. Sent on a member channel of an MPE
 //!   zone, it sets every member channel of the zone (the per-note range is the zone's).
 //! - **MPE configuration** (RPN 6, sent on MIDI channel 1 or 16, the zone's master channel): CC6
@@ -52,9 +53,10 @@ impl Default for Bends {
 
 impl Bends {
     /// Controller `controller` of the RPN protocol (CC6, 38, 100 or 101, and CC98 and 99, which
-    /// select a non-registered parameter) at `value` (0..=127) on `channel` (0..=15). Other
-    /// controllers are ignored.
-    pub(crate) fn controller(&mut self, channel: u8, controller: u8, value: u8) {
+    /// select a non-registered parameter) at `value` (0..=127) on `channel` (0..=15), with the
+    /// `Bend range` setting at `setting` (semitones): cents sent alone refine the semitones the
+    /// channel has, the setting's for a channel never told. Other controllers are ignored.
+    pub(crate) fn controller(&mut self, channel: u8, controller: u8, value: u8, setting: f64) {
         let c = usize::from(channel & 15);
         let value = value & 127;
         match (controller, self.selected[c]) {
@@ -63,7 +65,7 @@ impl Bends {
             (100, (msb, _)) => self.selected[c] = (msb, value),
             (6, SENSITIVITY) => self.set_sensitivity(c, f64::from(value)),
             (38, SENSITIVITY) => {
-                let semitones = self.ranges[c].map_or(0.0, f64::trunc);
+                let semitones = self.ranges[c].unwrap_or(setting).trunc();
                 self.set_sensitivity(c, semitones + f64::from(value) / 100.0);
             }
             (6, MPE_CONFIGURATION) if c == 0 || c == 15 => self.configure_zone(c, value.min(15)),
@@ -181,8 +183,22 @@ mod tests {
 
     fn send(bends: &mut Bends, channel: u8, messages: &[(u8, u8)]) {
         for &(cc, value) in messages {
-            bends.controller(channel, cc, value);
+            bends.controller(channel, cc, value, SETTING);
         }
+    }
+
+    /// The `Bend range` setting the tests play with (semitones).
+    const SETTING: f64 = 12.0;
+
+    /// Cents sent without semitones refine the channel's own semitones: the setting's on a
+    /// channel never told (12.5 with the setting at 12), a controller's once told.
+    #[test]
+    fn cents_alone_refine_the_channels_semitones() {
+        let mut b = Bends::default();
+        send(&mut b, 3, &[(101, 0), (100, 0), (38, 50)]);
+        assert_eq!(b.range(3), Some(SETTING + 0.5));
+        send(&mut b, 4, &[(101, 0), (100, 0), (6, 7), (38, 25), (38, 50)]);
+        assert_eq!(b.range(4), Some(7.5));
     }
 
     #[test]

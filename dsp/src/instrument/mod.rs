@@ -764,7 +764,7 @@ impl Instrument {
                 self.pressed[c].iter_mut().for_each(|press| press.pressure = 0.0);
             }
             Event::RegisteredParameter { channel, controller, value } => {
-                self.bends.controller(channel, controller, value)
+                self.bends.controller(channel, controller, value, self.requested.bend_range)
             }
             Event::AllNotesOff => {
                 self.sustain = [0.0; 16];
