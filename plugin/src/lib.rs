@@ -76,7 +76,14 @@ pub struct QsaStrings {
     guard: OverloadGuard,
     /// Whether the host waits for each buffer (the guard acts only then; [`keeps_time`]).
     realtime: bool,
+    /// Events stamped at the end of the latest call, which take the next call's first sample
+    /// (the same engine sample); at most [`DEFERRED_EVENTS`], allocated here.
+    deferred: Vec<Event>,
 }
+
+/// How many events stamped at a call's end wait for the next call; beyond them, the waiting
+/// events and the rest are played at once, in order.
+const DEFERRED_EVENTS: usize = 256;
 
 impl Default for QsaStrings {
     fn default() -> Self {
@@ -87,6 +94,7 @@ impl Default for QsaStrings {
             tap: Tap::new(Arc::new(Shared::default())),
             guard: OverloadGuard::default(),
             realtime: false,
+            deferred: Vec::with_capacity(DEFERRED_EVENTS),
         }
     }
 }
@@ -287,6 +295,9 @@ impl Plugin for QsaStrings {
             // Parameters set while the plugin was not processing (a state loaded, a host's flush
             // while stopped) count from the reset's first sample, as on a new instance.
             engine.set_settings(&self.params.settings());
+            // Events waiting from the latest call reach the engine before it is reset, so that
+            // their notes end with the others.
+            self.deferred.drain(..).for_each(|e| engine.handle(e));
             engine.reset();
         }
         self.guard.reset();
@@ -311,6 +322,11 @@ impl Plugin for QsaStrings {
             _ => return ProcessStatus::Normal,
         };
         let origin = engine.now();
+        // Events stamped at the latest call's end take their sample now, under its settings.
+        for e in self.deferred.drain(..) {
+            engine.handle(e);
+            report_ended(engine, context, origin);
+        }
         let api = context.plugin_api();
         let mut done = 0;
         let mut next = context.next_event();
@@ -330,11 +346,21 @@ impl Plugin for QsaStrings {
             report_ended(engine, context, origin);
             done = until;
         }
-        // Events stamped at the very end of the buffer.
+        // Events stamped at the very end of the buffer belong to the next call's first sample,
+        // the same engine sample. The framework ends a call there when it splits a host's buffer
+        // at a parameter change, and applies that change with the next call's settings: a note
+        // the host listed before the change at its sample then takes it, as a note listed after
+        // does.
         while let Some(event) = next {
             if let Some(e) = engine_event(&event, api) {
-                engine.handle(e);
-                report_ended(engine, context, origin);
+                if self.deferred.len() < DEFERRED_EVENTS {
+                    self.deferred.push(e);
+                } else {
+                    for e in self.deferred.drain(..).chain([e]) {
+                        engine.handle(e);
+                        report_ended(engine, context, origin);
+                    }
+                }
             }
             next = context.next_event();
         }

@@ -441,23 +441,34 @@ fn host_block_sizes_give_identical_samples() {
     assert_eq!(bit_identical(&audio, &reference), None, "random blocks: first differing sample");
 }
 
-/// A note struck in the sample its automation changes takes the new value through the plugin:
-/// the mode switched to slide, and in piano mode the hardness raised, each in the sample of a note
-/// at 1,000 (within a control block), render to the bit as with the new value set at sample 0,
-/// and not as the old value does.
+/// A note struck in the sample its automation changes takes the new value through the plugin,
+/// whichever of the two the host lists first: the mode switched to slide, and in piano mode the
+/// hardness raised, each in the sample of a note at 1,000 (within a control block), render to
+/// the bit as with the new value set at sample 0, and not as the old value does. (The framework
+/// splits the buffer at the change; a note listed before it ends the first part.)
 #[test]
 fn a_note_struck_with_an_automation_step_takes_the_new_value() {
     let bundle = release_bundle();
     let samples = 9_600;
     for (id, old, new) in [("mode", 0.0, 1.0), ("hard", 0.3, 0.9)] {
-        let render = |at: usize, value: f64| {
-            let score = vec![(0, param(id, old)), (at, param(id, value)), (1_000, Ev::On(0, 50, 0.8))];
+        let render = |at: usize, value: f64, note_first: bool| {
+            let (change, note) = ((at, param(id, value)), (1_000, Ev::On(0, 50, 0.8)));
+            let score = if note_first && at == 1_000 {
+                vec![(0, param(id, old)), note, change]
+            } else {
+                vec![(0, param(id, old)), change, note]
+            };
             Plugin::at_48k(&bundle, &[]).render_blocks(&score, samples, 512)
         };
-        let reference = render(0, new);
+        let reference = render(0, new, false);
         assert!(reference.peak() > AUDIBLE, "{id}: the note sounds");
-        assert_eq!(bit_identical(&render(1_000, new), &reference), None, "{id}: first differing sample");
-        assert!(bit_identical(&render(1_000, old), &reference).is_some(), "{id}: the old value gives another note");
+        for note_first in [false, true] {
+            let listed = if note_first { "the note listed first" } else { "the change listed first" };
+            let heard = render(1_000, new, note_first);
+            assert_eq!(bit_identical(&heard, &reference), None, "{id}, {listed}: first differing sample");
+            let other = render(1_000, old, note_first);
+            assert!(bit_identical(&other, &reference).is_some(), "{id}, {listed}: the old value gives another note");
+        }
     }
 }
 
