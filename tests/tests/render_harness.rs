@@ -833,21 +833,58 @@ fn midi_options_with_a_scene_file_are_refused() {
 }
 
 /// A string with more modes below Nyquist than a string holds (4,096) at the scene's rate, or
-/// with none, is an error naming its length: the C4 string made 50 m long at 44.1 kHz, and 1 cm
-/// long (its fundamental above Nyquist, so it would render silence). Its parameters are valid;
-/// its mode count depends on the rate too.
+/// with none, is an error naming the string and the rate, and what to change: the C4 string
+/// made 50 m long at 44.1 kHz, 1 cm long (its fundamental above Nyquist, so it would render
+/// silence), and the C4 preset as it is at 500 Hz (no `length` in the file to name). Its
+/// parameters are valid; its mode count depends on the rate too.
 #[test]
 fn a_string_with_too_many_modes_or_none_at_the_scenes_rate_is_a_clear_error() {
     let soft = fs::read_to_string(fig4_path().with_file_name("hammer-c4-soft.toml")).unwrap();
-    for (length, why) in [("50.0", "4096 modes"), ("0.01", "no mode")] {
+    let longer = |length: &str| edit(&soft, "eta0 = 8.0 ", &format!("length = {length}\neta0 = 8.0 "));
+    let cases = [
+        (longer("50.0"), "more than 4096 modes below 22050 Hz, Nyquist at sample_rate = 44100"),
+        (longer("0.01"), "no mode below 22050 Hz, Nyquist at sample_rate = 44100"),
+        (edit(&soft, "sample_rate = 44100", "sample_rate = 500"), "no mode below 250 Hz"),
+    ];
+    for (text, why) in cases {
         let dir = TempDir::new().unwrap();
-        let text = edit(&soft, "eta0 = 8.0 ", &format!("length = {length}\neta0 = 8.0 "));
         let scene = write_scene(dir.path(), "case.toml", &text);
         let result = render_to(&scene, &dir.path().join("out.wav"), &[]);
         assert_eq!(result.code, 1, "{}", result.stderr);
-        assert!(result.stderr.contains("string.length") && result.stderr.contains(why), "{}", result.stderr);
+        assert!(result.stderr.contains("string") && result.stderr.contains(why), "{}", result.stderr);
+        assert!(!result.stderr.contains("string.length"), "no key the file may lack: {}", result.stderr);
         assert_eq!(listing(dir.path()), names(&["case.toml"]), "nothing written");
     }
+}
+
+/// A preset's contact law serves only its own collider: the C4 preset's felt under a slide and
+/// the slide guitar's glass under a hammer are refused as a missing `contact.kappa`, which
+/// `[contact]` then gives; each preset still gives its own scene the law.
+#[test]
+fn a_presets_contact_law_serves_only_its_own_collider() {
+    let soft = fs::read_to_string(fig4_path().with_file_name("hammer-c4-soft.toml")).unwrap();
+    let phrase = fs::read_to_string(fig4_path().with_file_name("slide-phrase.toml")).unwrap();
+    let slide_on_c4 = edit(&phrase, "preset = \"slide-guitar\"", "preset = \"c4\"");
+    // The slide guitar's string under the hammer, which the preset does not give.
+    let hammer_on_guitar = edit(&soft, "preset = \"c4\"", "preset = \"slide-guitar\"");
+    let hammer_on_guitar = edit(&hammer_on_guitar, "velocity = 1.0 ", "mass = 3e-3\nposition = 0.12\nvelocity = 1.0 ");
+    for (what, text) in [("a slide on the C4 preset", slide_on_c4), ("a hammer on the slide guitar", hammer_on_guitar)]
+    {
+        let dir = TempDir::new().unwrap();
+        let scene = write_scene(dir.path(), "case.toml", &text);
+        let result = render_to(&scene, &dir.path().join("out.wav"), &[]);
+        assert_eq!(result.code, 1, "{what}: {}", result.stderr);
+        assert!(
+            result.stderr.contains("contact.kappa") && result.stderr.contains("missing"),
+            "{what}: {}",
+            result.stderr
+        );
+        let given = edit(&text, "[solver]", "[contact]\nkappa = 1e9\nalpha = 1.5\n\n[solver]");
+        // (The C4 preset gives no slide or fingers either: those are missing next.)
+        let next = parse_scene(&given).err().map(|e| e.to_string());
+        assert!(!next.as_deref().is_some_and(|e| e.contains("contact.")), "{what}, its [contact] given: {next:?}");
+    }
+    assert!(parse_scene(&soft).is_ok() && parse_scene(&phrase).is_ok(), "each preset's own scene takes its law");
 }
 
 /// A render whose output is not finite writes nothing and says why: a hammer thrown at 1e200 m/s

@@ -20,7 +20,7 @@ use crate::body::BodyParams;
 use crate::contact::{ContactSolver, Method, SolverSettings, WithSolver};
 use crate::control::{ControlSource, Fixed};
 use crate::scene::{Frame, HammerString, MassBarrier, Scene, SlideControls, SlideString, SlideStringParams};
-use crate::string::{ModalString, StringParams};
+use crate::string::{MAX_MODES, ModalString, StringParams};
 
 /// What to do with a scene once it is built.
 pub trait SceneJob {
@@ -72,12 +72,30 @@ pub fn build<J: SceneJob>(
         SceneDescription::SlideString(d) => Some(d.params.string),
     };
     if let Some(params) = string {
-        let modes = ModalString::modes_below(params, fs, sampling.max_frequency)
+        let modes = ModalString::count_modes(params, fs, sampling.max_frequency)
             .map_err(|e| SceneError::invalid(&format!("string.{}", e.key), e.reason))?;
+        // The string may be a preset's, and the rate counts as much as its length: the error
+        // names the table and the rate, and says what moves the count either way.
+        let limit = if sampling.max_frequency < 0.5 * fs {
+            format!("{} Hz, the band limit", sampling.max_frequency)
+        } else {
+            format!("{} Hz, Nyquist at sample_rate = {}", 0.5 * fs, common.sample_rate)
+        };
         if modes == 0 {
             return Err(SceneError::invalid(
-                "string.length",
-                "the string has no mode below Nyquist: it would be silent; lengthen it or lower the tension",
+                "string",
+                format!(
+                    "the string (fundamental {:.1} Hz) has no mode below {limit}: it would be silent; lengthen                      it, lower its tension or raise sample_rate",
+                    params.fundamental()
+                ),
+            ));
+        }
+        if modes > MAX_MODES {
+            return Err(SceneError::invalid(
+                "string",
+                format!(
+                    "the string has more than {MAX_MODES} modes below {limit}; shorten it, raise its tension or                      lower sample_rate"
+                ),
             ));
         }
     }

@@ -95,7 +95,8 @@ pub struct HammerStringDescription {
 }
 
 impl HammerStringDescription {
-    /// Default QSA reference energy: the hammer's kinetic energy `½ m v²` (J).
+    /// Default QSA reference energy: the hammer's kinetic energy `½ m v²` (J); for a hammer at
+    /// rest, which never strikes, the potential at 1 mm of compression.
     pub fn default_v_ref(&self) -> f64 {
         let e = self.params.hammer.kinetic_energy();
         if e > 0.0 { e } else { self.common.law.potential(1e-3) }
@@ -148,10 +149,13 @@ pub(super) struct StringTable {
     b3: Option<f64>,
 }
 
-/// What a preset provides besides the string.
+/// What a preset provides besides the string. Its contact law `(κ, α)` is its own collider's, a
+/// piano preset's felt for a hammer and the slide guitar's glass for a slide, and serves only a
+/// scene with that collider: a slide is not a felt.
 #[derive(Debug, Clone, Copy, Default)]
 struct PresetExtras {
-    law: Option<(f64, f64)>,
+    hammer_law: Option<(f64, f64)>,
+    slide_law: Option<(f64, f64)>,
     hammer_mass: Option<f64>,
     strike_position: Option<f64>,
     slide: Option<SlideParams>,
@@ -183,7 +187,7 @@ impl StringTable {
                     "slide-guitar" => {
                         let g = slide_guitar();
                         let extras = PresetExtras {
-                            law: Some((g.kappa, g.alpha)),
+                            slide_law: Some((g.kappa, g.alpha)),
                             slide: Some(g.slide),
                             fingers: Some((g.left, g.right)),
                             ..Default::default()
@@ -198,7 +202,7 @@ impl StringTable {
                     }
                 };
                 let extras = PresetExtras {
-                    law: Some((piano.kappa, piano.alpha)),
+                    hammer_law: Some((piano.kappa, piano.alpha)),
                     hammer_mass: Some(piano.hammer_mass),
                     strike_position: Some(piano.strike_position),
                     ..Default::default()
@@ -335,7 +339,7 @@ impl HammerStringFile {
     pub(super) fn validate(self) -> Result<HammerStringDescription, SceneError> {
         let (string, extras) = self.string.resolve()?;
         let head = Head { sample_rate: self.sample_rate, duration: self.duration };
-        let common = common(&head, &self.solver, &self.contact, extras.law, &self.output.options())?;
+        let common = common(&head, &self.solver, &self.contact, extras.hammer_law, &self.output.options())?;
         let h = &self.hammer;
         let hammer = HammerParams {
             mass: positive("hammer.mass", required("hammer.mass", h.mass, extras.hammer_mass)?)?,
@@ -480,7 +484,7 @@ impl SlideStringFile {
     pub(super) fn validate(self) -> Result<SlideStringDescription, SceneError> {
         let (string, extras) = self.string.resolve()?;
         let head = Head { sample_rate: self.sample_rate, duration: self.duration };
-        let common = common(&head, &self.solver, &self.contact, extras.law, &self.output.options())?;
+        let common = common(&head, &self.solver, &self.contact, extras.slide_law, &self.output.options())?;
         let preset_slide = extras.slide;
         let s = &self.slide;
         let slide = SlideParams {

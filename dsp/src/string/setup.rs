@@ -24,9 +24,7 @@ impl ModalString {
     /// How many modes [`band_limited`](Self::band_limited) would keep, or why it would fail:
     /// invalid parameters or rates, or more than [`MAX_MODES`] modes.
     pub fn modes_below(params: StringParams, sample_rate: f64, max_frequency: f64) -> Result<usize, StringError> {
-        check_rates(sample_rate, max_frequency)?;
-        params.validate()?;
-        let count = ModeCounter::new(&params, sample_rate, max_frequency).count();
+        let count = Self::count_modes(params, sample_rate, max_frequency)?;
         if count > MAX_MODES {
             return Err(StringError {
                 key: "length",
@@ -36,6 +34,14 @@ impl ModalString {
             });
         }
         Ok(count)
+    }
+
+    /// How many modes the string keeps below Nyquist and `max_frequency` (Hz), counted up to
+    /// [`MAX_MODES`]` + 1` (more than a string holds), or why its parameters or rates are invalid.
+    pub fn count_modes(params: StringParams, sample_rate: f64, max_frequency: f64) -> Result<usize, StringError> {
+        check_rates(sample_rate, max_frequency)?;
+        params.validate()?;
+        Ok(ModeCounter::new(&params, sample_rate, max_frequency).count())
     }
 
     /// An empty string (no modes) with room for `modes` modes, so that later
