@@ -37,9 +37,10 @@
 //!   it through the lock-free [`meter`] path (no allocation, lock or I/O on the audio thread).
 //!
 //! State (parameters) is saved by the framework with the plugin's version, which `filter_state`
-//! sees first: it brings every number into its parameter's range (a corrupt value to the
-//! default), gives a parameter the state leaves out its default (the player's settings stay), and
-//! it is where later releases migrate old state. A value of the wrong JSON type (an `i32` of
+//! sees first: it reads every value as its parameter's type and brings it into the range, gives
+//! a value it cannot read (a corrupt one, a choice this version does not have) and a parameter
+//! the state leaves out the default (the player's settings stay), and it is where later releases
+//! migrate old state. A value of the wrong JSON type (an `i32` of
 //! 64.5, say) fails the framework's parse before that: such a state does not load at all, and
 //! the instance keeps what it had.
 
@@ -56,7 +57,7 @@ use nice_plug::midi::{Channel, Key, VoiceID};
 use nice_plug::plugin::ParamValue;
 use nice_plug::prelude::*;
 use nice_plug_egui::{EguiEditor, EguiEditorState};
-use qsa_dsp::instrument::{Event, Instrument, Note, NoteTarget, ParamKind, bend_from_normalised, param_spec};
+use qsa_dsp::instrument::{Event, Instrument, Note, NoteTarget, ParamKind, ParamSpec, bend_from_normalised};
 
 use meter::{Shared, Tap};
 use overload::OverloadGuard;
@@ -193,6 +194,38 @@ fn report_ended<P: Plugin>(engine: &mut Instrument, context: &mut impl ProcessCo
     }
 }
 
+/// `saved`, a state's value for the parameter `spec`, as the framework reads that parameter's
+/// type, in its range; `None` if it cannot be read as one ([`QsaStrings::filter_state`]).
+fn state_value(spec: &ParamSpec, saved: &ParamValue) -> Option<ParamValue> {
+    let number = match saved {
+        ParamValue::F32(v) => Some(*v),
+        ParamValue::I32(v) => Some(*v as f32),
+        ParamValue::Bool(on) => Some(if *on { 1.0 } else { 0.0 }),
+        ParamValue::String(_) => None,
+    }
+    .filter(|v| v.is_finite());
+    let whole = |v: f32| ParamValue::I32(spec.clamp_plain(v.round()) as i32);
+    match spec.kind {
+        ParamKind::Float { .. } => number.map(|v| ParamValue::F32(spec.clamp_plain(v))),
+        ParamKind::Int { .. } => number.map(whole),
+        ParamKind::Bool { .. } => number.map(|v| ParamValue::Bool(v != 0.0)),
+        ParamKind::Choice { options, .. } => match saved {
+            ParamValue::String(id) => options.iter().any(|(known, _)| known == id).then(|| saved.clone()),
+            _ => number.map(whole),
+        },
+    }
+}
+
+/// The parameter `spec`'s default as the framework stores its type.
+fn default_value(spec: &ParamSpec) -> ParamValue {
+    let default = spec.default_plain();
+    match spec.kind {
+        ParamKind::Float { .. } => ParamValue::F32(default),
+        ParamKind::Bool { .. } => ParamValue::Bool(default != 0.0),
+        ParamKind::Int { .. } | ParamKind::Choice { .. } => ParamValue::I32(default as i32),
+    }
+}
+
 impl Plugin for QsaStrings {
     const NAME: &'static str = "QSA Strings";
     const VENDOR: &'static str = "QSA Strings";
@@ -216,35 +249,30 @@ impl Plugin for QsaStrings {
     type SysExMessage = ();
     type BackgroundTask = ();
 
-    /// Every number in a state being loaded (a choice saved by its index included) is brought
-    /// into its parameter's range, and one that is not finite (a corrupt state: JSON reads 1e39
-    /// as an `f32` infinity) becomes the default, since the framework stores saved values as
-    /// they are. The engine then never hears a value the parameter cannot take, and the state
-    /// the host saves next can be read back. A parameter the state leaves out (one an older
-    /// version did not have, or a hand-made state) takes its default, as the framework would
-    /// otherwise leave it where the instance had it; the player's settings
-    /// ([`PLAYER_SETTINGS`](qsa_dsp::instrument::PLAYER_SETTINGS)) stay as the player set them.
+    /// Every value in a state being loaded is read as its parameter's type and brought into its
+    /// range: a number into the range (a choice saved by its index included), a whole number or
+    /// a choice's index rounded, a switch as any number other than 0, a choice saved by its id
+    /// kept if this version knows the id. A value it cannot be read as (a word for a number, a
+    /// choice this version does not have, a number that is not finite: JSON reads 1e39 as an
+    /// `f32` infinity) takes the default, as does a parameter the state leaves out (one an older
+    /// version did not have, or a hand-made state): the framework would otherwise skip it and
+    /// leave the instance's value, so that one state would load differently in two instances,
+    /// and would store a non-finite number as it is. The player's settings
+    /// ([`PLAYER_SETTINGS`](qsa_dsp::instrument::PLAYER_SETTINGS)) stay as the player set them
+    /// instead. The engine then never hears a value the parameter cannot take, and the state the
+    /// host saves next can be read back.
     fn filter_state(state: &mut PluginState) {
         for spec in &qsa_dsp::instrument::PARAMETERS {
-            if qsa_dsp::instrument::PLAYER_SETTINGS.contains(&spec.id) || state.params.contains_key(spec.id) {
-                continue;
-            }
-            let default = spec.default_plain();
-            let value = match spec.kind {
-                ParamKind::Float { .. } => ParamValue::F32(default),
-                ParamKind::Bool { .. } => ParamValue::Bool(default != 0.0),
-                ParamKind::Int { .. } | ParamKind::Choice { .. } => ParamValue::I32(default as i32),
-            };
-            state.params.insert(spec.id.to_owned(), value);
-        }
-        for (id, value) in &mut state.params {
-            let Some(spec) = param_spec(id) else { continue };
-            match value {
-                ParamValue::F32(v) => *v = spec.clamp_plain(*v),
-                ParamValue::I32(v) if matches!(spec.kind, ParamKind::Int { .. } | ParamKind::Choice { .. }) => {
-                    *v = spec.clamp_plain(*v as f32) as i32;
+            match state.params.get(spec.id).map(|saved| state_value(spec, saved)) {
+                Some(Some(value)) => {
+                    state.params.insert(spec.id.to_owned(), value);
                 }
-                _ => {}
+                _ if qsa_dsp::instrument::PLAYER_SETTINGS.contains(&spec.id) => {
+                    state.params.remove(spec.id);
+                }
+                _ => {
+                    state.params.insert(spec.id.to_owned(), default_value(spec));
+                }
             }
         }
     }

@@ -931,13 +931,20 @@ fn midi_file_renders_the_same_offline_and_in_the_host() {
     }
 }
 
-/// A state saved by a later version (a newer version string, a parameter this version does not
-/// know, values beyond this version's ranges and a choice it does not have) loads what this
-/// version understands: unknown parameters are left out, numbers are clamped into their ranges,
-/// an unknown choice keeps the current one, and the instrument plays finite samples.
+/// A state saved by a later version or written by hand (a newer version string, a parameter
+/// this version does not know, values beyond this version's ranges, a choice it does not have,
+/// values saved as another type) loads what this version understands, the same in any instance:
+/// unknown parameters are left out, numbers are clamped into their ranges, a whole number saved
+/// as a float is rounded, a switch saved as a number is on unless 0, and an unknown choice or a
+/// value that is no number takes the default (not the instance's value: this one had IMP and a
+/// stereo width of 100 %), and the instrument plays finite samples.
 #[test]
 fn a_state_from_a_later_version_loads_what_it_can() {
-    let mut p = Plugin::at_48k(&release_bundle(), &[]);
+    let moved = [param("solver", 1.0), param("width", 1.0)];
+    let mut p = Plugin::at_48k(&release_bundle(), &moved);
+    let mut fresh = Plugin::at_48k(&release_bundle(), &[]);
+    assert_ne!(p.value(clap_id("solver")), fresh.value(clap_id("solver")), "the solver moved");
+    assert_ne!(p.value(clap_id("width")), fresh.value(clap_id("width")), "the width moved");
     let saved = p.save();
     let mut state: serde_json::Value = serde_json::from_slice(&saved[8..]).expect("the state is JSON after its length");
     state["version"] = serde_json::json!("99.0.0");
@@ -947,6 +954,10 @@ fn a_state_from_a_later_version_loads_what_it_can() {
     params.insert("segs".into(), serde_json::json!({ "i32": 100_000 }));
     params.insert("hand".into(), serde_json::json!({ "f32": -1e30 }));
     params.insert("solver".into(), serde_json::json!({ "string": "harp" }));
+    params.insert("nb".into(), serde_json::json!({ "f32": 95.6 }));
+    params.insert("width".into(), serde_json::json!({ "string": "wide" }));
+    params.insert("limit".into(), serde_json::json!({ "i32": 0 }));
+    params.insert("follow".into(), serde_json::json!({ "f32": 0.0 }));
     let body = serde_json::to_vec(&state).expect("JSON");
     let bytes = [&(body.len() as u64).to_le_bytes()[..], &body].concat();
     assert!(p.load(&bytes), "a later version's state loads");
@@ -954,7 +965,13 @@ fn a_state_from_a_later_version_loads_what_it_can() {
     assert_eq!(value(&mut p, "slide"), 1.0, "Slide position clamped to its top");
     assert_eq!(value(&mut p, "hand"), 0.0, "Hand height clamped to its bottom");
     assert_eq!(value(&mut p, "segs"), 63.0, "QSA segments clamped to 64");
-    assert_eq!(value(&mut p, "solver"), 0.0, "an unknown solver keeps QSA");
+    assert_eq!(value(&mut p, "solver"), value(&mut fresh, "solver"), "an unknown solver takes the default");
+    assert_eq!(value(&mut p, "width"), value(&mut fresh, "width"), "a word for the width takes the default");
+    // (A whole number's CLAP value counts from its range's bottom, 1.)
+    let block = value(&mut p, "nb");
+    assert!((block - 95.0).abs() < 1e-4, "a control block of 95.6 samples rounded to 96: {block}");
+    assert_eq!(value(&mut p, "limit"), 0.0, "the limiter saved as the number 0 is off");
+    assert_eq!(value(&mut p, "follow"), 0.0, "following keys saved as the number 0.0 is off");
     let audio =
         p.render_blocks(&[(0, param("mode", 1.0)), (0, Ev::On(0, 57, 0.8)), (0, Ev::On(0, 60, 0.8))], 19_200, 512);
     audio.assert_finite("after a later version's state");
