@@ -104,7 +104,8 @@ pub fn modified(params: &QsaParams, preset: &Preset) -> bool {
 }
 
 /// Set every parameter `preset` sets to its value, each as one host gesture (begin, set, end),
-/// and remember the preset's id.
+/// and remember the preset's id. A parameter at the preset's value already is left alone: the
+/// host records no automation or undo step for it.
 pub fn apply(params: &QsaParams, setter: &ParamSetter, preset: &Preset) {
     for (id, param, _) in params.param_map() {
         if let Some(plain) = preset.values.plain(&id).filter(|_| preset.sets(&id)) {
@@ -125,6 +126,11 @@ fn set_plain(context: &dyn GuiContextInner, param: nice_plug::prelude::ParamPtr,
     // thread, as `ParamSetter::set_parameter` makes them.
     unsafe {
         let normalized = param.preview_normalized(plain);
+        // Within a millionth of the range: the preset's value, to the rounding of a host's
+        // normalisation and back.
+        if (param.unmodulated_normalized_value() - normalized).abs() <= 1e-6 {
+            return;
+        }
         context.raw_begin_set_parameter(param);
         context.raw_set_parameter_normalized(param, normalized);
         context.raw_end_set_parameter(param);
@@ -138,7 +144,7 @@ mod tests {
 
     use egui::{MissingGlyphPolicy, RawInput};
     use nice_plug::prelude::{ParamPtr, PluginApi, PluginState};
-    use qsa_dsp::instrument::{PARAM_IDS, PLAYER_SETTINGS, find_preset};
+    use qsa_dsp::instrument::{PLAYER_SETTINGS, find_preset};
 
     use super::*;
 
@@ -178,30 +184,44 @@ mod tests {
         fn request_restart(&self) {}
     }
 
-    /// Choosing a preset sets every parameter but the player's settings, each in its own
-    /// begin–set–end gesture, to the preset's value (after the host's normalisation, within
-    /// `first_difference`'s tolerance), and the chosen id is kept; changing a parameter afterwards
-    /// marks the preset modified.
+    /// Choosing a preset sets every parameter but the player's settings that is not at the
+    /// preset's value already, each in its own begin–set–end gesture, to the preset's value
+    /// (after the host's normalisation, within `first_difference`'s tolerance), and the chosen id
+    /// is kept; choosing it again sends nothing; changing a parameter afterwards marks the preset
+    /// modified.
     #[test]
-    fn choosing_a_preset_sets_every_parameter_but_the_players_in_one_gesture_each() {
+    #[allow(unsafe_code)] // nice-plug's type-erased parameter calls are `unsafe`; see SAFETY.
+    fn choosing_a_preset_sets_every_parameter_it_changes_in_one_gesture_each() {
         for preset in factory_presets() {
             let params = Arc::new(QsaParams::default());
-            let host = RecordingHost::default();
-            apply(&params, &ParamSetter::new(&host), preset);
-            let calls = host.calls.lock().unwrap();
-            let set = PARAM_IDS.len() - PLAYER_SETTINGS.len();
-            assert_eq!(calls.len(), 3 * set, "{}: three calls per parameter it sets", preset.id);
             let map: Vec<_> =
                 params.param_map().into_iter().filter(|(id, ..)| !PLAYER_SETTINGS.contains(&id.as_str())).collect();
+            // SAFETY: the pointers come from the parameter map of `params`, alive to the test's end.
+            let at = |param: &ParamPtr| unsafe { param.unmodulated_normalized_value() };
+            let before: Vec<f32> = map.iter().map(|(_, param, _)| at(param)).collect();
+            let host = RecordingHost::default();
+            apply(&params, &ParamSetter::new(&host), preset);
+            let changed: Vec<_> = (map.iter().zip(&before))
+                .filter(|((_, param, _), was)| at(param) != **was)
+                .map(|((_, param, _), _)| *param)
+                .collect();
+            // The default preset changes nothing on a fresh instance; no preset changes everything.
+            assert!(changed.len() < map.len(), "{}: {} changed", preset.id, changed.len());
+            assert_eq!(changed.is_empty(), preset.id == "fig5-hammer", "{}: {} changed", preset.id, changed.len());
+            let calls = host.calls.lock().unwrap().clone();
+            assert_eq!(calls.len(), 3 * changed.len(), "{}: three calls per parameter it changes", preset.id);
             for (k, chunk) in calls.chunks(3).enumerate() {
                 let kinds: Vec<&str> = chunk.iter().map(|c| c.0).collect();
                 assert_eq!(kinds, ["begin", "set", "end"], "{}: gesture {k}", preset.id);
-                assert!(chunk.iter().all(|c| c.1 == map[k].1), "{}: one parameter per gesture", preset.id);
+                assert!(chunk.iter().all(|c| c.1 == changed[k]), "{}: one parameter per gesture", preset.id);
             }
             let got = params.values();
             assert_eq!(got.first_difference(&preset.values), None, "{}: {got:?}", preset.id);
             assert!(!modified(&params, preset), "{} is not modified right after choosing it", preset.id);
             assert_eq!(*params.preset.read().unwrap(), preset.id);
+            let again = RecordingHost::default();
+            apply(&params, &ParamSetter::new(&again), preset);
+            assert_eq!(again.calls.lock().unwrap().len(), 0, "{}: chosen again, nothing to send", preset.id);
         }
         let params = Arc::new(QsaParams::default());
         let host = RecordingHost::default();
