@@ -80,6 +80,8 @@ pub struct QsaStrings {
     /// Events stamped at the end of the latest call, which take the next call's first sample
     /// (the same engine sample); at most [`DEFERRED_EVENTS`], allocated here.
     deferred: Vec<Event>,
+    /// The voice count the plugin last asked the host to restart it for, if any.
+    restart_asked: Option<usize>,
 }
 
 /// How many events stamped at a call's end wait for the next call; beyond them, the waiting
@@ -96,6 +98,7 @@ impl Default for QsaStrings {
             guard: OverloadGuard::default(),
             realtime: false,
             deferred: Vec::with_capacity(DEFERRED_EVENTS),
+            restart_asked: None,
         }
     }
 }
@@ -311,6 +314,7 @@ impl Plugin for QsaStrings {
         self.tap.set_sample_rate(fs);
         self.realtime = keeps_time(buffer_config.process_mode);
         self.guard.reset();
+        self.restart_asked = None;
         true
     }
 
@@ -345,6 +349,14 @@ impl Plugin for QsaStrings {
             return ProcessStatus::Normal;
         };
         engine.set_settings(&self.params.settings());
+        // The voice pool is sized at activation. A new count the open editor did not set (it asks
+        // once its slider has settled), a state loaded with the editor closed say, asks the host
+        // to restart the plugin, once per count.
+        let voices = self.params.engine.voices.value().clamp(1, 128) as usize;
+        if voices != engine.voices() && !self.editor_state.is_open() && self.restart_asked != Some(voices) {
+            context.request_restart();
+            self.restart_asked = Some(voices);
+        }
         let (left, right) = match channels {
             [left, right, ..] => (left, right),
             _ => return ProcessStatus::Normal,

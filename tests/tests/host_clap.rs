@@ -978,6 +978,33 @@ fn a_state_from_a_later_version_loads_what_it_can() {
     assert!(audio.peak() > AUDIBLE, "the instrument plays after a later version's state");
 }
 
+/// A state loaded while the plugin runs with the editor closed, with another voice count than
+/// the pool was built for, asks the host to restart the plugin (the pool is sized at
+/// activation) once for that count, and the restart builds the pool it asks for; a state with
+/// the count the pool has asks for nothing.
+#[test]
+fn a_state_with_another_voice_count_asks_the_host_for_a_restart() {
+    let bundle = release_bundle();
+    let score: Score = vec![(0, Ev::On(0, 60, 0.8))];
+    let with_voices = |voices: i64| {
+        let mut p = Plugin::at_48k(&bundle, &[]);
+        let mut state = state_json(&p.save());
+        state["params"]["voices"] = serde_json::json!({ "i32": voices });
+        state_bytes(&state)
+    };
+    let mut p = Plugin::at_48k(&bundle, &[]);
+    let built = p.value(clap_id("voices")).expect("voices");
+    assert!(p.load(&with_voices(32)), "the state loads");
+    p.render_blocks(&score, 1_024, 256);
+    assert_eq!(p.restarts_requested(), 0, "the pool's own count asks for nothing (built for {built})");
+    assert!(p.load(&with_voices(8)), "the state loads");
+    p.render_blocks(&score, 1_024, 256);
+    assert_eq!(p.restarts_requested(), 1, "another count asks once, however many blocks run");
+    p.restart(|_| {});
+    p.render_blocks(&score, 1_024, 256);
+    assert_eq!(p.restarts_requested(), 1, "restarted with 8 voices, nothing more to ask");
+}
+
 /// A state that leaves parameters out (an older version's, or a hand-made one) gives each its
 /// default rather than the value the instance had: a float (width), a choice (the guitar's
 /// body), a switch (the limiter) and a whole number (control block). The player's settings it

@@ -17,7 +17,7 @@
 
 use std::ffi::CString;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Mutex, PoisonError};
 
 use clack_extensions::params::PluginParams;
@@ -64,10 +64,13 @@ pub struct TestHost;
 
 pub struct Shared {
     callback_requested: AtomicBool,
+    restarts_requested: AtomicUsize,
 }
 
 impl<'a> SharedHandler<'a> for Shared {
-    fn request_restart(&self) {}
+    fn request_restart(&self) {
+        self.restarts_requested.fetch_add(1, Ordering::SeqCst);
+    }
     fn request_process(&self) {}
     fn request_callback(&self) {
         self.callback_requested.store(true, Ordering::SeqCst);
@@ -204,7 +207,7 @@ impl Plugin {
         let host_info = HostInfo::new("qsa-tests", "QSA Strings", "https://example.invalid", "0.1.0").expect("host");
         let id = CString::new(PLUGIN_ID).expect("id");
         let mut instance = PluginInstance::<TestHost>::new(
-            |_| Shared { callback_requested: AtomicBool::new(false) },
+            |_| Shared { callback_requested: AtomicBool::new(false), restarts_requested: AtomicUsize::new(0) },
             |_| (),
             &entry,
             &id,
@@ -362,6 +365,11 @@ impl Plugin {
     }
 
     /// Load state; whether the plugin accepted it.
+    /// How many times the plugin has asked the host to restart it (deactivate and activate).
+    pub fn restarts_requested(&self) -> usize {
+        self.instance.access_shared_handler(|s| s.restarts_requested.load(Ordering::SeqCst))
+    }
+
     pub fn load(&mut self, bytes: &[u8]) -> bool {
         let state: PluginState = self.instance.plugin_handle().get_extension().expect("state extension");
         let accepted = state.load(&self.instance.plugin_handle(), &mut &bytes[..]).is_ok();
