@@ -22,6 +22,9 @@ pub struct Monitor {
     pub key: u8,
     /// Its energy: string, exciter (hammer or slide and hand) without the contact term (J).
     pub energy: f64,
+    /// The vibration it holds: its strings' energy (with the bridge's for a piano key), without
+    /// the exciter (J).
+    pub vibration: f64,
     /// Its contact compression (m); positive means touching.
     pub compression: f64,
     /// Its latest contact force (N), ≤ 0.
@@ -43,6 +46,7 @@ impl Default for Monitor {
             mode: Mode::Piano,
             key: 60,
             energy: 0.0,
+            vibration: 0.0,
             compression: 0.0,
             force: 0.0,
             contact_position: 0.0,
@@ -56,13 +60,14 @@ impl Instrument {
     /// A snapshot of the loudest voice (the one whose string moves most). All zeros when silent.
     pub fn monitor(&self) -> Monitor {
         let piano = self.voices.iter().filter(|v| v.sounding).map(|v| {
-            (v.string().kinetic_energy(), v.string(), None, v.energy(), v.contact(), v.strike.key, Mode::Piano)
+            let energies = (v.energy(), v.vibration());
+            (v.string().kinetic_energy(), v.string(), None, energies, v.contact(), v.strike.key, Mode::Piano)
         });
         let slide = self.slides.iter().filter(|v| v.sounding).map(|v| {
-            let weights = v.coupling_weights();
-            (v.string().kinetic_energy(), v.string(), weights, v.energy(), v.contact(), v.strike.key, Mode::Slide)
+            let (weights, energies) = (v.coupling_weights(), (v.energy(), v.string().energy()));
+            (v.string().kinetic_energy(), v.string(), weights, energies, v.contact(), v.strike.key, Mode::Slide)
         });
-        let Some((_, string, weights, energy, (compression, force, position), key, mode)) =
+        let Some((_, string, weights, (energy, vibration), (compression, force, position), key, mode)) =
             piano.chain(slide).max_by(|a, b| a.0.total_cmp(&b.0))
         else {
             return Monitor { guard_trips: self.guard_trips(), shed: self.shed_count(), ..Monitor::default() };
@@ -80,6 +85,7 @@ impl Instrument {
             mode,
             key,
             energy,
+            vibration,
             compression,
             force,
             contact_position: position,

@@ -1072,6 +1072,11 @@ impl PianoVoice {
         self.pending.is_some() || self.shedding
     }
 
+    /// The vibration the voice holds: its strings' and bridge's energy (J), the hammer left out.
+    pub fn vibration(&self) -> f64 {
+        self.core.own_energy()
+    }
+
     /// Energy of the string and hammer (J).
     pub fn energy(&self) -> f64 {
         self.core.energy()
