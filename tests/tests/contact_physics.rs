@@ -378,23 +378,28 @@ fn spline_errors(spline: &QuadSpline, lo: f64, hi: f64, points: usize) -> (f64, 
 }
 
 /// For α = 1 the recursion gives A_j = κ/2 and D_j = κ y_j, so V̂ ≡ V (docs/physics.md §1.5; the
-/// prototype measured |V̂ − V| ≤ 8e-16·V(y_ref) for N up to 1000; this test 8.7e-16 at N = 1000).
-/// Tolerance 1e-14·V(y_ref) on a grid of 20,000 points (18 or more per segment) over [−0.1 y_ref,
-/// y_ref]. The slope V̂' is exact too, but the knot slopes D_j = D_{j−1} + 2A_jΔy accumulate the
-/// rounding of each A_j (whose numerator Vk_j − Vk_{j−1} − D_{j−1}Δy cancels), so its error grows
-/// linearly with N: asserted |V̂' − V'| ≤ 16·N·ε·V'(y_ref) (measured ≤ 6.5·N·ε, i.e. 1.4e-12 at N =
-/// 1000).
+/// prototype measured |V̂ − V| ≤ 8e-16·V(y_ref) for N up to 1000; this test 8.7e-16 at N = 1000),
+/// but for rounding, which grows with N up to the scene files' 100,000 segments. On a grid of
+/// 20,000 points over [−0.1 y_ref, y_ref]:
+/// - the value within 1e-14·V(y_ref), and `4e-3·N·ε` beyond N = 10,000 (measured 5.0e-15 at
+///   N = 10,000 and 3.2e-14 at 100,000, where `4e-3·N·ε` is 8.9e-14);
+/// - the slope: the knot slopes D_j = D_{j−1} + 2A_jΔy accumulate the rounding of each A_j (whose
+///   numerator Vk_j − Vk_{j−1} − D_{j−1}Δy cancels) and of each knot value Vk_j, which the
+///   recursion hands on with alternating sign, so its error grows linearly with N at first and
+///   then as N²: asserted |V̂' − V'| ≤ max(16·N, 0.01·N²)·ε·V'(y_ref) (measured ≤ 6.5·N·ε to
+///   N = 1000, 1.4e-12 there; 4.4e-3·N²·ε at 10,000 and 2.9e-3·N²·ε at 100,000, 6.4e-9).
 #[test]
 fn spline_is_exact_for_alpha_one() {
     let law = PowerLaw::new(1e8, 1.0).expect("valid law");
     let y_ref = 2e-5;
-    for segments in [1, 2, 3, 5, 10, 30, 100, 1000] {
+    for segments in [1, 2, 3, 5, 10, 30, 100, 1000, 10_000, 100_000] {
         let spline = QuadSpline::new(law, y_ref, segments).expect("spline fit");
         let (value, slope) = spline_errors(&spline, -0.1 * y_ref, y_ref, 20_000);
         let (value, slope) = (value / law.potential(y_ref), slope / law.potential_slope(y_ref));
         println!("α = 1, N = {segments}: max|V̂ − V|/V(y_ref) = {value:.1e}, max|V̂' − V'|/V'(y_ref) = {slope:.1e}");
-        assert!(value <= 1e-14, "N = {segments}: V error {value:e}");
-        assert!(slope <= 16.0 * segments as f64 * EPS, "N = {segments}: V' error {slope:e}");
+        assert!(value <= (1e-14f64).max(4e-3 * segments as f64 * EPS), "N = {segments}: V error {value:e}");
+        let n = segments as f64;
+        assert!(slope <= (16.0 * n).max(0.01 * n * n) * EPS, "N = {segments}: V' error {slope:e}");
     }
 }
 

@@ -337,7 +337,12 @@ mod tests {
                 assert!(r.abs() <= 1e-14 * scale, "residual {r} for root {x} of ({a},{b},{c})");
             }
             assert!(l <= h);
-            assert!((l - lo).abs() <= 1e-6 * lo.abs().max(1e-300) || (h - hi).abs() <= 1e-6 * hi.abs());
+            // Both roots, the small one included where the textbook formula cancels: Vieta's
+            // product and sum, and the textbook root where it does not cancel (the larger one).
+            assert!((l * h - c / a).abs() <= 1e-14 * (c / a).abs(), "product of ({a},{b},{c})");
+            assert!((l + h + b / a).abs() <= 1e-14 * (b / a).abs().max(h.abs()), "sum of ({a},{b},{c})");
+            let (far, textbook) = if b > 0.0 { (l, lo) } else { (h, hi) };
+            assert!((far - textbook).abs() <= 1e-14 * textbook.abs(), "larger root of ({a},{b},{c})");
         }
     }
 
