@@ -32,7 +32,7 @@ use views::History;
 pub const SIZE: (f64, f64) = (1000.0, 775.0);
 
 /// Width of the parameter sliders (logical pixels).
-const SLIDER_WIDTH: f32 = 100.0;
+const SLIDER_WIDTH: f32 = 96.0;
 
 /// The editor's state (its size and whether it is open), kept by the plugin.
 pub fn default_state() -> Arc<EguiEditorState> {

@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use egui::{MissingGlyphPolicy, Pos2, RawInput, Rect, Shape, Vec2, vec2};
 use nice_plug::context::gui::{GuiContext, GuiContextInner};
-use nice_plug::prelude::{Param, ParamPtr, PluginApi, PluginState};
+use nice_plug::prelude::{Param, ParamPtr, Params, PluginApi, PluginState};
 use qsa_dsp::instrument::{Mode, Monitor, factory_presets};
 
 use super::{EditorApp, SIZE};
@@ -78,18 +78,71 @@ fn sounding(mode: Mode, contact: f64, guard_trips: u32) -> Monitor {
     m
 }
 
-/// What the editor draws in a window of `size` with the factory preset `preset` chosen (empty:
-/// none), after the audio thread sent `monitors`: its texts, each with the bounds of its glyphs,
-/// and the bounds of everything but the panel's background (which grows with what it holds).
-/// Panics on a character no font has.
-pub(super) fn draw(monitors: &[Monitor], preset: &str, size: Vec2) -> (Vec<(String, Rect)>, Rect) {
+/// The parameters with the factory preset `preset` chosen (empty: none, the defaults): every
+/// value it sets, and its id.
+#[allow(unsafe_code)] // nice-plug's type-erased parameter calls are `unsafe`; see SAFETY.
+fn with_preset(preset: &str) -> QsaParams {
+    let params = QsaParams::default();
+    if let Some(chosen) = qsa_dsp::instrument::find_preset(preset) {
+        for (id, param, _) in params.param_map() {
+            if let Some(plain) = chosen.values.plain(&id).filter(|_| chosen.sets(&id)) {
+                // SAFETY: `param` comes from the parameter map of `params`, alive here.
+                unsafe { param._internal_set_normalized_value(param.preview_normalized(plain)) };
+            }
+        }
+    }
+    *params.preset.write().unwrap() = preset.to_owned();
+    params
+}
+
+/// The parameter values an editor is drawn with: a factory preset's (by id; empty: the
+/// defaults), or every parameter at one normalised value (0: the bottoms of the ranges, 1 the
+/// tops), where the longest value texts lie.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Values<'a> {
+    Preset(&'a str),
+    Every(f32),
+}
+
+impl<'a> From<&'a str> for Values<'a> {
+    fn from(preset: &'a str) -> Self {
+        Self::Preset(preset)
+    }
+}
+
+impl<'a> From<&'a String> for Values<'a> {
+    fn from(preset: &'a String) -> Self {
+        Self::Preset(preset)
+    }
+}
+
+impl Values<'_> {
+    #[allow(unsafe_code)] // nice-plug's type-erased parameter calls are `unsafe`; see SAFETY.
+    fn params(self) -> QsaParams {
+        match self {
+            Self::Preset(id) => with_preset(id),
+            Self::Every(normalized) => {
+                let params = QsaParams::default();
+                for (_, param, _) in params.param_map() {
+                    // SAFETY: `param` comes from the parameter map of `params`, alive here.
+                    unsafe { param._internal_set_normalized_value(normalized) };
+                }
+                params
+            }
+        }
+    }
+}
+
+/// What the editor draws in a window of `size` with the parameters at `values`, after the audio
+/// thread sent `monitors`: its texts, each with the bounds of its glyphs, and the bounds of
+/// everything but the panel's background (which grows with what it holds). Panics on a
+/// character no font has.
+pub(super) fn draw<'a>(monitors: &[Monitor], values: impl Into<Values<'a>>, size: Vec2) -> (Vec<(String, Rect)>, Rect) {
     let shared = Arc::new(Shared::default());
     for m in monitors {
         shared.monitors.force_push(*m);
     }
-    let params = QsaParams::default();
-    *params.preset.write().unwrap() = preset.to_owned();
-    let mut app = EditorApp::new(Arc::new(params), shared);
+    let mut app = EditorApp::new(Arc::new(values.into().params()), shared);
     app.gui = Some(GuiContext::new(Arc::new(Host::default())));
 
     let ctx = egui::Context::default();
@@ -127,12 +180,13 @@ pub(super) fn draw(monitors: &[Monitor], preset: &str, size: Vec2) -> (Vec<(Stri
 }
 
 /// Draws the editor in its default window and in a taller one, and checks what it drew.
-fn check(case: &str, monitors: &[Monitor], preset: &str) {
+fn check<'a>(case: &str, monitors: &[Monitor], values: impl Into<Values<'a>>) {
+    let values = values.into();
     let window = vec2(SIZE.0 as f32, SIZE.1 as f32);
     let screen = Rect::from_min_size(Pos2::ZERO, window);
     // The panel's margin, less half a stroke.
     let margin = egui::Frame::central_panel(&egui::Style::default()).inner_margin.bottom as f32 - 0.5;
-    let (shown, drawn) = draw(monitors, preset, window);
+    let (shown, drawn) = draw(monitors, values, window);
     assert!(shown.iter().any(|(t, _)| t == "QSA Strings"), "{case}: nothing drawn");
     assert!(
         screen.shrink(margin).contains_rect(drawn),
@@ -145,7 +199,7 @@ fn check(case: &str, monitors: &[Monitor], preset: &str) {
     }
     // A taller window shows nothing more: nothing lies wholly below the default one.
     let mut all: Vec<String> =
-        draw(monitors, preset, vec2(window.x, 3.0 * window.y)).0.into_iter().map(|(t, _)| t).collect();
+        draw(monitors, values, vec2(window.x, 3.0 * window.y)).0.into_iter().map(|(t, _)| t).collect();
     let mut shown: Vec<String> = shown.into_iter().map(|(t, _)| t).collect();
     all.sort();
     shown.sort();
@@ -160,15 +214,39 @@ fn the_editor_fits_its_window_without_missing_glyphs_or_overlaps() {
     check("piano, guard tripped", &[sounding(Mode::Piano, 0.12, 3); 20], "");
     let overloaded = Monitor { shed: 24, ..sounding(Mode::Piano, 0.12, 3) };
     check("piano, guard tripped and voices shed", &[overloaded; 20], "");
+    check("every parameter at the bottom of its range", &[], Values::Every(0.0));
+    check("every parameter at the top of its range", &[sounding(Mode::Slide, 0.3, 0); 20], Values::Every(1.0));
     let window = vec2(SIZE.0 as f32, SIZE.1 as f32);
     let (shown, _) = draw(&[overloaded; 20], "", window);
     assert!(shown.iter().any(|(t, _)| t == "shed 24"), "the shed voices are not shown");
 }
 
+/// Every factory preset, its values set, fits the editor, which shows each value it sets away
+/// from the default.
 #[test]
+#[allow(unsafe_code)] // nice-plug's type-erased parameter calls are `unsafe`; see SAFETY.
 fn every_factory_preset_fits_the_editor() {
+    let defaults = QsaParams::default();
+    let shown_value = |param: &ParamPtr| {
+        // SAFETY: the pointers come from parameter maps alive for the whole test.
+        unsafe { param.normalized_value_to_string(param.unmodulated_normalized_value(), true) }
+    };
+    let default_text: BTreeMap<String, String> =
+        defaults.param_map().into_iter().map(|(id, param, _)| (id, shown_value(&param))).collect();
     for preset in factory_presets() {
-        check(&format!("preset {}", preset.id), &[], &preset.id);
+        let case = format!("preset {}", preset.id);
+        check(&case, &[], &preset.id);
+        let params = with_preset(&preset.id);
+        let moved: Vec<String> = (params.param_map().into_iter())
+            .map(|(id, param, _)| (id, shown_value(&param)))
+            .filter(|(id, text)| default_text[id] != *text)
+            .map(|(_, text)| text)
+            .collect();
+        assert!(!moved.is_empty() || preset.id == "fig5-hammer", "{case}: sets nothing away from the defaults");
+        let (texts, _) = draw(&[], &preset.id, vec2(SIZE.0 as f32, SIZE.1 as f32));
+        for text in moved {
+            assert!(texts.iter().any(|(t, _)| *t == text), "{case}: its value {text:?} is not shown");
+        }
     }
 }
 
