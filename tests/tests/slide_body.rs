@@ -6,7 +6,7 @@
 use qsa_dsp::body::BodyParams;
 use qsa_dsp::contact::{ExplicitSolver, NewtonSolver, PowerLaw, QsaSolver, QuadSpline};
 use qsa_dsp::control::Breakpoints;
-use qsa_dsp::instrument::SlideBody;
+use qsa_dsp::instrument::{Event, Instrument, Mode, Settings, SlideBody};
 use qsa_dsp::preset::slide_guitar;
 use qsa_dsp::scene::{Frame, Scene, SlideString};
 use qsa_dsp::scene_file::SlideAutomation;
@@ -233,18 +233,43 @@ fn the_acoustic_guitar_spreads_its_higher_modes_across_the_picture_and_keeps_its
     assert!(mean.abs() <= 0.5, "{mean:+.2} LU on average");
 }
 
-/// Changing the guitar never touches a sounding note: a note plucked on the electric guitar and
-/// switched to the acoustic 0.2 s in renders the same samples as one left alone, and the next
-/// note from silence sounds on the acoustic body (its first 0.5 s differ from the electric's by
-/// more than half their level).
+/// Changing the guitar never touches a sounding note, and the next note from silence takes it.
+/// D3 plucked on the electric guitar and switched to the acoustic 0.2 s in renders, for its
+/// 0.5 s, the same samples as D3 left on the electric; let go, and played again once all sound
+/// is off, it renders the samples of D3 on an instrument made acoustic, which differ from the
+/// electric's by more than half their energy.
 #[test]
 fn a_sounding_note_keeps_its_guitar() {
-    let (kept, switched) =
-        (slide_note(SlideBody::Pickup, 50, None), slide_note(SlideBody::Pickup, 50, Some(SlideBody::Acoustic)));
-    assert_eq!(kept, switched);
-    let (electric, acoustic) = (slide_note(SlideBody::Pickup, 50, None), slide_note(SlideBody::Acoustic, 50, None));
+    let electric = Settings { mode: Mode::Slide, limiter: false, ..Settings::default() };
+    let acoustic = Settings { slide_body: SlideBody::Acoustic, ..electric };
+    let on = Event::NoteOn { channel: 0, key: 50, velocity: 80.0 / 127.0 };
     let n = (0.5 * REALISM_FS) as usize;
-    let energy = |x: &[f32]| x[..n].iter().map(|v| f64::from(*v).powi(2)).sum::<f64>();
-    let difference: Vec<f32> = electric.iter().zip(&acoustic).map(|(a, b)| a - b).collect();
-    assert!(energy(&difference) > 0.25 * energy(&electric));
+    let note = |instrument: &mut Instrument, switch: Option<Settings>| {
+        let mut heard = Vec::with_capacity(n);
+        instrument.handle(on);
+        let (mut left, mut right) = ([0.0f32; 256], [0.0f32; 256]);
+        for block in 0..n / 256 {
+            if block == 37
+                && let Some(settings) = switch
+            {
+                instrument.set_settings(&settings);
+            }
+            instrument.process(&mut left, &mut right);
+            heard.extend_from_slice(&left);
+        }
+        heard
+    };
+    let mut switched = Instrument::new(REALISM_FS, 4, electric);
+    let first = note(&mut switched, Some(acoustic));
+    let left_alone = note(&mut Instrument::new(REALISM_FS, 4, electric), None);
+    assert!(first == left_alone, "the sounding note keeps the electric guitar");
+    switched.handle(Event::NoteOff { channel: 0, key: 50 });
+    switched.handle(Event::AllSoundOff);
+    let next = note(&mut switched, None);
+    let made_acoustic = note(&mut Instrument::new(REALISM_FS, 4, acoustic), None);
+    assert!(next == made_acoustic, "the next note sounds on the acoustic guitar");
+    let energy = |x: &[f32]| x.iter().map(|v| f64::from(*v).powi(2)).sum::<f64>();
+    let difference: Vec<f32> = left_alone.iter().zip(&next).map(|(a, b)| a - b).collect();
+    println!("the two guitars' D3 differ by {:.2} of the electric's energy", energy(&difference) / energy(&left_alone));
+    assert!(energy(&difference) > 0.25 * energy(&left_alone), "the acoustic guitar sounds other than the electric");
 }
