@@ -1707,7 +1707,7 @@ fn a_chord_struck_on_busy_slide_voices_sounds_whole() {
 /// string held on has fallen at least 3 dB below a fresh pluck's first 50 ms (measured 3.4), and
 /// the plucked one sounds within 1.5 dB of the fresh pluck (measured 0.2: the finger stops the
 /// old motion as it throws the string anew; a pluck added to the old motion without stopping
-/// it would be up to 1.6 dB louder), more than half-way from the held note back to it.
+/// it would add that motion's power, 1.6 dB), more than half-way from the held note back to it.
 #[test]
 fn a_slide_key_struck_again_while_held_plucks_again() {
     let held = play(&mut slide(Settings::default()), &vec![(0, on(50, 0.8))], 16_800, || 64);
