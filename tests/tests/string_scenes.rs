@@ -529,8 +529,9 @@ fn a_slide_scene_with_every_control_automated_needs_no_controls_table() {
 /// (`scene::hammer_string` module docs) and then steps the string alone: its output must equal
 /// the harness path's, which never retires, for every solver and output kind, up to rounding.
 /// The two paths compute the same free recursion in two forms that differ by a few ulps per mode
-/// and step (`string::kernel::free_run`); in a stable, lightly damped recursion such errors add up
-/// at most linearly, so after the N = 8,820 steps of the run they stay below `N·12ε ≈ 1.2e-11` of
+/// and step (`string::kernel::free_run`; `u = 2⁻⁵³`, the unit roundoff, half of `f64::EPSILON`);
+/// in a stable, lightly damped recursion such errors add up
+/// at most linearly, so after the N = 8,820 steps of the run they stay below `N·12u ≈ 1.2e-11` of
 /// the state's scale, and the velocity's difference quotient multiplies that by at most
 /// `2fs/ω_1 ≈ 54`. The bound is 1e-9 of the output's peak; a wrong free step misses it by orders
 /// of magnitude.

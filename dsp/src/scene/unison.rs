@@ -1436,6 +1436,9 @@ mod tests {
                 "{name}: force {force:.1e}, output {output:.1e}, drift {drift:.1e} (peak {peak_force:.1} N, at rest {unaware:.1} N)"
             );
             assert!(force < 1e-9 && output < 1e-9 && drift < 1e-9, "{name}: {force:e} {output:e} {drift:e}");
+            // The background matters: met on strings at rest, the strike's peak force differs
+            // from the copy's by over a tenth (measured 23 %), so the match above is not trivial.
+            assert!((unaware - peak_force).abs() > 0.1 * peak_force, "{name}: {unaware} N at rest, {peak_force} N");
         }
         compare(&ringing, &hammer, || QsaSolver::new(QuadSpline::new(law(3), y_ref, 6).unwrap()), "qsa");
         compare(&ringing, &hammer, || NewtonSolver::new(law(3)), "imp");
