@@ -26,8 +26,9 @@ pub const SECONDS: f64 = 2.0;
 /// Sample rate of the measurement (Hz).
 pub const SAMPLE_RATE: f64 = 48_000.0;
 
-/// MIDI velocities the report measures and plots: piano, mezzo-forte, fortissimo (40 and 120
-/// lie between the voicing table's velocities).
+/// MIDI velocities the report measures and plots: piano, mezzo-forte, fortissimo. All three are
+/// velocities of the voicing table, so the report shows the keys meeting its targets; the
+/// loudness tests check the velocities between them, where the table interpolates.
 pub const VELOCITIES: [u8; 3] = [40, 80, 120];
 
 /// Loudness every key has after voicing at MIDI velocity 80 (LUFS)...
