@@ -432,9 +432,24 @@ pub enum Match<'a> {
     },
 }
 
+/// Of `rows`, the QSA rows of one case at one rate, the one with the fewest segments from which
+/// every row with more segments also has an `error` within [`ERROR_TOLERANCE`] of `target`: a
+/// match that holds as N grows, not one N whose spline error happens to cancel the time step's
+/// while the next N's does not.
+pub fn fewest_segments_matching<'a>(
+    rows: impl Iterator<Item = &'a ErrorRow>,
+    error: impl Fn(&ErrorRow) -> f64,
+    target: f64,
+) -> Option<&'a ErrorRow> {
+    let mut rows: Vec<&ErrorRow> = rows.collect();
+    rows.sort_by_key(|r| r.config.segments);
+    let from = rows.iter().rposition(|r| !(error(r) <= target + ERROR_TOLERANCE)).map_or(0, |i| i + 1);
+    rows.get(from).copied()
+}
+
 /// The lowest oversampling at which IMP's `signal` error is resolved (`check`) and below
-/// [`USEFUL_ERROR`], and there the QSA row with the fewest segments whose error is within
-/// [`ERROR_TOLERANCE`] of IMP's.
+/// [`USEFUL_ERROR`], and there the QSA row with the fewest segments from which every larger N
+/// is within [`ERROR_TOLERANCE`] of IMP's error ([`fewest_segments_matching`]).
 pub fn as_accurate_as_imp<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal, check: f64) -> Match<'a> {
     let imp_at =
         |k: usize| rows.iter().find(|r| r.case == case && r.config.method == Method::Imp && r.config.oversampling == k);
@@ -444,12 +459,9 @@ pub fn as_accurate_as_imp<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal, 
         if e > USEFUL_ERROR || !resolved(e, check) {
             continue;
         }
-        let qsa = rows
-            .iter()
-            .filter(|r| r.case == case && r.config.method == Method::Qsa && r.config.oversampling == k)
-            .filter(|r| signal.of(r) <= e + ERROR_TOLERANCE)
-            .min_by_key(|r| r.config.segments);
-        if let Some(qsa) = qsa {
+        let at_k =
+            rows.iter().filter(|r| r.case == case && r.config.method == Method::Qsa && r.config.oversampling == k);
+        if let Some(qsa) = fewest_segments_matching(at_k, |r| signal.of(r), e) {
             return Match::Found { qsa, imp };
         }
     }
@@ -536,6 +548,26 @@ mod tests {
             other => panic!("{other:?}"),
         }
         assert!(matches!(as_accurate_as_imp(&rows[..2], "c", Signal::Force, -4.0), Match::Unresolved { .. }));
+    }
+
+    /// A QSA row that matches IMP while the next N does not (its spline error cancelling the
+    /// time step's) is no match: the fewest segments is the one from which every larger N
+    /// matches.
+    #[test]
+    fn a_match_must_hold_for_every_larger_n() {
+        let rows = vec![
+            row(Method::Imp, 0, 1, -1.33, 3.0, 3.0),
+            row(Method::Qsa, 2, 1, -1.43, 1.0, 1.0),
+            row(Method::Qsa, 3, 1, -1.23, 1.0, 1.0),
+            row(Method::Qsa, 4, 1, -1.30, 1.0, 1.0),
+            row(Method::Qsa, 6, 1, -1.32, 1.0, 1.0),
+        ];
+        match as_accurate_as_imp(&rows, "c", Signal::Force, -4.0) {
+            Match::Found { qsa, .. } => assert_eq!(qsa.config.segments, 4),
+            other => panic!("{other:?}"),
+        }
+        let none_past = fewest_segments_matching(rows[1..3].iter(), |r| Signal::Force.of(r), -1.33);
+        assert!(none_past.is_none(), "the largest N does not match: {none_past:?}");
     }
 
     #[test]
