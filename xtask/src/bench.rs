@@ -501,9 +501,17 @@ pub fn measure_piano(
     let calls = CallStats::of(&fastest, keys.len(), call);
     rtfs.sort_by(f64::total_cmp);
     let rtf = rtfs[rtfs.len() / 2];
-    // Every mode a voice steps: a piano key's strings and its copy of the soundboard.
+    // Every mode a voice steps: a piano key's strings and its copy of the soundboard; a slide
+    // voice's string, and the acoustic guitar's body when it sounds on one.
     let board = qsa_dsp::bridge::BridgeParams::soundboard(qsa_dsp::bridge::SOUNDBOARD_CONDUCTANCE);
     let board_modes = board.modes.iter().filter(|m| m.frequency < 0.49 * PIANO_RATE).count();
+    let body_modes = match settings.slide_body {
+        SlideBody::Acoustic => {
+            let body = qsa_dsp::body::BodyParams::guitar();
+            body.modes.iter().filter(|m| m.mode.frequency < 0.49 * PIANO_RATE).count()
+        }
+        SlideBody::Pickup => 0,
+    };
     let modes = keys
         .iter()
         .map(|&k| {
@@ -513,7 +521,7 @@ pub fn measure_piano(
                     qsa_dsp::preset::piano_note(k).strings,
                     board_modes,
                 ),
-                Mode::Slide => (qsa_dsp::preset::slide_guitar().string, 1, 0),
+                Mode::Slide => (qsa_dsp::preset::slide_guitar().string, 1, body_modes),
             };
             let one = qsa_dsp::string::ModalString::band_limited(string, PIANO_RATE, settings.max_frequency)
                 .map_or(0, |s| s.modes());
