@@ -212,10 +212,23 @@ pub fn explanation(rows: &[StiffRow], base_rate: f64) -> String {
             }
         );
     }
+    // The finest render's own error, estimated from IMP's convergence towards it: at the two
+    // rates below it IMP's errors fall by `p·log10 2` decades a doubling (`p` its observed
+    // order), so the finest render lies `log10(2^p − 1)` decades below IMP's at half its rate.
+    // A lead whose EXP error is below that is not resolved by the finest render.
+    let own_error = (|| {
+        let (half, quarter) = (find(Method::Imp, finest / 2, finest)?, find(Method::Imp, finest / 4, finest)?);
+        let order = (quarter.force_error - half.force_error) / 2f64.log10();
+        (order > 0.0).then(|| half.force_error - (2f64.powf(order) - 1.0).log10())
+    })();
     let leads: Vec<String> = OVERSAMPLING
         .iter()
         .filter_map(|&k| Some((k, find(Method::Imp, k, finest)?, find(Method::Exp, k, finest)?)))
-        .map(|(k, imp, exp)| format!("{k}×: {:+.2}", imp.force_error - exp.force_error))
+        .map(|(k, imp, exp)| {
+            let unresolved = own_error.is_some_and(|own| exp.force_error < own);
+            let mark = if unresolved { " (unresolved: EXP below the finest render's own error)" } else { "" };
+            format!("{k}×: {:+.2}{mark}", imp.force_error - exp.force_error)
+        })
         .collect();
     let always = OVERSAMPLING
         .iter()
