@@ -287,14 +287,15 @@ pub fn most_accurate<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal) -> Op
 
 /// The Pareto front of `case` over all methods for `signal`, by increasing RTF, with errors below
 /// the reference's resolution `check` counted as `check` (no row is credited with an accuracy the
-/// reference cannot confirm, so the cheapest of such rows stands for them). A row whose error is
-/// not a number is left out.
+/// reference cannot confirm, so the cheapest of such rows stands for them), each row better than
+/// every cheaper one by more than [`ERROR_TOLERANCE`] (a difference the report calls equal buys
+/// no place at a higher cost). A row whose error is not a number is left out.
 pub fn pareto<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal, check: f64) -> Vec<&'a ErrorRow> {
     let points: Vec<(f64, f64, &ErrorRow)> = (rows.iter())
         .filter(|r| r.case == case && !signal.of(r).is_nan())
         .filter_map(|r| r.rtf.map(|t| (t, signal.of(r).max(check), r)))
         .collect();
-    super::pareto::front(&points).into_iter().map(|p| p.2).collect()
+    super::pareto::front(&points, ERROR_TOLERANCE).into_iter().map(|p| p.2).collect()
 }
 
 /// QSA against EXP at one target.

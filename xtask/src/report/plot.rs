@@ -176,7 +176,7 @@ fn pareto_panel(area: &Area, rows: &[&ErrorRow], signal: Signal, check: f64, cap
         // The front ranks the rows as the tables do: an error below the reference's own counts as
         // that (unresolved), so the line runs along it there while the dots stay where they fell.
         let capped: Vec<(f64, f64, String)> = points.iter().map(|p| (p.0, p.1.max(check), p.2.clone())).collect();
-        let best = front(&capped);
+        let best = front(&capped, 0.0);
         chart
             .draw_series(LineSeries::new(best.iter().map(|p| (p.0, p.1)), c.stroke_width(2)))
             .map_err(|e| e.to_string())?
