@@ -842,9 +842,17 @@ fn a_string_with_too_many_modes_or_none_at_the_scenes_rate_is_a_clear_error() {
     let soft = fs::read_to_string(fig4_path().with_file_name("hammer-c4-soft.toml")).unwrap();
     let longer = |length: &str| edit(&soft, "eta0 = 8.0 ", &format!("length = {length}\neta0 = 8.0 "));
     let cases = [
-        (longer("50.0"), "more than 4096 modes below 22050 Hz, Nyquist at sample_rate = 44100"),
-        (longer("0.01"), "no mode below 22050 Hz, Nyquist at sample_rate = 44100"),
-        (edit(&soft, "sample_rate = 44100", "sample_rate = 500"), "no mode below 250 Hz"),
+        (
+            longer("50.0"),
+            "more than 4096 modes below 22050 Hz, Nyquist at sample_rate = 44100; shorten it, raise its tension or \
+             lower sample_rate",
+        ),
+        (
+            longer("0.01"),
+            "no mode below 22050 Hz, Nyquist at sample_rate = 44100: it would be silent; lengthen it, lower its \
+             tension or raise sample_rate",
+        ),
+        (edit(&soft, "sample_rate = 44100", "sample_rate = 500"), "no mode below 250 Hz, Nyquist at sample_rate = 500"),
     ];
     for (text, why) in cases {
         let dir = TempDir::new().unwrap();

@@ -85,7 +85,8 @@ pub fn build<J: SceneJob>(
             return Err(SceneError::invalid(
                 "string",
                 format!(
-                    "the string (fundamental {:.1} Hz) has no mode below {limit}: it would be silent; lengthen                      it, lower its tension or raise sample_rate",
+                    "the string (fundamental {:.1} Hz) has no mode below {limit}: it would be silent; lengthen \
+                     it, lower its tension or raise sample_rate",
                     params.fundamental()
                 ),
             ));
@@ -94,7 +95,8 @@ pub fn build<J: SceneJob>(
             return Err(SceneError::invalid(
                 "string",
                 format!(
-                    "the string has more than {MAX_MODES} modes below {limit}; shorten it, raise its tension or                      lower sample_rate"
+                    "the string has more than {MAX_MODES} modes below {limit}; shorten it, raise its tension or \
+                     lower sample_rate"
                 ),
             ));
         }
