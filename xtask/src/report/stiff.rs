@@ -168,6 +168,15 @@ pub fn parse(text: &str) -> Result<Vec<StiffRow>, String> {
         .collect()
 }
 
+/// The error (log10) of the finest render, estimated from IMP's errors against it at half and
+/// a quarter of its rate (log10), for a scheme converging as `C h^p`: `half − log10(r − 2)`,
+/// `r = 10^(quarter − half)` (see [`explanation`]); `None` unless `r > 2` (no convergence seen).
+fn own_error(half: Option<f64>, quarter: Option<f64>) -> Option<f64> {
+    let (half, quarter) = (half?, quarter?);
+    let r = 10f64.powf(quarter - half);
+    (r > 2.0).then(|| half - (r - 2.0).log10())
+}
+
 /// The study's findings in words, from its rows; `base_rate` is the case's (Hz). Empty if the
 /// rows lack the comparison at 8× (a study run with other settings).
 pub fn explanation(rows: &[StiffRow], base_rate: f64) -> String {
@@ -212,15 +221,15 @@ pub fn explanation(rows: &[StiffRow], base_rate: f64) -> String {
             }
         );
     }
-    // The finest render's own error, estimated from IMP's convergence towards it: at the two
-    // rates below it IMP's errors fall by `p·log10 2` decades a doubling (`p` its observed
-    // order), so the finest render lies `log10(2^p − 1)` decades below IMP's at half its rate.
-    // A lead whose EXP error is below that is not resolved by the finest render.
-    let own_error = (|| {
-        let (half, quarter) = (find(Method::Imp, finest / 2, finest)?, find(Method::Imp, finest / 4, finest)?);
-        let order = (quarter.force_error - half.force_error) / 2f64.log10();
-        (order > 0.0).then(|| half.force_error - (2f64.powf(order) - 1.0).log10())
-    })();
+    // The finest render's own error, estimated from IMP's convergence: with `x_h = x + C h^p`,
+    // IMP at half and a quarter of the finest rate differ from the finest render by `C h^p`
+    // times `2^p − 1` and `4^p − 1`, whose ratio `r` is `2^p + 1`; the finest render's own
+    // error, `C h^p`, is then IMP's at half its rate over `r − 2`. A lead whose EXP error is
+    // below that is not resolved by the finest render.
+    let own_error = own_error(
+        find(Method::Imp, finest / 2, finest).map(|r| r.force_error),
+        find(Method::Imp, finest / 4, finest).map(|r| r.force_error),
+    );
     let leads: Vec<String> = OVERSAMPLING
         .iter()
         .filter_map(|&k| Some((k, find(Method::Imp, k, finest)?, find(Method::Exp, k, finest)?)))
@@ -232,8 +241,9 @@ pub fn explanation(rows: &[StiffRow], base_rate: f64) -> String {
         .collect();
     let always = OVERSAMPLING
         .iter()
-        .filter_map(|&k| Some(find(Method::Imp, k, finest)?.force_error - find(Method::Exp, k, finest)?.force_error))
-        .all(|d| d > 0.0);
+        .filter_map(|&k| Some((find(Method::Imp, k, finest)?, find(Method::Exp, k, finest)?)))
+        .filter(|(_, exp)| !own_error.is_some_and(|own| exp.force_error < own))
+        .all(|(imp, exp)| imp.force_error - exp.force_error > 0.0);
     let _ = write!(
         s,
         "The rest is {}: against IMP at {finest}×, EXP's force error is below IMP's at the same rate by {} decades. ",
@@ -286,6 +296,19 @@ pub fn explanation(rows: &[StiffRow], base_rate: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Renders `x_h = x + C h^p` at steps `h_f`, `2h_f` and `4h_f`: the finest render's own error
+    /// `C h_f^p` is recovered from the other two's errors against it, for orders 1, 2 and 1.94.
+    #[test]
+    fn the_finest_renders_own_error_is_recovered_at_any_order() {
+        for p in [1.0f64, 2.0, 1.94] {
+            let c_h = 1e-3;
+            let against_finest = |steps: f64| (c_h * (steps.powf(p) - 1.0)).log10();
+            let own = own_error(Some(against_finest(2.0)), Some(against_finest(4.0))).expect("converging");
+            assert!((own - c_h.log10()).abs() < 1e-12, "order {p}: {own} against {}", c_h.log10());
+        }
+        assert_eq!(own_error(Some(-1.0), Some(-1.2)), None, "errors growing with the rate: no estimate");
+    }
 
     #[test]
     fn csv_reads_back_what_it_wrote() {
