@@ -963,16 +963,21 @@ impl PianoVoice {
         self.applied = f64::NAN;
     }
 
-    /// The key of the pending note this voice starts at the coming block's start, its steal fade
-    /// over.
+    /// Whether the pending note starts at the coming block's start: its steal fade is over, or
+    /// the guard's fade has silenced the old note already ([`begin_block`](Self::begin_block)).
+    fn pending_starts_now(&self) -> bool {
+        self.fade_left == 0 || self.guard_fade.is_fading()
+    }
+
+    /// The key of the pending note this voice starts at the coming block's start.
     pub fn starts_now(&self) -> Option<u8> {
-        self.pending.filter(|_| self.fade_left == 0).map(|p| p.key)
+        self.pending.filter(|_| self.pending_starts_now()).map(|p| p.key)
     }
 
     /// The MIDI channel whose pedals reach this voice from the coming block's start: that of the
     /// pending note it starts then, else its note's.
     pub fn channel_now(&self) -> u8 {
-        self.pending.filter(|_| self.fade_left == 0).map_or(self.strike.channel, |p| p.channel)
+        self.pending.filter(|_| self.pending_starts_now()).map_or(self.strike.channel, |p| p.channel)
     }
 
     /// The key this voice will sound once any steal fade is over.
@@ -1403,7 +1408,9 @@ mod tests {
 
     /// A note that steals a voice the guard is fading, held or let go while it waits, sounds in
     /// full at the next block as on a fresh voice: the old note's trip is counted, and the fade
-    /// the guard began has silenced the voice already.
+    /// the guard began has silenced the voice already. It starts at that block for the
+    /// instrument too: its key is the one it starts (which the instrument meets with the motion
+    /// elsewhere) and its channel's pedals reach it.
     #[test]
     fn a_note_stealing_a_voice_during_a_guard_fade_sounds_as_on_a_fresh_voice() {
         for released in [false, true] {
@@ -1412,15 +1419,16 @@ mod tests {
             let mut out = [0.0; 64];
             voice.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
             voice.render(&mut out);
-            let strike = Strike { channel: 0, key: 62, velocity: 0.7, shifted: false, timbre: None };
+            let strike = Strike { channel: 3, key: 62, velocity: 0.7, shifted: false, timbre: None };
             voice.steal(strike, FS, 0);
             if released {
-                voice.key_up(0, 62);
+                voice.key_up(3, 62);
             }
+            assert_eq!((voice.starts_now(), voice.channel_now()), (Some(62), 3), "released {released}");
             let mut fresh = PianoVoice::new(200, FS);
             fresh.play(strike, &settings, 0);
             if released {
-                fresh.key_up(0, 62);
+                fresh.key_up(3, 62);
             }
             let (mut heard, mut expected) = ([0.0; 256], [0.0; 256]);
             for (v, out) in [(&mut voice, &mut heard), (&mut fresh, &mut expected)] {
