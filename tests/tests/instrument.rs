@@ -1706,8 +1706,7 @@ fn a_chord_struck_on_busy_slide_voices_sounds_whole() {
 /// without a note-off), plucks again, as a new note: over the 50 ms after it, 0.3 s in, the
 /// string held on has fallen at least 3 dB below a fresh pluck's first 50 ms (measured 3.4), and
 /// the plucked one sounds within 1.5 dB of the fresh pluck (measured 0.2: the finger stops the
-/// old motion as it throws the string anew; a pluck added to the old motion without stopping
-/// it would add that motion's power, 1.6 dB), more than half-way from the held note back to it.
+/// old motion as it throws the string anew), so the second note-on is heard.
 #[test]
 fn a_slide_key_struck_again_while_held_plucks_again() {
     let held = play(&mut slide(Settings::default()), &vec![(0, on(50, 0.8))], 16_800, || 64);
@@ -1718,7 +1717,6 @@ fn a_slide_key_struck_again_while_held_plucks_again() {
     println!("after the second note-on {plucked:.1} dB from a fresh pluck; held on, {ringing:.1} dB");
     assert!(ringing <= -3.0, "held on, the string has fallen {ringing:.1} dB from a fresh pluck");
     assert!(plucked.abs() < 1.5, "the second note-on sounds {plucked:.1} dB from a fresh pluck");
-    assert!(plucked - ringing > 0.5 * ringing.abs(), "the pluck adds {:.1} dB", plucked - ringing);
 }
 
 /// The registered-parameter controllers that select `parameter` (MSB, LSB) on `channel` and set

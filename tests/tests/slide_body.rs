@@ -236,8 +236,8 @@ fn the_acoustic_guitar_spreads_its_higher_modes_across_the_picture_and_keeps_its
 /// Changing the guitar never touches a sounding note, and the next note from silence takes it.
 /// D3 plucked on the electric guitar and switched to the acoustic 0.2 s in renders, for its
 /// 0.5 s, the same samples as D3 left on the electric; let go, and played again once all sound
-/// is off, it renders the samples of D3 on an instrument made acoustic, which differ from the
-/// electric's by more than half their energy.
+/// is off, it renders the samples of D3 on an instrument made acoustic, whose difference from
+/// the electric's holds more than half the electric's energy (measured 1.22 of it).
 #[test]
 fn a_sounding_note_keeps_its_guitar() {
     let electric = Settings { mode: Mode::Slide, limiter: false, ..Settings::default() };
@@ -271,5 +271,5 @@ fn a_sounding_note_keeps_its_guitar() {
     let energy = |x: &[f32]| x.iter().map(|v| f64::from(*v).powi(2)).sum::<f64>();
     let difference: Vec<f32> = left_alone.iter().zip(&next).map(|(a, b)| a - b).collect();
     println!("the two guitars' D3 differ by {:.2} of the electric's energy", energy(&difference) / energy(&left_alone));
-    assert!(energy(&difference) > 0.25 * energy(&left_alone), "the acoustic guitar sounds other than the electric");
+    assert!(energy(&difference) > 0.5 * energy(&left_alone), "the acoustic guitar sounds other than the electric");
 }
