@@ -84,8 +84,8 @@ pub struct QsaStrings {
     restart_asked: Option<usize>,
 }
 
-/// How many events stamped at a call's end wait for the next call; beyond them, the waiting
-/// events and the rest are played at once, in order.
+/// How many events stamped at a call's end wait for the next call; the one beyond them is
+/// played at once after them, in order, and the next ones wait again.
 const DEFERRED_EVENTS: usize = 256;
 
 impl Default for QsaStrings {

@@ -153,8 +153,8 @@ mod tests {
         }
     }
 
-    /// A lossless harmonic string whose 441st mode falls on Nyquist but for rounding (50 Hz at
-    /// 44.1 kHz, 96 kHz and 88.2 kHz with 100 Hz): that mode would have `C = 0` and `K̂ = ∞`, so
+    /// A lossless harmonic string whose top mode falls on Nyquist but for rounding (50 Hz at
+    /// 44.1 kHz and at 88.2 kHz, 100 Hz at 88.2 kHz): that mode would have `C = 0` and `K̂ = ∞`, so
     /// the string keeps the modes below it, each with a finite, positive `C` and `K̂` and at
     /// least `10⁻⁶` in `1 + 2P + Q`, and its energy at rest is 0 and struck is finite.
     #[test]
@@ -178,8 +178,8 @@ mod tests {
         }
     }
 
-    /// Damping so heavy that `P` rounds to 1 leaves the modes no stiffness in their recursion
-    /// (`B = A`): held under a force they stay at 0 rather than at `f/0`.
+    /// Damping so heavy that `A = 2P` rounds to `B = 1 + Q` (`P → ½`, `Q → 0`) leaves the modes
+    /// no stiffness in their recursion: held under a force they stay at 0 rather than at `f/0`.
     #[test]
     fn a_mode_without_stiffness_rests_at_zero_under_a_force() {
         let mut p = c4();

@@ -62,21 +62,23 @@ impl Mode {
 
 /// The least `1 + 2P + Q` a kept mode may have: a mode this close to Nyquist (an undamped one
 /// within `10⁻³` rad of `π` per step, 7 Hz at 44.1 kHz) is left out. `C` is proportional to it
-/// and `K̂ = (B − A)/C`, so its rounding (`ε` absolute) is a relative error of `ε/10⁻⁶ = 2.2e-10`
-/// at most in `C` and `K̂`, inside the energy balance's 1e-9; at `ωΔt → π` it would round to 0
-/// and make `K̂` infinite.
+/// and `K̂ = (B − A)/C`, so the few roundings of the sum (each `ε/2` absolute) are a relative
+/// error of a few `ε/10⁻⁶ = 2.2e-10` at most in `C` and `K̂`, near the energy balance's 1e-9
+/// only for a mode that holds the whole energy; at `ωΔt → π` the sum would round to 0 and make
+/// `K̂` infinite.
 const MIN_HEADROOM: f64 = 1e-6;
 
 /// Angle per step (rad) above which a mode's headroom `1 + 2P + Q` is checked: below it the
-/// headroom is at least `2(1 + cos 3) = 0.02` for any damping.
+/// headroom is at least `sin² 3 = 0.0199` for any damping (`1 + 2d cos θ + d²`, `d = e^{−σΔt}`,
+/// is least at `d = −cos θ`, where it is `sin² θ`).
 const NEAR_NYQUIST: f64 = 3.0;
 
 /// The modes of a string that ring strictly below Nyquist and a frequency limit, in order, with
 /// at least [`MIN_HEADROOM`] in `1 + 2P + Q`. The sequence stops at the first mode that fails
 /// (an overdamped mode, which does not ring, is kept while `ω0_i` is below the limit). `ω_i`
-/// increases with `i` up to the limit unless the damping grows as fast as the frequency (`η2`):
-/// then `ω_i` falls again towards overdamping, and modes far above the limit, decaying faster
-/// than `π·fs` per second, may ring below it again; they are left out.
+/// increases with `i` up to the limit unless the damping grows like `β²` (`η2`, `b3`): then
+/// `ω_i` falls again towards overdamping, and modes far above the limit, decaying faster than
+/// `π·fs` per second, may ring below it again; they are left out.
 pub(super) struct ModeCounter<'a> {
     params: &'a StringParams,
     /// π·min(fs, 2 f_max) (rad/s).

@@ -176,7 +176,8 @@ impl ModalString {
 /// (N): the recursion `u^{n+1} = 2P_i u^n − Q_i u^{n−1} + C_i f_i`, with the coefficients
 /// `(A_i, B_i, C_i) = (2P_i, 1 + Q_i, C_i)`, leaves `u_i = C_i f_i/(B_i − A_i)` where it is. A
 /// mode without stiffness in its recursion (`B_i = A_i`: a free mass, or damping so heavy that
-/// `P_i` rounds to 1) has no such rest and is held at 0. The padding beyond them is zeroed.
+/// `2P_i` rounds to `1 + Q_i`) has no such rest and is held at 0. The padding beyond them is
+/// zeroed.
 pub(super) fn hold_still(
     (a, b, c): (&[f64], &[f64], &[f64]),
     modes: usize,
