@@ -114,7 +114,7 @@ pub use notes::{EndedNote, MAX_TUNING, Note, NoteParam, NoteTarget};
 pub use output::{CEILING, LOOKAHEAD, OutputStage, RELEASE, lookahead_samples};
 pub use params::{
     Group, PARAM_IDS, PARAMETERS, PLAYER_SETTINGS, ParamError, ParamKind, ParamSpec, ParamValues, Scale, ValueDisplay,
-    param_index, param_spec,
+    param_index, param_spec, plain_values_differ,
 };
 pub use partners::{
     MAX_PARTNER_MODES, PARTNER_BAND, PARTNER_KEYS, PARTNER_TOLERANCE_CENTS, PartnerTable, STRIKING_PARTIALS,

@@ -990,8 +990,15 @@ impl ParamValues {
             .iter()
             .filter(|spec| compared(spec.id))
             .map(|spec| (spec.id, (spec.get)(self), (spec.get)(other)))
-            .find_map(|(id, a, b)| ((a - b).abs() > 1e-5f32.max(1e-4 * a.abs().max(b.abs()))).then_some(id))
+            .find_map(|(id, a, b)| plain_values_differ(a, b).then_some(id))
     }
+}
+
+/// Whether two plain values of a parameter differ by more than a host's `f32` normalisation can
+/// account for: relative 1e-4, or 1e-5 absolute near zero
+/// ([`ParamValues::first_difference`]'s tolerance).
+pub fn plain_values_differ(a: f32, b: f32) -> bool {
+    (a - b).abs() > 1e-5f32.max(1e-4 * a.abs().max(b.abs()))
 }
 
 #[cfg(test)]

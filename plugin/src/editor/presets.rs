@@ -10,7 +10,7 @@
 
 use egui::{Id, Label, RichText, Ui};
 use nice_plug::prelude::{GuiContextInner, ParamSetter, Params};
-use qsa_dsp::instrument::{CATEGORIES, Preset, factory_presets};
+use qsa_dsp::instrument::{CATEGORIES, Preset, factory_presets, plain_values_differ};
 
 use crate::params::QsaParams;
 
@@ -104,11 +104,16 @@ pub fn modified(params: &QsaParams, preset: &Preset) -> bool {
 }
 
 /// Set every parameter `preset` sets to its value, each as one host gesture (begin, set, end),
-/// and remember the preset's id. A parameter at the preset's value already is left alone: the
-/// host records no automation or undo step for it.
+/// and remember the preset's id. A parameter at the preset's value already (within the tolerance
+/// that marks a preset modified) is left alone: the host records no automation or undo step for
+/// it. (A value the editor sent the host a moment ago, which has not come back yet, counts as
+/// not sent: the parameter is compared as it stands.)
 pub fn apply(params: &QsaParams, setter: &ParamSetter, preset: &Preset) {
+    let now = params.values();
     for (id, param, _) in params.param_map() {
-        if let Some(plain) = preset.values.plain(&id).filter(|_| preset.sets(&id)) {
+        if let Some(plain) = preset.values.plain(&id).filter(|_| preset.sets(&id))
+            && now.plain(&id).is_none_or(|current| plain_values_differ(current, plain))
+        {
             set_plain(setter.raw_context, param, plain);
         }
     }
@@ -126,11 +131,6 @@ fn set_plain(context: &dyn GuiContextInner, param: nice_plug::prelude::ParamPtr,
     // thread, as `ParamSetter::set_parameter` makes them.
     unsafe {
         let normalized = param.preview_normalized(plain);
-        // Within a millionth of the range: the preset's value, to the rounding of a host's
-        // normalisation and back.
-        if (param.unmodulated_normalized_value() - normalized).abs() <= 1e-6 {
-            return;
-        }
         context.raw_begin_set_parameter(param);
         context.raw_set_parameter_normalized(param, normalized);
         context.raw_end_set_parameter(param);
