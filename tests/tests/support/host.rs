@@ -364,12 +364,12 @@ impl Plugin {
         bytes
     }
 
-    /// Load state; whether the plugin accepted it.
     /// How many times the plugin has asked the host to restart it (deactivate and activate).
     pub fn restarts_requested(&self) -> usize {
         self.instance.access_shared_handler(|s| s.restarts_requested.load(Ordering::SeqCst))
     }
 
+    /// Load state; whether the plugin accepted it.
     pub fn load(&mut self, bytes: &[u8]) -> bool {
         let state: PluginState = self.instance.plugin_handle().get_extension().expect("state extension");
         let accepted = state.load(&self.instance.plugin_handle(), &mut &bytes[..]).is_ok();

@@ -287,9 +287,10 @@ pub fn most_accurate<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal) -> Op
 
 /// The Pareto front of `case` over all methods for `signal`, by increasing RTF, with errors below
 /// the reference's resolution `check` counted as `check` (no row is credited with an accuracy the
-/// reference cannot confirm, so the cheapest of such rows stands for them), each row better than
-/// every cheaper one by more than [`ERROR_TOLERANCE`] (a difference the report calls equal buys
-/// no place at a higher cost). A row whose error is not a number is left out.
+/// reference cannot confirm, so the cheapest of such rows stands for them), each row better by
+/// more than [`ERROR_TOLERANCE`] than the cheaper row before it on the front (a difference the
+/// report calls equal buys no place at a higher cost). A row whose error is not a number is left
+/// out.
 pub fn pareto<'a>(rows: &'a [ErrorRow], case: &str, signal: Signal, check: f64) -> Vec<&'a ErrorRow> {
     let points: Vec<(f64, f64, &ErrorRow)> = (rows.iter())
         .filter(|r| r.case == case && !signal.of(r).is_nan())

@@ -2,8 +2,9 @@
 //! both run time and error. The plots draw it and the budget table picks from it.
 
 /// The Pareto front of `(cost, error, label)` points: sorted by cost, each point better in error
-/// than every cheaper one by more than `margin` (0: strictly better; the report's tolerance: a
-/// difference it would call equal buys no place on the front at a higher cost).
+/// by more than `margin` than the cheaper point before it on the front (0: strictly better than
+/// every cheaper point; the report's tolerance: a difference it would call equal buys no place
+/// on the front at a higher cost).
 pub fn front<T: Clone>(points: &[(f64, f64, T)], margin: f64) -> Vec<(f64, f64, T)> {
     let mut sorted: Vec<(f64, f64, T)> =
         points.iter().filter(|p| p.0.is_finite() && p.1.is_finite()).cloned().collect();

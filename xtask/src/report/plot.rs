@@ -174,9 +174,10 @@ fn pareto_panel(area: &Area, rows: &[&ErrorRow], signal: Signal, check: f64, cap
             .draw_series(points.iter().map(|p| Circle::new((p.0, p.1), 4, marker_style)))
             .map_err(|e| e.to_string())?;
         // The front ranks the rows as the tables do: an error below the reference's own counts as
-        // that (unresolved), so the line runs along it there while the dots stay where they fell.
+        // that (unresolved), so the line runs along it there while the dots stay where they fell,
+        // and a dearer row joins only when better by more than the report's tolerance.
         let capped: Vec<(f64, f64, String)> = points.iter().map(|p| (p.0, p.1.max(check), p.2.clone())).collect();
-        let best = front(&capped, 0.0);
+        let best = front(&capped, super::analysis::ERROR_TOLERANCE);
         chart
             .draw_series(LineSeries::new(best.iter().map(|p| (p.0, p.1)), c.stroke_width(2)))
             .map_err(|e| e.to_string())?
