@@ -514,7 +514,7 @@ mod tests {
         let map = params.param_map();
         let param = |id: &str| map.iter().find(|(i, _, _)| i == id).map(|(_, p, _)| *p).unwrap();
         let typed = |id: &str, text: &str| {
-            // SAFETY: the pointer comes from the parameter map of `params`, alive to the test's end.
+            // SAFETY: the pointer comes from the parameter map of `params`, alive to the end.
             unsafe { param(id).string_to_normalized_value(text) }
         };
         let plain = |id: &str, normalized: f32| {

@@ -255,9 +255,8 @@ fn the_pedal_after_a_retune_adds_partners_beside_the_undamped_ones() {
 }
 
 /// Striking a sounding key again strikes the same, still vibrating string: one voice, whose
-/// vibration (its strings' and bridge's energy, [`Monitor::vibration`](qsa_dsp::instrument::Monitor))
-/// 20 ms after the re-strike exceeds a twin's that was not struck again by what the new hammer
-/// handed over. A mezzo-forte C4, struck again after 0.1 s. On the unison alone
+/// vibration (its strings' and bridge's energy, [`Monitor::vibration`]) 20 ms after the
+/// re-strike exceeds a twin's that was not struck again by what the new hammer handed over. A mezzo-forte C4, struck again after 0.1 s. On the unison alone
 /// (`piano_voice.rs`, `a_restrike_adds_what_its_hammer_loses_at_every_phase_of_the_swing`), a
 /// re-strike hands the strings between 0.12 and 0.75 of the new hammer's `E_h = ½ m v²`
 /// depending on the swing's phase (0.570 on strings at rest), and never more than `E_h`: the

@@ -196,7 +196,7 @@ mod tests {
             let params = Arc::new(QsaParams::default());
             let map: Vec<_> =
                 params.param_map().into_iter().filter(|(id, ..)| !PLAYER_SETTINGS.contains(&id.as_str())).collect();
-            // SAFETY: the pointers come from the parameter map of `params`, alive to the test's end.
+            // SAFETY: the pointers come from the parameter map of `params`, alive to the end.
             let at = |param: &ParamPtr| unsafe { param.unmodulated_normalized_value() };
             let before: Vec<f32> = map.iter().map(|(_, param, _)| at(param)).collect();
             let host = RecordingHost::default();
