@@ -612,7 +612,14 @@ fn typed_number(text: &str, unit: &str) -> Option<f32> {
             (text.is_char_boundary(at) && text[at..].eq_ignore_ascii_case(unit)).then(|| text[..at].trim_end())
         })
         .unwrap_or(text);
-    let number = if number.contains('.') { number.to_owned() } else { number.replacen(',', ".", 1) };
+    // A comma is a decimal comma unless it could group thousands (`10,000` or `0,125`: three
+    // digits after it), which is read as nothing rather than guessed.
+    let number = match number.split_once(',') {
+        None => number.to_owned(),
+        Some((_, after)) if after.len() == 3 && after.bytes().all(|b| b.is_ascii_digit()) => return None,
+        Some(_) if number.contains('.') => return None,
+        Some(_) => number.replacen(',', ".", 1),
+    };
     number.parse::<f32>().ok().filter(|v| v.is_finite())
 }
 
@@ -667,10 +674,11 @@ impl ParamSpec {
     /// The value of `text` typed by hand into a field that shows this parameter, in its shown
     /// unit, as a host's or the editor's text entry reads it: what [`parse`](Self::parse) reads,
     /// and also a number followed by the parameter's unit (with or without its space, in any
-    /// letter case; `x` for `×`), a decimal comma, a whole number written with decimals
-    /// (rounded) and a switch's `On`/`Off` in any case. `None` for anything else, NaN and
-    /// infinities included, so that a slip of the keyboard changes nothing. Not range-checked
-    /// (the framework clamps); choices are left to the framework, which reads their names.
+    /// letter case; `x` for `×`), a decimal comma (not one that could group thousands: `10,000`
+    /// and `0,125` read as nothing), a whole number written with decimals (rounded) and a
+    /// switch's `On`/`Off` in any case. `None` for anything else, NaN and infinities included,
+    /// so that a slip of the keyboard changes nothing. Not range-checked (the framework clamps);
+    /// choices are left to the framework, which reads their names.
     pub fn parse_typed(&self, text: &str) -> Option<f32> {
         let text = text.trim();
         match self.kind {
@@ -1011,12 +1019,15 @@ mod tests {
     #[test]
     fn typed_text_reads_as_a_finite_value_or_nothing() {
         let spec = |id| param_spec(id).unwrap();
-        let cases: [(&str, &str, Option<f32>); 24] = [
+        let cases: [(&str, &str, Option<f32>); 27] = [
             ("glide", "50", Some(50.0)),
             ("glide", " 50 ms ", Some(50.0)),
             ("glide", "50ms", Some(50.0)),
             ("glide", "50 MS", Some(50.0)),
             ("glide", "12,5", Some(12.5)),
+            ("ptone", "10,000", None),
+            ("pluck", "0,125", None),
+            ("glide", "1,000.5", None),
             ("glide", "1e2", Some(100.0)),
             ("glide", "nan", None),
             ("glide", "NaN ms", None),
