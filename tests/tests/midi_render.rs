@@ -282,3 +282,24 @@ fn a_render_without_a_tail_reaches_the_last_event() {
     let (left, right, _) = render(&score, &Default::default(), 48_000.0, 0.0, 512);
     assert_eq!((left.len(), right.len()), (24_001, 24_001));
 }
+
+/// The render lasts until the file's last event of any kind, not its last note: a volume
+/// controller the engine ignores (at 2 s) and the end of the track (at 4 s, where a sequencer
+/// closes the last bar) each carry it on, 4 s and one sample at 48 kHz with no tail.
+#[test]
+fn a_render_lasts_until_the_files_last_event_of_any_kind() {
+    use xtask::render::midi::{render, score};
+    // 480 ticks a quarter note at 120 bpm: the note lasts 480 ticks (0.5 s); 0x8b 0x20 is 1440
+    // ticks more (to 2 s), 0x8f 0x00 1920 more (to 4 s).
+    let note = [0, 0x90, 60, 100, 0x83, 0x60, 0x80, 60, 0];
+    let volume = [0x8b, 0x20, 0xb0, 7, 90];
+    let end = [0x8f, 0x00, 0xff, 0x2f, 0];
+    let bytes = smf(&[&note[..], &volume, &end].concat());
+    let score = score(&bytes, 48_000.0).unwrap();
+    assert_eq!(score.events.last().map(|e| e.0), Some(24_000), "the note-off is the last engine event");
+    assert_eq!(score.end, 192_000);
+    let (left, right, _) = render(&score, &Default::default(), 48_000.0, 0.0, 512);
+    assert_eq!((left.len(), right.len()), (192_001, 192_001));
+    let (left, _, _) = render(&score, &Default::default(), 48_000.0, 0.5, 512);
+    assert_eq!(left.len(), 216_000);
+}

@@ -812,7 +812,8 @@ fn out_naming_a_pipe_writes_into_it_and_leaves_it_a_pipe() {
 }
 
 /// The options that apply to `--midi` alone are refused with a scene file, naming the option,
-/// rather than ignored, even at their defaults; nothing is written.
+/// rather than ignored, even at their defaults, as a usage error (exit code 2, as for the
+/// parser's own); nothing is written.
 #[test]
 fn midi_options_with_a_scene_file_are_refused() {
     for extra in [
@@ -829,6 +830,34 @@ fn midi_options_with_a_scene_file_are_refused() {
         let scene = write_scene(dir.path(), "case.toml", BASE);
         let out = render_to(&scene, &dir.path().join("out.wav"), extra);
         assert_refused(&out, &format!("{} applies to --midi only", extra[0]), dir.path(), &scene, BASE, &["case.toml"]);
+        assert_eq!(out.code, 2, "{extra:?}");
+    }
+}
+
+/// With `--csv`, a CSV that would be the WAV itself is refused and nothing is written: a WAV
+/// named `.CSV` (the same file as its `.csv` on a case-insensitive file system), and a `.csv`
+/// that is a link to the WAV.
+#[test]
+fn a_csv_that_would_be_the_wav_itself_is_refused() {
+    let dir = TempDir::new().unwrap();
+    let scene = write_scene(dir.path(), "case.toml", BASE);
+    let out = render_to(&scene, &dir.path().join("x.CSV"), &["--csv"]);
+    assert_refused(&out, "the CSV would replace the WAV", dir.path(), &scene, BASE, &["case.toml"]);
+    #[cfg(unix)]
+    {
+        let (wav, csv) = (dir.path().join("take.wav"), dir.path().join("take.csv"));
+        fs::write(&wav, b"mine").unwrap();
+        std::os::unix::fs::symlink(&wav, &csv).unwrap();
+        let out = render_to(&scene, &wav, &["--csv"]);
+        assert_refused(
+            &out,
+            "the CSV would replace the WAV",
+            dir.path(),
+            &scene,
+            BASE,
+            &["case.toml", "take.csv", "take.wav"],
+        );
+        assert_eq!(fs::read(&wav).unwrap(), b"mine");
     }
 }
 

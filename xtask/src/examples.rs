@@ -68,7 +68,14 @@ pub struct ExamplesArgs {
     /// Folder holding the MIDI phrases.
     #[arg(long, default_value = "scenes")]
     pub scenes: PathBuf,
+    /// Write into an output folder that holds files but not the examples' README (replacing
+    /// files of the same names).
+    #[arg(long)]
+    pub force: bool,
 }
+
+/// First line of the examples' README, which marks a folder as theirs ([`crate::folder::claim`]).
+pub const TITLE: &str = "# Audio examples";
 
 /// Why the examples could not be made.
 #[derive(Debug, thiserror::Error)]
@@ -134,13 +141,8 @@ pub fn render_showcase(s: &Showcase, scenes: &Path) -> Result<Example, ExamplesE
     let score =
         midi::score(&bytes, fs).map_err(|e| ExamplesError::Io { path: path.clone(), message: e.to_string() })?;
     let samples = (s.seconds * fs).round() as usize;
-    let last = score.events.last().map_or(0, |e| e.0) as f64 / fs;
-    let (left, right, _) = midi::render(&score, &preset.values, fs, (s.seconds - last).max(0.0), 512);
-    let mut channels = [left, right].map(|c| {
-        let mut c: Vec<f64> = c.iter().take(samples).map(|&v| f64::from(v)).collect();
-        c.resize(samples, 0.0);
-        c
-    });
+    let (left, right, _) = midi::render_signals(&score, &preset.values, fs, (samples, &mut || 512), false);
+    let mut channels = [left, right].map(|c| c.iter().map(|&v| f64::from(v)).collect::<Vec<f64>>());
     if let Some(bad) = channels.iter().find_map(|c| c.iter().position(|v| !v.is_finite())) {
         return Err(ExamplesError::Setup(format!("{}: non-finite sample at {bad}", s.preset)));
     }
@@ -186,6 +188,7 @@ pub fn spectral_centroid(x: &[f64], fs: f64) -> f64 {
 /// `cargo xtask examples`: render every showcase, write WAV, PNG and README; print one line per
 /// example.
 pub fn run(args: &ExamplesArgs, out: &mut dyn Write) -> Result<Vec<Example>, ExamplesError> {
+    crate::folder::claim(&args.out, "examples", TITLE, args.force).map_err(ExamplesError::Setup)?;
     if !args.out.is_dir() {
         std::fs::create_dir_all(&args.out).map_err(io(&args.out))?;
     }
@@ -222,8 +225,8 @@ pub fn run(args: &ExamplesArgs, out: &mut dyn Write) -> Result<Vec<Example>, Exa
 
 /// The examples' README: how they are made and a table linking them.
 pub fn readme_text(examples: &[Example]) -> String {
-    let mut text = String::from(
-        "# Audio examples\n\n\
+    let mut text = format!(
+        "{TITLE}\n\n\
          An example per preset category, two for the slide (the electric and the acoustic guitar),\n\
          made by `cargo xtask examples` (do not edit by hand: run it again). Each is the showcase\n\
          preset playing the start of a phrase from `scenes/` through the MIDI renderer, the plugin's\n\
@@ -443,6 +446,30 @@ mod tests {
         // Sine and cosine over whole periods are orthogonal.
         assert!(correlation(&x, &y).abs() < 1e-12, "{}", correlation(&x, &y));
         assert_eq!(correlation(&x, &[0.0; 1000]), 1.0);
+    }
+
+    /// An example renders only its own seconds of the phrase: a phrase whose last event lies
+    /// 4.5·10⁹ s on (the longest tempo, one tick a quarter note, the longest delta) makes its
+    /// example as a short one does, rather than asking for memory for the whole file.
+    #[test]
+    fn an_example_renders_only_its_own_seconds_of_the_phrase() {
+        let dir = tempfile::TempDir::new().unwrap();
+        let track = [
+            &[0x00, 0xff, 0x51, 3, 0xff, 0xff, 0xff][..],
+            &[0x00, 0x90, 60, 100],
+            &[0xff, 0xff, 0xff, 0x7f, 0x80, 60, 0],
+            &[0x00, 0xff, 0x2f, 0],
+        ]
+        .concat();
+        let mut file = b"MThd\0\0\0\x06\0\0\0\x01\0\x01MTrk".to_vec();
+        file.extend_from_slice(&(track.len() as u32).to_be_bytes());
+        file.extend_from_slice(&track);
+        let showcase = SHOWCASES[1];
+        std::fs::write(dir.path().join(showcase.midi), &file).unwrap();
+        let example = render_showcase(&showcase, dir.path()).unwrap();
+        let samples = (showcase.seconds * f64::from(RATE)).round() as usize;
+        assert_eq!(example.channels.map(|c| c.len()), [samples; 2]);
+        assert!(example.peak_dbfs.is_finite());
     }
 
     #[test]

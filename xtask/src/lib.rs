@@ -20,6 +20,7 @@
 
 pub mod bench;
 pub mod examples;
+pub mod folder;
 pub mod loudness;
 pub mod presets;
 pub mod python_venv;
@@ -86,7 +87,8 @@ pub struct BundlerArgs {
 }
 
 /// Run the command line `args` (without the program name), writing the task's report to
-/// `stdout`. Returns the process exit code.
+/// `stdout`. Returns the process exit code: 0, 1 for a task that failed, 2 for options that do
+/// not go together (as for the parser's own usage errors).
 pub fn run(args: impl IntoIterator<Item = OsString>, stdout: &mut dyn Write, stderr: &mut dyn Write) -> i32 {
     let cli = match Cli::try_parse_from(std::iter::once(OsString::from("cargo xtask")).chain(args)) {
         Ok(cli) => cli,
@@ -104,7 +106,13 @@ pub fn run(args: impl IntoIterator<Item = OsString>, stdout: &mut dyn Write, std
         }
     };
     let result = match cli {
-        Cli::Render(args) => render::run(&args, stdout).map(|_| ()).map_err(|e| e.to_string()),
+        Cli::Render(args) => match render::run(&args, stdout) {
+            Err(e @ render::RenderError::Usage(_)) => {
+                let _ = writeln!(stderr, "error: {e}");
+                return 2;
+            }
+            result => result.map(|_| ()).map_err(|e| e.to_string()),
+        },
         Cli::Bench(args) => bench::run(&args, stdout).map(|_| ()).map_err(|e| e.to_string()),
         Cli::Report(args) => report::run(&args, stdout).map_err(|e| e.to_string()),
         Cli::Presets(args) => presets::run(&args, stdout),

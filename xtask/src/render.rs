@@ -64,7 +64,7 @@ pub struct RenderArgs {
     /// Sample rate for --midi (Hz) [default: 48000].
     #[arg(long, requires = "midi")]
     pub rate: Option<u32>,
-    /// Seconds rendered after the last MIDI event [default: 2].
+    /// Seconds rendered after the MIDI file's last event, its end of track included [default: 2].
     #[arg(long, requires = "midi")]
     pub tail: Option<f64>,
     /// Output WAV path [default: the input path with extension .wav].
@@ -73,7 +73,8 @@ pub struct RenderArgs {
     /// Also write per-sample signals to a CSV beside the WAV (scenes only).
     #[arg(long, conflicts_with = "midi")]
     pub csv: bool,
-    /// Render in calls of N samples (0: seeded random sizes) [default: one call].
+    /// Render in calls of N samples (0: seeded random sizes) [default: one call for a scene, 512
+    /// samples for --midi].
     #[arg(long, value_name = "N")]
     pub chunk: Option<usize>,
     /// For --midi: write the dry signals, centred (each piano key's bridge force, each slide
@@ -166,6 +167,9 @@ pub enum RenderError {
         /// What is wrong, naming the key.
         source: SceneError,
     },
+    /// The options given do not go together (a usage error: exit code 2, as the parser's own).
+    #[error("{0}")]
+    Usage(String),
     /// An output path is unusable.
     #[error("{0}")]
     Output(String),
@@ -210,11 +214,11 @@ pub fn run(args: &RenderArgs, stdout: &mut dyn Write) -> Result<Outcome, RenderE
                 ("--raw", args.raw),
             ];
             if let Some((flag, _)) = midi_only.iter().find(|(_, given)| *given) {
-                return Err(RenderError::Output(format!("{flag} applies to --midi only, not to a scene file")));
+                return Err(RenderError::Usage(format!("{flag} applies to --midi only, not to a scene file")));
             }
             Outcome::Scene(run_scene(args, scene_path)?)
         }
-        (None, None) => return Err(RenderError::Output("give a scene file or --midi FILE.mid".into())),
+        (None, None) => return Err(RenderError::Usage("give a scene file or --midi FILE.mid".into())),
     };
     let line = serde_json::to_string(&summary).expect("a summary always serialises");
     writeln!(stdout, "{line}").map_err(|source| RenderError::Write { path: "<stdout>".into(), source })?;
@@ -227,7 +231,13 @@ fn run_scene(args: &RenderArgs, scene_path: &Path) -> Result<Summary, RenderErro
     let scene = parse_scene(&text).map_err(|source| RenderError::Scene { path: scene_path.to_owned(), source })?;
     let wav_path = args.out.clone().unwrap_or_else(|| scene_path.with_extension("wav"));
     let csv_path = args.csv.then(|| wav_path.with_extension("csv"));
-    if csv_path.as_ref() == Some(&wav_path) {
+    // One file by two names: the WAV's own extension `.csv` in any case (one file on a
+    // case-insensitive file system), or a link between them.
+    let one_file = |csv: &PathBuf| {
+        wav_path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+            || matches!((fs::canonicalize(csv), fs::canonicalize(&wav_path)), (Ok(a), Ok(b)) if a == b)
+    };
+    if csv_path.as_ref().is_some_and(one_file) {
         return Err(RenderError::Output(format!(
             "with --csv the CSV would replace the WAV {}; give the WAV path another extension",
             wav_path.display()

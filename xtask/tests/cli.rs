@@ -87,3 +87,23 @@ fn missing_scene_exits_non_zero() {
     assert!(stderr.contains("cannot read") && stderr.contains("absent.toml"), "{stderr}");
     assert!(listing(dir.path()).is_empty());
 }
+
+/// `examples` and `report` fill folders of their own: pointed at a folder that holds someone
+/// else's README (the project's own root, say), each refuses before writing anything, names the
+/// folder and says how to write there anyway; the README stays as it was.
+#[test]
+fn examples_and_report_refuse_a_folder_that_is_not_theirs() {
+    for task in [&["examples"][..], &["report", "--from-data"]] {
+        let dir = TempDir::new().unwrap();
+        let readme = dir.path().join("README.md");
+        fs::write(&readme, "# My project\n").unwrap();
+        let mut args: Vec<&std::ffi::OsStr> = task.iter().map(|a| a.as_ref()).collect();
+        args.extend(["--out".as_ref(), dir.path().as_os_str()]);
+        let out = xtask(&args);
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(out.status.code(), Some(1), "{task:?}: {stderr}");
+        assert!(stderr.contains(&dir.path().display().to_string()) && stderr.contains("--force"), "{stderr}");
+        assert_eq!(fs::read_to_string(&readme).unwrap(), "# My project\n", "{task:?}");
+        assert_eq!(listing(dir.path()), ["README.md".to_string()].into_iter().collect());
+    }
+}

@@ -8,8 +8,9 @@
 //! [`event_from_midi`], the conversion a host and the plugin apply, and the parameters come from
 //! [`ParamValues`] (the defaults, or a factory preset's with `--preset`) with `--mode` and
 //! `--set ID=VALUE` applied, so the samples equal those of the plugin given
-//! the same parameters and events at the same samples. The render runs until the last event
-//! plus `--tail` seconds, and always includes the last event's sample.
+//! the same parameters and events at the same samples. The render runs until the file's last
+//! event of any kind (its end of track included, which a sequencer puts at the end of the last
+//! bar) plus `--tail` seconds, and always includes that event's sample.
 
 use midly::{Format, MetaMessage, MidiMessage, Smf, Timing, TrackEventKind};
 use qsa_dsp::instrument::{Event, Instrument, ParamValues, event_from_midi, factory_presets, find_preset};
@@ -21,6 +22,18 @@ pub struct Score {
     pub events: Vec<(u64, Event)>,
     /// Notes the file plays.
     pub notes: usize,
+    /// Sample of the file's last event of any kind: a controller the engine ignores, or the end
+    /// of a track (at or after the last of [`Self::events`]).
+    pub end: u64,
+}
+
+impl Score {
+    /// Samples a render of the score with `tail` seconds (at `sample_rate`, Hz) after its end
+    /// lasts: through the end's sample at least, so that an event there acts.
+    pub fn samples(&self, tail: f64, sample_rate: f64) -> u64 {
+        let tail = (tail.max(0.0) * sample_rate).round() as u64;
+        self.end.saturating_add(tail).max(self.end.saturating_add(1))
+    }
 }
 
 /// Largest MIDI file read (bytes): far beyond any performance (a 600 s render of a
@@ -43,6 +56,11 @@ pub enum MidiError {
 /// The channel messages of `bytes` (a standard MIDI file) with their sample offsets at
 /// `sample_rate` (Hz): `(sample, [status, data1, data2])`, in time order (file order within a tick).
 pub fn timed_messages(bytes: &[u8], sample_rate: f64) -> Result<Vec<(u64, [u8; 3])>, MidiError> {
+    timed_file(bytes, sample_rate).map(|(messages, _)| messages)
+}
+
+/// [`timed_messages`], and the sample of the file's last event of any kind.
+fn timed_file(bytes: &[u8], sample_rate: f64) -> Result<(Vec<(u64, [u8; 3])>, u64), MidiError> {
     if bytes.len() > MAX_FILE_BYTES {
         return Err(MidiError::Parse(format!("{} bytes; at most {MAX_FILE_BYTES} (16 MiB)", bytes.len())));
     }
@@ -75,6 +93,7 @@ pub fn timed_messages(bytes: &[u8], sample_rate: f64) -> Result<Vec<(u64, [u8; 3
     let mut tempo = 500_000.0;
     let (mut last_tick, mut seconds) = (0u64, 0.0f64);
     let mut out = Vec::new();
+    let at = |seconds: f64| (seconds * sample_rate).round() as u64;
     for (tick, _, _, kind) in timeline {
         seconds += (tick - last_tick) as f64 * seconds_per_tick_at(tempo);
         last_tick = tick;
@@ -103,18 +122,19 @@ pub fn timed_messages(bytes: &[u8], sample_rate: f64) -> Result<Vec<(u64, [u8; 3
                     }
                     MidiMessage::ProgramChange { .. } => continue,
                 };
-                out.push(((seconds * sample_rate).round() as u64, [status | channel.as_int(), d1, d2]));
+                out.push((at(seconds), [status | channel.as_int(), d1, d2]));
             }
             _ => {}
         }
     }
-    Ok(out)
+    Ok((out, at(seconds)))
 }
 
 /// Read `bytes` (a standard MIDI file) into engine events at `sample_rate` (Hz).
 pub fn score(bytes: &[u8], sample_rate: f64) -> Result<Score, MidiError> {
     let mut notes = 0;
-    let events = timed_messages(bytes, sample_rate)?
+    let (messages, end) = timed_file(bytes, sample_rate)?;
+    let events = messages
         .into_iter()
         .filter_map(|(sample, [status, d1, d2])| {
             let event = event_from_midi(status, d1, d2)?;
@@ -122,13 +142,12 @@ pub fn score(bytes: &[u8], sample_rate: f64) -> Result<Score, MidiError> {
             Some((sample, event))
         })
         .collect();
-    Ok(Score { events, notes })
+    Ok(Score { events, notes, end })
 }
 
-/// Render `score` with `params` at `sample_rate` (Hz) until the last event plus `tail` seconds
-/// (at least through the last event's sample, so that it acts), in calls of `chunk` samples
-/// (split at every event). Returns left and right channels and the wall-clock seconds spent in
-/// the engine.
+/// Render `score` with `params` at `sample_rate` (Hz) for [`Score::samples`] with `tail` seconds,
+/// in calls of `chunk` samples (split at every event). Returns left and right channels and the
+/// wall-clock seconds spent in the engine.
 pub fn render(
     score: &Score,
     params: &ParamValues,
@@ -136,20 +155,19 @@ pub fn render(
     tail: f64,
     chunk: usize,
 ) -> (Vec<f32>, Vec<f32>, f64) {
-    render_signals(score, params, sample_rate, (tail, &mut || chunk), false)
+    let samples = score.samples(tail, sample_rate) as usize;
+    render_signals(score, params, sample_rate, (samples, &mut || chunk), false)
 }
 
-/// [`render`] in calls of the sizes `chunks` gives (split at every event), with `raw` the dry
-/// signals ([`Instrument::set_raw_output`]).
+/// The first `samples` of `score` rendered as [`render`] does, in calls of the sizes `chunks`
+/// gives (split at every event), with `raw` the dry signals ([`Instrument::set_raw_output`]).
 pub fn render_signals(
     score: &Score,
     params: &ParamValues,
     sample_rate: f64,
-    (tail, chunks): (f64, &mut dyn FnMut() -> usize),
+    (samples, chunks): (usize, &mut dyn FnMut() -> usize),
     raw: bool,
 ) -> (Vec<f32>, Vec<f32>, f64) {
-    let last = score.events.last().map_or(0, |e| e.0);
-    let samples = (last + (tail.max(0.0) * sample_rate).round() as u64).max(last + 1) as usize;
     let mut engine = Instrument::new(sample_rate, params.voices.clamp(1, 128) as usize, params.settings());
     engine.set_raw_output(raw);
     let (mut left, mut right) = (vec![0.0f32; samples], vec![0.0f32; samples]);
@@ -254,7 +272,7 @@ pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSumma
     }
     let fs = f64::from(rate);
     let score = score(&bytes, fs).map_err(|e| RenderError::Midi(format!("{}: {e}", path.display())))?;
-    let seconds = (score.events.last().map_or(0, |e| e.0) as f64) / fs + tail;
+    let seconds = score.end as f64 / fs + tail;
     if seconds > 600.0 {
         return Err(RenderError::Midi(format!("{}: lasts {seconds:.0} s; at most 600 s", path.display())));
     }
@@ -270,8 +288,9 @@ pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSumma
     super::check_output_path(&wav_path, path)?;
     // In calls of 512 samples unless `--chunk` says otherwise (0: seeded random sizes).
     let mut sizes = super::chunk_sizes(Some(args.chunk.unwrap_or(512)));
+    let samples = score.samples(tail, fs) as usize;
     let (left, right, wall) =
-        render_signals(&score, &params, fs, (tail, &mut || sizes.next().unwrap_or(usize::MAX)), args.raw);
+        render_signals(&score, &params, fs, (samples, &mut || sizes.next().unwrap_or(usize::MAX)), args.raw);
     let spec = hound::WavSpec {
         channels: 2,
         sample_rate: rate,

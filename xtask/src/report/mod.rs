@@ -109,6 +109,10 @@ pub struct ReportArgs {
     /// `mass-barrier/imp/corner-2`.
     #[arg(long, value_name = "SCENE/METHOD/SET")]
     pub rerun: Option<String>,
+    /// Write into a report directory that holds files but not the report's README (replacing
+    /// files of the same names).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Why the report could not be made, or why `--quick` failed.
@@ -117,6 +121,9 @@ pub enum ReportError {
     /// A scene file could not be parsed, or a case could not be built.
     #[error("{0}")]
     Scene(String),
+    /// The report directory holds someone else's files.
+    #[error("{0}")]
+    Folder(String),
     /// A file could not be read or written.
     #[error("{path}: {source}")]
     Io {
@@ -159,6 +166,9 @@ pub fn run(args: &ReportArgs, stdout: &mut dyn Write) -> Result<(), ReportError>
         let line = stability::rerun(id, excerpt(&cases))?;
         writeln!(stdout, "{line}").ok();
         return Ok(());
+    }
+    if !args.quick {
+        crate::folder::claim(&args.out, "report", readme::TITLE, args.force).map_err(ReportError::Folder)?;
     }
     if args.from_data {
         let results = load(&args.scenes, &args.out)?;

@@ -38,6 +38,9 @@ pub const STABILITY_CSV: &str = "stability.csv";
 pub const STABILITY_MD: &str = "stability.md";
 /// The report.
 pub const README: &str = "README.md";
+/// First line of the report's README, which marks a folder as the report's
+/// ([`crate::folder::claim`]).
+pub const TITLE: &str = "# Error against run time, and stability";
 /// The seed's Fig. 5 (right) plot.
 pub const FIG5_PNG: &str = "fig5-right.png";
 /// The Fig. 4 trajectories.
@@ -184,7 +187,7 @@ fn readme(r: &Results, orders: &[Order]) -> String {
     let w = &mut s;
     let rows = &r.rows;
     let run = &r.run;
-    let _ = writeln!(w, "# Error against run time, and stability\n");
+    let _ = writeln!(w, "{TITLE}\n");
     let mut noises: Vec<f64> = rows.iter().filter(|row| row.rtf.is_some()).map(analysis::noise).collect();
     noises.sort_by(f64::total_cmp);
     let quantile = |q: f64| noises.get(((noises.len() as f64 - 1.0) * q).round() as usize).copied().unwrap_or(f64::NAN);
