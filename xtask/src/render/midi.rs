@@ -53,14 +53,17 @@ pub enum MidiError {
     Parse(String),
 }
 
+/// A channel message at its sample: `(sample, [status, data1, data2])`.
+pub type TimedMessage = (u64, [u8; 3]);
+
 /// The channel messages of `bytes` (a standard MIDI file) with their sample offsets at
 /// `sample_rate` (Hz): `(sample, [status, data1, data2])`, in time order (file order within a tick).
-pub fn timed_messages(bytes: &[u8], sample_rate: f64) -> Result<Vec<(u64, [u8; 3])>, MidiError> {
+pub fn timed_messages(bytes: &[u8], sample_rate: f64) -> Result<Vec<TimedMessage>, MidiError> {
     timed_file(bytes, sample_rate).map(|(messages, _)| messages)
 }
 
 /// [`timed_messages`], and the sample of the file's last event of any kind.
-fn timed_file(bytes: &[u8], sample_rate: f64) -> Result<(Vec<(u64, [u8; 3])>, u64), MidiError> {
+fn timed_file(bytes: &[u8], sample_rate: f64) -> Result<(Vec<TimedMessage>, u64), MidiError> {
     if bytes.len() > MAX_FILE_BYTES {
         return Err(MidiError::Parse(format!("{} bytes; at most {MAX_FILE_BYTES} (16 MiB)", bytes.len())));
     }
