@@ -1540,6 +1540,54 @@ fn letting_go_of_a_legato_key_glides_back_to_the_latest_key_still_held() {
     assert!(held > 1e-3 && muted < 1e-2 * held, "held {held:.2e}, muted {muted:.2e}");
 }
 
+/// A slide let go returns only to keys played on a slide: D3 plucked on the slide, the mode
+/// switched to the piano, C4 struck there and held, then D3 let go. The slide mutes as at any
+/// last note-off and falls silent (only the piano's C4 sounds 3 s on), where it glided to C4's
+/// place on its string before and rang on while C4 was held.
+#[test]
+fn a_slide_let_go_does_not_glide_to_a_key_held_on_the_piano() {
+    let mut p = slide(Settings::default());
+    play(&mut p, &vec![(0, on(50, 0.8))], 14_400, || 64);
+    p.set_settings(&Settings { mode: Mode::Piano, ..Default::default() });
+    play(&mut p, &vec![(0, on(60, 0.8)), (9_600, off(50))], 9_600 + 144_000, || 64);
+    let slide_notes: Vec<u8> = p.drain_ended().map(|e| e.note.key).collect();
+    println!("sounding {}, notes ended {slide_notes:?}", p.sounding());
+    assert_eq!(slide_notes, [50], "D3's note ends; none begins on C4");
+    assert_eq!(p.sounding(), 1, "only the piano's held C4 sounds");
+}
+
+/// Following keys switched on inside a control block counts for the note-offs of that block as
+/// for its note-ons: D3 and E3 pressed there (E3 glides legato from D3, as following keys
+/// asks) and E3 let go before the block ends glides back to D3, held, and sounds on at its pitch
+/// (within 1 %), where the block's setting (not following) muted the string before.
+#[test]
+fn following_keys_switched_on_inside_a_block_counts_for_its_note_offs() {
+    let mut p = slide(Settings { follow_key: false, ..Default::default() });
+    play(&mut p, &vec![], 650, || 64);
+    p.set_settings(&Settings { mode: Mode::Slide, ..Default::default() });
+    let score: Score = vec![(0, on(50, 0.8)), (0, on(52, 0.8)), (10, off(52))];
+    let out = play(&mut p, &score, 48_000, || 64);
+    let expected = slide_key_pitch(50);
+    let f = slide_pitch_in(&out, 24_000..48_000, expected);
+    let held = rms(&out[24_000..48_000]);
+    println!("after E3's release {f:.2} Hz (D3 {expected:.2} Hz), rms {held:.2e}");
+    assert!(held > 1e-3, "the held D3 sounds on: rms {held:.2e}");
+    assert!((f / expected - 1.0).abs() < 0.01, "{f:.2} Hz, not D3's {expected:.2} Hz");
+}
+
+/// A slide note that takes a busy voice counts as a steal, as a piano note does, and a legato
+/// glide on a voice of its own channel does not: on one slide voice, A2 held on channel 1, D3
+/// legato over it, then E3 on channel 2, which takes the voice.
+#[test]
+fn a_slide_note_taking_a_busy_voice_counts_as_a_steal() {
+    let mut p = Instrument::new(FS, 1, Settings { mode: Mode::Slide, ..Default::default() });
+    let other = Event::NoteOn { channel: 1, key: 52, velocity: 0.8 };
+    play(&mut p, &vec![(0, on(45, 0.8)), (4_800, on(50, 0.8))], 9_600, || 64);
+    assert_eq!(p.steals(), 0, "a legato glide is no steal");
+    play(&mut p, &vec![(0, other)], 4_800, || 64);
+    assert_eq!((p.steals(), p.sounding()), (1, 1));
+}
+
 /// Following keys, a slide voice that glides back to a held key plays that key's note: D3 (note
 /// id 1) pressed, G3 (id 2) legato, tuned 2 semitones up by its own expression, then let go. The
 /// hand is pressed by poly pressure: D3's (0.8, sent while G3 sounds) is the voice's from the

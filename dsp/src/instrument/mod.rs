@@ -369,6 +369,9 @@ struct Press {
     /// The latest poly pressure or pressure expression since, 0..=1: a slide voice that returns
     /// to the key takes it.
     pressure: f64,
+    /// Whether the key was played on a slide: a slide returns only to keys it could have played,
+    /// not to a key held on the piano from before the mode changed.
+    slide: bool,
 }
 
 /// The instrument engine.
@@ -799,7 +802,7 @@ impl Instrument {
         self.keys_down[usize::from(strike.channel)] |= 1 << strike.key;
         self.presses += 1;
         self.pressed[usize::from(strike.channel)][usize::from(strike.key)] =
-            Press { order: self.presses, id: voice, pressure: 0.0 };
+            Press { order: self.presses, id: voice, pressure: 0.0, slide: self.requested.mode == Mode::Slide };
         let note = Note { voice, channel: strike.channel, key: strike.key };
         // A note takes the settings of its own sample, the latest the host set, though the
         // controls they steer go on at the control block's: a mode, a hardness or a slide's mass
@@ -831,11 +834,14 @@ impl Instrument {
         for v in &mut self.voices {
             v.keys_up(released);
         }
-        let (follow, offset) = (self.settings.follow_key, self.voices.len());
+        // Following keys as a note struck now would (the setting of this sample, not the block's).
+        let (follow, offset) = (self.requested.follow_key, self.voices.len());
         for (j, v) in self.slides.iter_mut().enumerate().filter(|(_, v)| released(v.strike.channel, v.strike.key)) {
             let c = usize::from(v.strike.channel);
             let (down, pressed) = (self.keys_down[c], &self.pressed[c]);
-            let latest = (0..128u8).filter(|&k| down >> k & 1 == 1).max_by_key(|&k| pressed[usize::from(k)].order);
+            let latest = (0..128u8)
+                .filter(|&k| down >> k & 1 == 1 && pressed[usize::from(k)].slide)
+                .max_by_key(|&k| pressed[usize::from(k)].order);
             match latest {
                 Some(key) if follow && v.key_down => {
                     // The released note ends; the voice plays the held key's, whose own note
@@ -1057,6 +1063,7 @@ impl Instrument {
             .or_else(|| quietest(false).map(|(i, _)| i))
             .or_else(|| quietest(true).map(|(i, _)| i));
         if let Some(i) = index {
+            self.steals += u64::from(self.slides[i].sounding);
             let voice = &mut self.slides[i];
             // A silent voice's pickup stayed where the voice last sounded (see `begin_block`).
             if voice.pickup() != self.pickup {
