@@ -133,9 +133,9 @@ pub use settings::{
 };
 pub use slide_scale::SlideScale;
 pub use slide_voice::{
-    BRAKING, ChannelState, FINGER_LIFT, HAND_ACCELERATION, HAND_SPEED, LANDING_SPEED, MUTE_HAND_DAMPING, MUTE_TIME,
-    MUTED_LIMIT, OPEN_KEY, PICKUP_APERTURE, PLUCK_RELEASE, PLUCK_TIME, REST_FORCE, SLIDE_ACCELERATION, SLIDE_SPEED,
-    SlideVoice, TRAIL, hand_reach, pluck_force, pluck_point,
+    BRAKING, ChannelState, FINGER_LIFT, HAND_ACCELERATION, HAND_SPEED, LANDING_SPEED, MUTE_FINGER_DAMPING,
+    MUTE_HAND_DAMPING, MUTE_TIME, MUTED_LIMIT, OPEN_KEY, PICKUP_APERTURE, PLUCK_RELEASE, PLUCK_TIME, REST_FORCE,
+    SLIDE_ACCELERATION, SLIDE_SPEED, SlideVoice, TRAIL, hand_reach, pluck_force, pluck_point, trailing_finger,
 };
 pub use solvers::Solvers;
 pub use voicing::{VOICING_DB, VOICING_VELOCITIES, voicing_gain};

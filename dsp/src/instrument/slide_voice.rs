@@ -40,23 +40,25 @@
 //!   every note-on starts them at 0. A voice that has not rendered since it was plucked from
 //!   silence takes a new tuning or slide offset at once (a host sends a note's modulation right
 //!   after its note-on); later they move the slide at its speed limit;
-//! - the left finger trails the slide by 2 cm, damping the dead part of the string, resting on
-//!   it with 0.3 N while the hand holds the slide on the string; with the slide lifted there is
-//!   no dead part, and the finger lifts off the open string too: it lifts once the hand's plan
-//!   rises [`FINGER_LIFT`] above the string's line and lands again once the plan is back at or
-//!   below the line (a hand skimming the string, its plan overshooting the line a little as it
-//!   turns, keeps its finger down; a note from silence finds it down unless its hand is higher
-//!   than that). It lands and lifts over [`MUTE_TIME`] on a raised cosine, as the muting finger
-//!   lands: a force stepping on or off would push the string aside at once;
+//! - the left finger trails the slide by 2 cm, damping the dead part of the string, resting on it
+//!   with 0.3 N while the hand holds the slide on the string, its window clear of the nut and of
+//!   the slide (it lifts where the dead part is too short: [`trailing_finger`]); with the slide
+//!   lifted there is no dead part, and the finger lifts off the open string too: it lifts once the
+//!   hand's plan rises [`FINGER_LIFT`] above the string's line and lands again once the plan is
+//!   back at or below the line (a hand skimming the string, its plan overshooting the line a little
+//!   as it turns, keeps its finger down; a note from silence finds it down unless its hand is
+//!   higher than that). It lands and lifts over [`MUTE_TIME`] on a raised cosine, as the muting
+//!   finger lands: a force stepping on or off would push the string aside at once;
 //! - note-on plucks with the right finger at the plucking position: the force ramps up over
 //!   [`PLUCK_TIME`] to [`pluck_force`] `0.3 + 2.7·velocity` N and falls to none over
 //!   [`PLUCK_RELEASE`], at those times whatever the rate and the block (a block is cut at a
 //!   corner of the force inside it, the pieces blocks of the core's of their own); note-off lays
-//!   the finger on, its force rising to 0.3 N over [`MUTE_TIME`], muting the string, and the hand
-//!   stills the slide as the finger lands (damping it at least [`MUTE_HAND_DAMPING`]). The finger
-//!   follows the `pluck_position` setting at the slide's speed limits, as it may be pressing,
-//!   and plucks between the slide and the bridge: at the setting's place or halfway from the
-//!   slide to the bridge, whichever is nearer the bridge ([`pluck_point`]);
+//!   the finger on, its force rising to 0.3 N over [`MUTE_TIME`], muting the string (its damping
+//!   at least [`MUTE_FINGER_DAMPING`]), and the hand stills the slide as the finger lands
+//!   (damping it at least [`MUTE_HAND_DAMPING`]). The finger follows the `pluck_position`
+//!   setting at the slide's speed limits, as it may be pressing, and plucks between the slide
+//!   and the bridge: at the setting's place or halfway from the slide to the bridge, whichever
+//!   is nearer the bridge ([`pluck_point`]);
 //! - switching `follow_key` under a sounding note leaves the slide where it is, which then
 //!   glides to where the new choice puts it.
 //!
@@ -128,7 +130,8 @@ pub const MUTE_TIME: f64 = 0.02;
 
 /// The longest a muted string sounds (s): a voice still sounding this long after its finger
 /// began to mute it is faded out as a shed one is, and its note ends. Muted, a note falls silent
-/// within about a second with QSA and IMP whatever the settings; EXP's pressed contact, stiff
+/// with QSA and IMP whatever the settings (2.3 s after its note-off at the defaults, 4.7 s for the
+/// heaviest slide on the softest hand without damping); EXP's pressed contact, stiff
 /// beyond its stability (`κ` of 1e11 N/m^α and more at 22.05 kHz), can keep the string moving
 /// for ever, inaudibly or as a drone.
 pub const MUTED_LIMIT: f64 = 5.0;
@@ -140,8 +143,22 @@ pub const MUTED_LIMIT: f64 = 5.0;
 /// only takes energy, so it may change under a sounding note.
 pub const MUTE_HAND_DAMPING: f64 = 5.0;
 
+/// The least damping (s/m) of the finger muting a note let go, reached as it lands (the default
+/// `Finger damping`): a finger without damping only pushes the string aside, and the note would
+/// ring on under it. Damping only takes energy, so it may change under a sounding note.
+pub const MUTE_FINGER_DAMPING: f64 = 5.0;
+
 /// How far the left finger trails the slide (m).
 pub const TRAIL: f64 = 0.02;
+
+/// Where the trailing finger rests behind the slide at `x_o` (m), its window `width` (m) wide,
+/// and the share of its force it lays on the string: [`TRAIL`] behind the slide, its window kept
+/// clear of the nut. Near the nut the dead part of the string is shorter than the window, so the
+/// finger has nowhere to rest: its force falls to none as the dead part shrinks from one and a
+/// half windows to one (the open string's key, with the slide 5 mm from the nut, has none).
+pub fn trailing_finger(x_o: f64, width: f64) -> (f64, f64) {
+    ((x_o - TRAIL).max(0.5 * width), ((x_o - width) / (0.5 * width)).clamp(0.0, 1.0))
+}
 
 /// How high above the string's line the hand's plan rises (m) before the trailing finger lifts
 /// off the string: half the height a controller at 0 lifts the slide to ([`HAND_RANGE`]).
@@ -579,6 +596,8 @@ pub struct SlideVoice {
     pickup: f64,
     /// Where the slide stops this voice's string for each pitch.
     scale: SlideScale,
+    /// Width of the trailing finger's window (m).
+    left_width: f64,
 }
 
 impl SlideVoice {
@@ -589,7 +608,7 @@ impl SlideVoice {
             .expect("the slide-guitar preset is a valid string");
         let length = g.string.length;
         let scale = SlideScale::new(&string);
-        let rest = Self::at_rest(length, &scale, settings);
+        let rest = Self::at_rest((length, g.left.width), &scale, settings);
         let x_o = rest.slide_position;
         let slide = Self::slide_params(settings);
         let params = SlideStringParams {
@@ -654,17 +673,19 @@ impl SlideVoice {
             body: SlideBody::Pickup,
             pickup: settings.pickup_position,
             scale,
+            left_width: g.left.width,
         }
     }
 
-    /// The controls of a voice at rest on a string of length `length` (m) under `settings`: the
-    /// slide lifted above its position, the fingers off.
-    fn at_rest(length: f64, scale: &SlideScale, settings: &Settings) -> SlideControls {
+    /// The controls of a voice at rest on a string of length `length` (m), its trailing finger's
+    /// window `left_width` (m) wide, under `settings`: the slide lifted above its position, the
+    /// fingers off.
+    fn at_rest((length, left_width): (f64, f64), scale: &SlideScale, settings: &Settings) -> SlideControls {
         let x_o = scale.position(settings.slide_position);
         SlideControls {
             slide_position: x_o,
             hand_height: HAND_RANGE.0,
-            left_position: (x_o - TRAIL).max(0.002),
+            left_position: trailing_finger(x_o, left_width).0,
             left_force: 0.0,
             right_position: pluck_point(settings.pluck_position, x_o, length),
             right_force: 0.0,
@@ -777,8 +798,9 @@ impl SlideVoice {
         // As for a hand come down to `height`: the finger lifts only above `FINGER_LIFT`.
         let down = height <= FINGER_LIFT;
         let trailing = if down { 1.0 } else { 0.0 };
-        let still =
-            SlideControls { hand_height: height, left_force: REST_FORCE * trailing, right_force: 0.0, ..self.live.0 };
+        let share = trailing_finger(self.live.0.slide_position, self.left_width).1;
+        let left_force = REST_FORCE * trailing * share;
+        let still = SlideControls { hand_height: height, left_force, right_force: 0.0, ..self.live.0 };
         let solvers = &self.solvers;
         if self.core.rest_pressed(still, |y, nyquist| solvers.static_slope(y, nyquist)).is_some() {
             self.live.0 = still;
@@ -853,7 +875,7 @@ impl SlideVoice {
     /// the energy weighed afresh.
     pub fn reset(&mut self, settings: &Settings) {
         self.guard_fade.clear();
-        let rest = Self::at_rest(self.length, &self.scale, settings);
+        let rest = Self::at_rest((self.length, self.left_width), &self.scale, settings);
         self.live.0 = rest;
         self.slide_motion = Motion::at_rest(rest.slide_position);
         self.right = Motion::at_rest(rest.right_position);
@@ -947,7 +969,7 @@ impl SlideVoice {
     fn lift_to(&mut self, x_o: f64, settings: &Settings) {
         self.slide_motion = Motion::at_rest(x_o);
         let (left_position, right_position) =
-            ((x_o - TRAIL).max(0.002), pluck_point(settings.pluck_position, x_o, self.length));
+            (trailing_finger(x_o, self.left_width).0, pluck_point(settings.pluck_position, x_o, self.length));
         self.right = Motion::at_rest(right_position);
         self.mute = 0.0;
         self.live.0 = SlideControls { slide_position: x_o, left_position, right_position, ..self.live.0 };
@@ -1033,6 +1055,7 @@ impl SlideVoice {
         let (from, plucked) = (self.live.0, self.pluck);
         let corners = pluck_corners(fs);
         let full = self.plucking_force;
+        let mut finger_damping = [settings.finger_damping; 2];
         let right_force = match plucked {
             Some(t) => {
                 self.pluck = Some(t + len).filter(|&n| n < corners[1]);
@@ -1043,6 +1066,7 @@ impl SlideVoice {
                 self.mute += span;
                 let landed = landed((self.mute / MUTE_TIME).min(1.0));
                 slide.damping = slide.damping.max(MUTE_HAND_DAMPING * landed);
+                finger_damping[1] = finger_damping[1].max(MUTE_FINGER_DAMPING * landed);
                 REST_FORCE * landed
             }
         };
@@ -1057,15 +1081,16 @@ impl SlideVoice {
         let step = if self.trail_down { span } else { -span } / MUTE_TIME;
         self.trailing = (self.trailing + step).clamp(0.0, 1.0);
         let x_o = self.slide_motion.position;
+        let (left_position, share) = trailing_finger(x_o, self.left_width);
         self.live.0 = SlideControls {
             slide_position: x_o,
             hand_height: hand.to,
-            left_position: (x_o - TRAIL).max(0.002),
-            left_force: REST_FORCE * landed(self.trailing),
+            left_position,
+            left_force: REST_FORCE * landed(self.trailing) * share,
             right_position: self.right.position,
             right_force,
         };
-        self.core.set_params(slide, [settings.finger_damping; 2], settings.block);
+        self.core.set_params(slide, finger_damping, settings.block);
         self.corners = Corners::NONE;
         match plucked {
             Some(t) => self.cut_at_corners(from, t, len, corners, full, hand),
@@ -1238,6 +1263,42 @@ mod tests {
 
     /// The note the tests' voices pluck: key 52 at velocity 0.8.
     const STRIKE: Strike = Strike { channel: 0, key: 52, velocity: 0.8, shifted: false, timbre: None };
+
+    /// The trailing finger rests only on the dead part of the string, between the nut and the
+    /// slide: wherever it lays any force its window lies within them, and its force grows with
+    /// the slide's position without a step. A note on the open string's key (its slide 5 mm from
+    /// the nut) rests no finger there, where the finger's window reached past the nut and 4.5 mm
+    /// under the speaking string; on D3 the finger rests with its whole force, clear of both.
+    #[test]
+    fn the_trailing_finger_rests_only_on_the_dead_part_of_the_string() {
+        let width = crate::preset::slide_guitar().left.width;
+        let mut last = 0.0;
+        for i in 0..=2_000 {
+            let x_o = 1e-4 * f64::from(i);
+            let (at, share) = trailing_finger(x_o, width);
+            if share > 0.0 {
+                assert!(at - 0.5 * width >= 0.0 && at + 0.5 * width <= x_o, "x_o {x_o}: window at {at}");
+            }
+            assert!((share - last).abs() <= 1e-4 / (0.5 * width) + 1e-12, "x_o {x_o}: share {last} to {share}");
+            last = share;
+        }
+        for (key, force) in [(45, 0.0), (50, REST_FORCE)] {
+            let settings = Settings { mode: crate::instrument::Mode::Slide, ..Settings::default() };
+            let mut voice = SlideVoice::new(FS, &settings);
+            let channel = ChannelState::default();
+            voice.play(Strike { key, ..STRIKE }, &settings, &channel, false, 0);
+            for _ in 0..5 {
+                voice.begin_block(&settings, &channel, 64);
+                voice.render(&mut [0.0; 64]);
+            }
+            let controls = voice.live.0;
+            assert!((controls.left_force - force).abs() <= 1e-12, "key {key}: {controls:?}");
+            if force > 0.0 {
+                let window = (controls.left_position - 0.5 * width, controls.left_position + 0.5 * width);
+                assert!(window.0 >= 0.0 && window.1 <= controls.slide_position, "key {key}: {controls:?}");
+            }
+        }
+    }
 
     /// The monitor draws the string as the core reaches it: through the coupling weights, the
     /// shape at `x` is the state's projection on the weighted mode shapes there (to 1e-10 of
