@@ -1588,6 +1588,33 @@ fn a_slide_note_taking_a_busy_voice_counts_as_a_steal() {
     assert_eq!((p.steals(), p.sounding()), (1, 1));
 }
 
+/// Turning the dry output off again hears the strings through soundboards and a pickup circuit
+/// at rest, not through what they held when the dry output was turned on: C4 struck hard and let
+/// go at 0.2 s (the board ringing), the dry output on from 0.4 s to 2.4 s (the strings damped by
+/// then), then off. Over the next 0.1 s the output is what a twin gives whose boards never
+/// heard the note (to 1e-6 of the board's ring before), where the boards, frozen, rang on
+/// from where they were left.
+#[test]
+fn the_heard_output_back_from_the_dry_starts_from_boards_at_rest() {
+    let render = |heard_first: bool| {
+        let mut p = piano(4);
+        p.set_raw_output(!heard_first);
+        let before = play(&mut p, &vec![(0, on(60, 1.0)), (9_600, off(60))], 19_200, || 64);
+        p.set_raw_output(true);
+        play(&mut p, &vec![], 96_000, || 64);
+        p.set_raw_output(false);
+        (rms(&before[14_400..19_200]), play(&mut p, &vec![], 4_800, || 64))
+    };
+    let ((ringing, back), (_, twin)) = (render(true), render(false));
+    let difference: Vec<f32> = back.iter().zip(&twin).map(|(a, b)| a - b).collect();
+    println!(
+        "board before {ringing:.2e}, back {:.2e}, its difference from the twin {:.2e}",
+        rms(&back),
+        rms(&difference)
+    );
+    assert!(rms(&difference) <= 1e-6 * ringing, "{:.2e} against {ringing:.2e}", rms(&difference));
+}
+
 /// Following keys, a slide voice that glides back to a held key plays that key's note: D3 (note
 /// id 1) pressed, G3 (id 2) legato, tuned 2 semitones up by its own expression, then let go. The
 /// hand is pressed by poly pressure: D3's (0.8, sent while G3 sounds) is the voice's from the

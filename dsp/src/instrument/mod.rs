@@ -1155,8 +1155,14 @@ impl Instrument {
     /// Output the dry signals (`true`): each piano key's bridge force and each slide voice's
     /// string velocity at the pickup (on the acoustic guitar, what its body radiates, which its
     /// string is coupled to), centred, without the soundboard's radiation, the stereo pan or the
-    /// pickup's circuit; what research renders compare against the scenes.
+    /// pickup's circuit; what research renders compare against the scenes. The soundboards and
+    /// the circuit, which the dry signals pass by, start again from rest when they come back:
+    /// what they held when left would ring out under signals that never went through them.
     pub fn set_raw_output(&mut self, raw: bool) {
+        if raw != self.raw {
+            self.boards.iter_mut().for_each(Body::reset);
+            self.circuit.reset();
+        }
         self.raw = raw;
     }
 
