@@ -55,14 +55,16 @@
 //!
 //! # Voices
 //!
-//! The pool is sized once ([`Instrument::new`]); nothing allocates after that. A note takes a free
-//! voice or, when none is free, steals the least audible one (the quietest output over its latest
-//! window of 20 ms, a note not heard over a whole window yet counting as the loudest): that voice
-//! fades out over 5 ms at a decay rate of 2000/s before its new note starts, so stealing does not
-//! click. When every voice fades already, the piano voice whose waiting note
-//! came first gives it up to the new note, the newest notes winning. A piano voice is released
-//! when its strings' energy falls 100 dB below its strike's. A host's choke ([`Event::Choke`])
-//! fades the notes it addresses out the same way, whatever the pedals, and ends them.
+//! The pool is sized once ([`Instrument::new`]); nothing allocates after that. A piano note takes a
+//! free voice or, when none is free, steals the least audible one (the quietest output over its
+//! latest window of 20 ms, a note not heard over a whole window yet counting as the loudest): that
+//! voice fades out over 5 ms at a decay rate of 2000/s before its new note starts, so stealing does
+//! not click. When every voice fades already, the piano voice whose waiting note came first gives
+//! it up to the new note, the newest notes winning. A slide note takes a free voice or the one
+//! whose string moves least, a voice still plucking last, and plucks its string as it is: the
+//! string keeps its motion, so reuse does not click. A piano voice is released when its strings'
+//! energy falls 100 dB below its strike's. A host's choke ([`Event::Choke`]) fades the notes it
+//! addresses out the same way, whatever the pedals, and ends them.
 //!
 //! # Output
 //!
@@ -128,8 +130,8 @@ pub use presets::{
     CATEGORIES, FACTORY_PRESETS, Preset, PresetError, factory_presets, find_preset, load_factory_presets, parse_preset,
 };
 pub use settings::{
-    GAIN_RANGE_DB, HAND_RANGE, HARDNESS_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings, SlideBody,
-    hammer_speed,
+    GAIN_RANGE_DB, HAND_HEIGHT_LIMIT, HAND_RANGE, HARDNESS_RANGE, HandSource, MAX_BLOCK, MAX_SEGMENTS, Mode, Settings,
+    SlideBody, hammer_speed,
 };
 pub use slide_scale::SlideScale;
 pub use slide_voice::{

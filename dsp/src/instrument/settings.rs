@@ -61,6 +61,10 @@ pub enum SlideBody {
 /// Lowest and highest hand height a controller maps to (m): lifted at 0, pressed at full.
 pub const HAND_RANGE: (f64, f64) = (2e-3, -2e-3);
 
+/// Farthest the `hand_height` setting (with a note's offset) holds the hand above or presses
+/// it below the string's line (m): the setting reaches past a controller's [`HAND_RANGE`].
+pub const HAND_HEIGHT_LIMIT: f64 = 3e-3;
+
 /// Everything the host can set. Piano quantities are relative to the per-note rule
 /// ([`crate::preset::piano_note`]), so the keyboard keeps its natural variation; slide quantities
 /// are absolute.
@@ -233,7 +237,7 @@ impl Settings {
             follow_key: self.follow_key,
             glide_time: clamp(self.glide_time, 0.001, 2.0, d.glide_time),
             bend_range: clamp(self.bend_range, 0.0, 24.0, d.bend_range),
-            hand_height: clamp(self.hand_height, -3e-3, 3e-3, d.hand_height),
+            hand_height: clamp(self.hand_height, -HAND_HEIGHT_LIMIT, HAND_HEIGHT_LIMIT, d.hand_height),
             hand_source: self.hand_source,
             slide_mass: clamp(self.slide_mass, 0.005, 0.2, d.slide_mass),
             hand_stiffness: clamp(self.hand_stiffness, 1e2, 1e6, d.hand_stiffness),

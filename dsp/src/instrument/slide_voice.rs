@@ -96,7 +96,7 @@ use crate::exciter::SlideParams;
 use crate::instrument::memo::{ENERGY_INTERVAL, Memo};
 use crate::instrument::notes::NoteParam;
 use crate::instrument::piano_voice::{GUARD_FACTOR, GuardFade, RELEASE_ENERGY, STEAL_TIME, Strike};
-use crate::instrument::settings::{HAND_RANGE, HandSource, Settings, SlideBody};
+use crate::instrument::settings::{HAND_HEIGHT_LIMIT, HAND_RANGE, HandSource, Settings, SlideBody};
 use crate::instrument::slide_scale::SlideScale;
 use crate::instrument::solvers::Solvers;
 use crate::preset::slide_guitar;
@@ -734,8 +734,9 @@ impl SlideVoice {
             let Ok(law) = PowerLaw::new(settings.slide_kappa, settings.slide_alpha) else { return };
             let (slide, solver) = (Self::slide_params(settings), (settings.method, settings.segments));
             // The QSA fit spans twice the largest static push the hand and fingers can make: the
-            // deepest hand press and the strongest pluck, with the resting finger.
-            let y_ref = slide.reference_compression(&law, -HAND_RANGE.1, pluck_force(1.0), REST_FORCE);
+            // deepest hand press (the setting's, beyond a controller's) and the strongest pluck,
+            // with the resting finger.
+            let y_ref = slide.reference_compression(&law, HAND_HEIGHT_LIMIT, pluck_force(1.0), REST_FORCE);
             if !self.solvers.restart(solver.0, law, y_ref, solver.1, self.core.compressions()) {
                 return;
             }
@@ -926,7 +927,9 @@ impl SlideVoice {
     fn hand_height(&self, settings: &Settings, channel: &ChannelState) -> f64 {
         let pressed = |v: f64| HAND_RANGE.0 + (HAND_RANGE.1 - HAND_RANGE.0) * v.clamp(0.0, 1.0);
         match settings.hand_source {
-            HandSource::Parameter => (settings.hand_height + self.hand_offset).clamp(-3e-3, 3e-3),
+            HandSource::Parameter => {
+                (settings.hand_height + self.hand_offset).clamp(-HAND_HEIGHT_LIMIT, HAND_HEIGHT_LIMIT)
+            }
             HandSource::ModWheel => pressed(channel.mod_wheel),
             HandSource::ChannelPressure => pressed(channel.pressure),
             HandSource::PolyPressure => pressed(self.poly_pressure),
@@ -1298,6 +1301,21 @@ mod tests {
                 assert!(window.0 >= 0.0 && window.1 <= controls.slide_position, "key {key}: {controls:?}");
             }
         }
+    }
+
+    /// A note's QSA fit spans twice the largest static push its hand can make, the `hand_height`
+    /// setting's deepest press (3 mm, beyond a controller's 2 mm) included: the force at the
+    /// fit's reference compression is `2(k_H (3 mm + 1 mm) + F_pluck + F_rest)` to rounding.
+    #[test]
+    fn a_notes_contact_fit_spans_the_deepest_press_the_setting_makes() {
+        let settings = Settings { mode: crate::instrument::Mode::Slide, hand_height: -3e-3, ..Settings::default() };
+        let mut voice = SlideVoice::new(FS, &settings);
+        voice.play(STRIKE, &settings, &ChannelState::default(), false, 0);
+        let y_ref = voice.solvers.qsa.spline().reference_compression();
+        let law = PowerLaw::new(settings.slide_kappa, settings.slide_alpha).unwrap();
+        let push = 2.0 * (settings.hand_stiffness * (3e-3 + 1e-3) + pluck_force(1.0) + REST_FORCE);
+        let reached = law.kappa() * y_ref.powf(law.alpha());
+        assert!((reached / push - 1.0).abs() < 1e-9, "the fit reaches {reached} N, the push is {push} N");
     }
 
     /// The monitor draws the string as the core reaches it: through the coupling weights, the

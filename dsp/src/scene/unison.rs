@@ -490,6 +490,7 @@ impl UnisonCore {
         self.place();
         self.place_partners(&partners[..self.partners], 0);
         self.losses = 0.0;
+        self.last_force = 0.0;
         self.clear_background();
         self.measure();
         Ok(())
@@ -572,8 +573,10 @@ impl UnisonCore {
 
     /// Have the hammer meet the first `struck` strings of the unison only (module docs, "The
     /// hammer shifted"), clamped to 1 to all of them: the una corda shifts it off the others.
-    /// Takes effect at the next [`strike`](Self::strike), which it must precede; the strings
-    /// keep their state. Never allocates.
+    /// Takes effect at once, the compression measured anew over the strings now met, so call it
+    /// just before a [`strike`](Self::strike) (and a solver started afresh): a solver under way
+    /// holds compressions measured over the old ones. The strings keep their state. Never
+    /// allocates.
     pub fn set_struck(&mut self, struck: usize) {
         let struck = struck.clamp(1, self.count.max(1));
         if struck != self.struck {
@@ -926,6 +929,7 @@ impl UnisonCore {
         self.coupled_bank.reset();
         self.free_bank.reset();
         self.clear_background();
+        self.last_force = 0.0;
         self.measure();
     }
 
@@ -1725,6 +1729,28 @@ mod tests {
         let worst = a.iter().zip(&b).map(|(x, y)| (x - 2.0 / 3.0 * y).abs()).fold(0.0, f64::max);
         println!("peak {peak:.3} N, worst difference {worst:.2e} N");
         assert!(peak > 1.0 && worst < 1e-9 * peak, "{worst:e} of {peak}");
+    }
+
+    /// A unison brought to rest, or retuned, in the middle of a contact reports no contact
+    /// force (what a monitor draws): the force is the latest step's, and no step has come since.
+    #[test]
+    fn a_unison_brought_to_rest_in_contact_reports_no_force() {
+        let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
+        let y_ref = law(3).compression_at_energy(0.5 * 3.0 * 2.97e-3 * 3.5 * 3.5);
+        let c4 = chaigne_askenfelt_c4();
+        let params = UnisonParams { string: c4.string, strings: 3, detune: [-1.0, 0.2, 0.8] };
+        for retune in [false, true] {
+            let mut core = c4_unison(3, params.detune, &board);
+            let mut solver = QsaSolver::new(QuadSpline::new(law(3), y_ref, 6).unwrap());
+            core.process_output(&mut solver, &mut [0.0; 48]);
+            assert!(core.contact().1.abs() > 1.0, "in contact after 1 ms: {:?}", core.contact());
+            if retune {
+                core.retune(&params, f64::INFINITY, c4.strike_position).unwrap();
+            } else {
+                core.reset();
+            }
+            assert_eq!(core.contact().1, 0.0, "retuned {retune}");
+        }
     }
 
     /// A trichord struck on two strings (the una corda), then struck again on all three while
