@@ -121,11 +121,14 @@ fn engine_event<S>(event: &NoteEvent<S>, api: PluginApi) -> Option<Event> {
             let (channel, key) = note(&channel, &key)?;
             Event::NoteOn { channel, key, velocity }
         }
-        NoteEvent::NoteOff { channel: Channel::Number(channel), key: Key::Number(key), .. } => {
+        NoteEvent::NoteOff { voice_id, channel: Channel::Number(channel), key: Key::Number(key), .. }
+            if voice_id.id().is_none_or(|v| v < 0) =>
+        {
             Event::NoteOff { channel, key }
         }
         // CLAP note-offs and chokes may leave the channel or key open (all of them) or name a
-        // note by its id alone.
+        // note by its id, alone or with its channel and key: a note-off by id lets go of that
+        // note, not of a later one on the same key that the host let overlap it.
         NoteEvent::NoteOff { voice_id, channel, key, .. } => Event::Release { note: target(voice_id, channel, key) },
         NoteEvent::Choke { voice_id, channel, key, .. } => Event::Choke { note: target(voice_id, channel, key) },
         // MIDI poly aftertouch (and VST3 poly pressure without a note id): as the offline renderer.

@@ -1108,6 +1108,28 @@ fn slide_pitch_between(audio: &Audio, a: f64, b: f64, expected: f64) -> f64 {
     slide_pitch(&signal, FS, expected)
 }
 
+/// A CLAP host's notes on one key may overlap, each with its note id: the first note's note-off
+/// (its id, channel and key) lets go of nothing while the second holds the key, so the piano
+/// renders to the bit as without it, where the plugin once passed it on as the key's note-off
+/// and the damper fell on the held note; the second's note-off then damps as a note-off does.
+#[test]
+fn clap_a_note_off_by_id_leaves_a_later_note_on_its_key_held() {
+    let bundle = release_bundle();
+    let samples = FS as usize;
+    let render = |score: &[(usize, Ev)]| Plugin::at_48k(&bundle, &[]).render_blocks(score, samples, 512);
+    let off = |id| Ev::OffAt(Target { note_id: Some(id), channel: Some(0), key: Some(60) });
+    let first = [(0, Ev::OnId(0, 60, 0.8, 1)), (9_600, Ev::OnId(0, 60, 0.8, 2))];
+    let overlapped = render(&[first[0], first[1], (19_200, off(1)), (38_400, off(2))]);
+    let without = render(&[first[0], first[1], (38_400, off(2))]);
+    let held = render(&first);
+    if let Some(i) = bit_identical(&overlapped, &without) {
+        panic!("the first note's note-off changed the sound from sample {i}");
+    }
+    let tail = |a: &Audio| a.left[40_000..].iter().map(|v| f64::from(*v).powi(2)).sum::<f64>().sqrt();
+    println!("after the second note-off {:.2e}, held {:.2e}", tail(&without), tail(&held));
+    assert!(tail(&without) < 0.5 * tail(&held), "the second note's note-off let nothing go");
+}
+
 /// A CLAP tuning expression moves its note's slide and nothing else. Note 1 (channel 2, key 50)
 /// and note 2 (channel 3, key 57, 220 Hz) sound; note 2 is tuned −3 semitones at 0.25 s,
 /// addressed by its note id. Note 2 alone sounds at 220 Hz before and at key 54's 185 Hz after

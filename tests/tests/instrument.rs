@@ -1615,6 +1615,34 @@ fn the_heard_output_back_from_the_dry_starts_from_boards_at_rest() {
     assert!(rms(&difference) <= 1e-6 * ringing, "{:.2e} against {ringing:.2e}", rms(&difference));
 }
 
+/// A host's notes on one key may overlap: C4 struck as note 1, struck again as note 2 while
+/// held, then note 1's note-off by its id, channel and key lets go of nothing (note 2 holds the
+/// key: the render is the same to the bit as without that note-off), and note 2's own then lets
+/// go of the key as a MIDI note-off does. On the slide alike. A note-off naming an id the engine
+/// was never told lets go of its key, as a MIDI note-off does, rather than leave it held.
+#[test]
+fn a_note_off_by_id_lets_go_of_its_own_note_not_a_later_one_on_its_key() {
+    let with_id = |voice| Event::NoteOnWithId { channel: 0, key: 52, velocity: 0.8, voice };
+    let off_id = |voice| Event::Release { note: NoteTarget { voice: Some(voice), channel: Some(0), key: Some(52) } };
+    for mode in [Mode::Piano, Mode::Slide] {
+        let render = |score: &Score| {
+            play(&mut Instrument::new(FS, 4, Settings { mode, ..Default::default() }), score, 48_000, || 64)
+        };
+        let overlapped = render(&vec![(0, with_id(1)), (9_600, with_id(2)), (19_200, off_id(1)), (28_800, off_id(2))]);
+        let without = render(&vec![(0, with_id(1)), (9_600, with_id(2)), (28_800, off_id(2))]);
+        let by_key = render(&vec![(0, with_id(1)), (9_600, with_id(2)), (28_800, off(52))]);
+        let held = render(&vec![(0, with_id(1)), (9_600, with_id(2))]);
+        assert!(overlapped == without, "{mode:?}: note 1's note-off changed the sound");
+        assert!(without == by_key, "{mode:?}: note 2's note-off is not its key's");
+        let (after, still) = (rms(&without[38_400..]), rms(&held[38_400..]));
+        println!("{mode:?}: rms after note 2's note-off {after:.2e}, held {still:.2e}");
+        assert!(after < 0.1 * still, "{mode:?}: note 2's note-off let nothing go");
+        let unknown = render(&vec![(0, with_id(1)), (19_200, off_id(99))]);
+        let midi = render(&vec![(0, with_id(1)), (19_200, off(52))]);
+        assert!(unknown == midi, "{mode:?}: a note-off by an unknown id is not its key's");
+    }
+}
+
 /// Following keys, a slide voice that glides back to a held key plays that key's note: D3 (note
 /// id 1) pressed, G3 (id 2) legato, tuned 2 semitones up by its own expression, then let go. The
 /// hand is pressed by poly pressure: D3's (0.8, sent while G3 sounds) is the voice's from the

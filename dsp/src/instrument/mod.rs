@@ -240,9 +240,11 @@ pub enum Event {
     },
     /// Release the keys of the addressed notes, as their note-offs do. A CLAP note-off may leave
     /// its channel or key open, releasing every note on a key or a channel (or all of them), or
-    /// name a note by its voice id alone.
+    /// name a note by its voice id alone. Naming its id, channel and key, it releases that note:
+    /// not a later note on the key that the host let overlap it (which it then leaves held), and,
+    /// when the id is one the engine was never told, the key, as [`Event::NoteOff`] does.
     Release {
-        /// The notes: a key held down counts when the target names no voice id.
+        /// The notes: a key held down counts when the target names no voice id, or its press's.
         note: NoteTarget,
     },
     /// Stop the addressed notes whatever the pedals: their keys are released and their voices
@@ -374,6 +376,9 @@ struct Press {
     /// Whether the key was played on a slide: a slide returns only to keys it could have played,
     /// not to a key held on the piano from before the mode changed.
     slide: bool,
+    /// The id of the press this one came over while the key was still down (a host's notes on
+    /// one key may overlap): that note's own note-off, by id, lets go of nothing.
+    under: Option<i32>,
 }
 
 /// The instrument engine.
@@ -688,7 +693,11 @@ impl Instrument {
                 self.key_up(channel, key);
                 self.notes.end_unplayed(Note { voice: Some(voice), channel: channel & 15, key: key & 127 }, self.now);
             }
-            Event::Release { note } => self.keys_up(&self.addressed_keys(note)),
+            Event::Release { note } => {
+                let keys = self.addressed_keys(note);
+                let keys = self.or_by_key(note, keys);
+                self.keys_up(&keys);
+            }
             Event::Choke { note } => {
                 // Faded first: a choked slide following keys lets go rather than gliding back to
                 // a key still held.
@@ -801,10 +810,13 @@ impl Instrument {
         let shifted = for_channel(&self.soft, channel, |a, b| a | b);
         let timbre = self.channels[usize::from(channel)].timbre;
         let strike = Strike { channel, key: key & 127, velocity: f64::from(velocity.min(1.0)), shifted, timbre };
+        let down = self.keys_down[usize::from(strike.channel)] >> strike.key & 1 == 1;
         self.keys_down[usize::from(strike.channel)] |= 1 << strike.key;
         self.presses += 1;
-        self.pressed[usize::from(strike.channel)][usize::from(strike.key)] =
-            Press { order: self.presses, id: voice, pressure: 0.0, slide: self.requested.mode == Mode::Slide };
+        let press = &mut self.pressed[usize::from(strike.channel)][usize::from(strike.key)];
+        let under = if down { press.id.filter(|&id| voice != Some(id)) } else { None };
+        *press =
+            Press { order: self.presses, id: voice, pressure: 0.0, slide: self.requested.mode == Mode::Slide, under };
         let note = Note { voice, channel: strike.channel, key: strike.key };
         // A note takes the settings of its own sample, the latest the host set, though the
         // controls they steer go on at the control block's: a mode, a hardness or a slide's mass
@@ -877,6 +889,25 @@ impl Instrument {
         }
         for (_, note) in self.notes.addressed(target) {
             keys[usize::from(note.channel)] |= 1 << note.key;
+        }
+        keys
+    }
+
+    /// The keys a note-off for `target` lets go of, given `keys`, those its fields address: a
+    /// note-off naming an id, a channel and a key that addresses nothing lets go of its key as a
+    /// MIDI note-off would (an id the engine was never told, or whose note it no longer tells
+    /// apart), unless the id is the press the key's latest press came over, whose own note-off
+    /// lets go of nothing: that key is held by the later note.
+    fn or_by_key(&mut self, target: NoteTarget, mut keys: [u128; 16]) -> [u128; 16] {
+        let (Some(id), Some(channel), Some(key)) = (target.voice, target.channel, target.key) else { return keys };
+        if keys == [0; 16] {
+            let (channel, key) = (usize::from(channel & 15), key & 127);
+            let press = &mut self.pressed[channel][usize::from(key)];
+            if press.under == Some(id) && self.keys_down[channel] >> key & 1 == 1 {
+                press.under = None;
+            } else {
+                keys[channel] = 1 << key;
+            }
         }
         keys
     }
