@@ -151,7 +151,7 @@ mod tests {
         }
     }
 
-    /// The pickup passes low frequencies unchanged    /// The pickup passes low frequencies unchanged (−0.1 dB at 200 Hz), peaks by 4.0 dB ± 0.3 at
+    /// The pickup passes low frequencies unchanged (−0.1 dB at 200 Hz), peaks by 4.0 dB ± 0.3 at
     /// its resonance at every common rate (the prewarping), and cuts an octave and a half above
     /// it by more than 12 dB: a 2nd-order low-pass, as Lemme's loaded pickups.
     #[test]
