@@ -1542,8 +1542,8 @@ fn letting_go_of_a_legato_key_glides_back_to_the_latest_key_still_held() {
 
 /// A slide let go returns only to keys played on a slide: D3 plucked on the slide, the mode
 /// switched to the piano, C4 struck there and held, then D3 let go. The slide mutes as at any
-/// last note-off and falls silent (only the piano's C4 sounds 3 s on), where it glided to C4's
-/// place on its string before and rang on while C4 was held.
+/// last note-off and falls silent (only the piano's C4 sounds 3 s on), rather than gliding to
+/// C4's place on its string and ringing on while C4 is held.
 #[test]
 fn a_slide_let_go_does_not_glide_to_a_key_held_on_the_piano() {
     let mut p = slide(Settings::default());
@@ -1559,7 +1559,7 @@ fn a_slide_let_go_does_not_glide_to_a_key_held_on_the_piano() {
 /// Following keys switched on inside a control block counts for the note-offs of that block as
 /// for its note-ons: D3 and E3 pressed there (E3 glides legato from D3, as following keys
 /// asks) and E3 let go before the block ends glides back to D3, held, and sounds on at its pitch
-/// (within 1 %), where the block's setting (not following) muted the string before.
+/// (within 1 %), rather than muting the string as the block's setting (not following) would.
 #[test]
 fn following_keys_switched_on_inside_a_block_counts_for_its_note_offs() {
     let mut p = slide(Settings { follow_key: false, ..Default::default() });
@@ -1592,8 +1592,8 @@ fn a_slide_note_taking_a_busy_voice_counts_as_a_steal() {
 /// at rest, not through what they held when the dry output was turned on: C4 struck hard and let
 /// go at 0.2 s (the board ringing), the dry output on from 0.4 s to 2.4 s (the strings damped by
 /// then), then off. Over the next 0.1 s the output is what a twin gives whose boards never
-/// heard the note (to 1e-6 of the board's ring before), where the boards, frozen, rang on
-/// from where they were left.
+/// heard the note (to 1e-6 of the board's ring before), rather than ringing on from where the
+/// boards were left.
 #[test]
 fn the_heard_output_back_from_the_dry_starts_from_boards_at_rest() {
     let render = |heard_first: bool| {
@@ -1640,7 +1640,33 @@ fn a_note_off_by_id_lets_go_of_its_own_note_not_a_later_one_on_its_key() {
         let unknown = render(&vec![(0, with_id(1)), (19_200, off_id(99))]);
         let midi = render(&vec![(0, with_id(1)), (19_200, off(52))]);
         assert!(unknown == midi, "{mode:?}: a note-off by an unknown id is not its key's");
+        // Three overlapping: the first's note-off lets go of nothing either.
+        let three = [(0, with_id(1)), (4_800, with_id(2)), (9_600, with_id(3))];
+        let first_off = render(&[&three[..], &[(19_200, off_id(1))]].concat());
+        assert!(first_off == render(&three.to_vec()), "{mode:?}: the first of three let go of the key");
     }
+    // A slide not following keys gives each press its own voice: note 1's note-off lets go of
+    // its voice alone, as a note-off on another channel would, and note 2 rings on held.
+    let settings = Settings { mode: Mode::Slide, follow_key: false, ..Default::default() };
+    let render = |score: &Score| play(&mut Instrument::new(FS, 4, settings), score, 48_000, || 64);
+    let by_id = render(&vec![(0, with_id(1)), (9_600, with_id(2)), (19_200, off_id(1))]);
+    let other_channel = Event::NoteOn { channel: 1, key: 52, velocity: 0.8 };
+    let apart = render(&vec![(0, on(52, 0.8)), (9_600, other_channel), (19_200, off(52))]);
+    assert!(by_id == apart, "note 1's note-off is not its voice's alone");
+}
+
+/// Following keys switched on under notes that each took a voice on one channel (D3, then E3,
+/// not following keys), E3 let go does not glide back to D3, which its own voice plays: it
+/// mutes, and only D3 sounds 3 s on, rather than two voices playing D3.
+#[test]
+fn a_slide_let_go_does_not_return_to_a_key_another_voice_plays() {
+    let mut p = slide(Settings { follow_key: false, ..Default::default() });
+    play(&mut p, &vec![(0, on(50, 0.8)), (4_800, on(52, 0.8))], 9_600, || 64);
+    p.set_settings(&Settings { mode: Mode::Slide, ..Default::default() });
+    play(&mut p, &vec![(0, off(52))], 144_000, || 64);
+    let ended: Vec<u8> = p.drain_ended().map(|e| e.note.key).collect();
+    println!("sounding {}, notes ended {ended:?}", p.sounding());
+    assert_eq!((p.sounding(), ended), (1, vec![52]), "E3's note ends and D3 sounds once");
 }
 
 /// Following keys, a slide voice that glides back to a held key plays that key's note: D3 (note

@@ -376,10 +376,14 @@ struct Press {
     /// Whether the key was played on a slide: a slide returns only to keys it could have played,
     /// not to a key held on the piano from before the mode changed.
     slide: bool,
-    /// The id of the press this one came over while the key was still down (a host's notes on
-    /// one key may overlap): that note's own note-off, by id, lets go of nothing.
-    under: Option<i32>,
+    /// The ids of the presses this one came over while the key was still down (a host's notes on
+    /// one key may overlap), the latest last: such a note's own note-off, by id, lets go of its
+    /// own voice if it still has one, not of the key.
+    under: [Option<i32>; OVERLAPS],
 }
+
+/// How many earlier notes a key's latest press remembers having come over ([`Press::under`]).
+const OVERLAPS: usize = 3;
 
 /// The instrument engine.
 #[derive(Debug, Clone)]
@@ -693,11 +697,7 @@ impl Instrument {
                 self.key_up(channel, key);
                 self.notes.end_unplayed(Note { voice: Some(voice), channel: channel & 15, key: key & 127 }, self.now);
             }
-            Event::Release { note } => {
-                let keys = self.addressed_keys(note);
-                let keys = self.or_by_key(note, keys);
-                self.keys_up(&keys);
-            }
+            Event::Release { note } => self.release(note),
             Event::Choke { note } => {
                 // Faded first: a choked slide following keys lets go rather than gliding back to
                 // a key still held.
@@ -814,7 +814,12 @@ impl Instrument {
         self.keys_down[usize::from(strike.channel)] |= 1 << strike.key;
         self.presses += 1;
         let press = &mut self.pressed[usize::from(strike.channel)][usize::from(strike.key)];
-        let under = if down { press.id.filter(|&id| voice != Some(id)) } else { None };
+        let mut under = [None; OVERLAPS];
+        if down && let Some(id) = press.id.filter(|&id| voice != Some(id)) {
+            // The oldest drops out when more overlap.
+            under[..OVERLAPS - 1].copy_from_slice(&press.under[1..]);
+            under[OVERLAPS - 1] = Some(id);
+        }
         *press =
             Press { order: self.presses, id: voice, pressure: 0.0, slide: self.requested.mode == Mode::Slide, under };
         let note = Note { voice, channel: strike.channel, key: strike.key };
@@ -850,9 +855,15 @@ impl Instrument {
         }
         // Following keys as a note struck now would (the setting of this sample, not the block's).
         let (follow, offset) = (self.requested.follow_key, self.voices.len());
+        // The keys other slide voices play, held: a voice let go returns to none of them (with
+        // following keys switched on under notes that each took a voice).
+        let mut playing = [0u128; 16];
+        for v in self.slides.iter().filter(|v| v.sounding && v.key_down && !released(v.strike.channel, v.strike.key)) {
+            playing[usize::from(v.strike.channel)] |= 1 << v.strike.key;
+        }
         for (j, v) in self.slides.iter_mut().enumerate().filter(|(_, v)| released(v.strike.channel, v.strike.key)) {
             let c = usize::from(v.strike.channel);
-            let (down, pressed) = (self.keys_down[c], &self.pressed[c]);
+            let (down, pressed) = (self.keys_down[c] & !playing[c], &self.pressed[c]);
             let latest = (0..128u8)
                 .filter(|&k| down >> k & 1 == 1 && pressed[usize::from(k)].slide)
                 .max_by_key(|&k| pressed[usize::from(k)].order);
@@ -863,6 +874,7 @@ impl Instrument {
                     // id, which events for the key reach, and those for the id the key was
                     // pressed with (`each_slide`).
                     v.return_to(key, pressed[usize::from(key)].pressure);
+                    playing[c] |= 1 << key;
                     self.notes.start(offset + j, Note { voice: None, channel: v.strike.channel, key }, self.now);
                 }
                 _ => v.key_up(),
@@ -893,23 +905,35 @@ impl Instrument {
         keys
     }
 
-    /// The keys a note-off for `target` lets go of, given `keys`, those its fields address: a
-    /// note-off naming an id, a channel and a key that addresses nothing lets go of its key as a
-    /// MIDI note-off would (an id the engine was never told, or whose note it no longer tells
-    /// apart), unless the id is the press the key's latest press came over, whose own note-off
-    /// lets go of nothing: that key is held by the later note.
-    fn or_by_key(&mut self, target: NoteTarget, mut keys: [u128; 16]) -> [u128; 16] {
-        let (Some(id), Some(channel), Some(key)) = (target.voice, target.channel, target.key) else { return keys };
-        if keys == [0; 16] {
-            let (channel, key) = (usize::from(channel & 15), key & 127);
-            let press = &mut self.pressed[channel][usize::from(key)];
-            if press.under == Some(id) && self.keys_down[channel] >> key & 1 == 1 {
-                press.under = None;
-            } else {
-                keys[channel] = 1 << key;
+    /// The note-off of the notes `target` addresses ([`Event::Release`]): the keys they hold go
+    /// up. A note-off naming an id, a channel and a key is that note's: for a note a later press
+    /// of its key came over, held down, only its own voice lets go (a slide not following keys
+    /// gives each press a voice), the key staying held; for an id that addresses nothing (one the
+    /// engine was never told), its key goes up as at a MIDI note-off.
+    fn release(&mut self, target: NoteTarget) {
+        let (Some(id), Some(channel), Some(key)) = (target.voice, target.channel, target.key) else {
+            self.keys_up(&self.addressed_keys(target));
+            return;
+        };
+        let (c, key) = (usize::from(channel & 15), key & 127);
+        let held = self.keys_down[c] >> key & 1 == 1;
+        let press = &mut self.pressed[c][usize::from(key)];
+        if let Some(slot) = press.under.iter_mut().find(|under| **under == Some(id)).filter(|_| held) {
+            *slot = None;
+            let offset = self.voices.len();
+            for (i, _) in self.notes.addressed(target) {
+                match i.checked_sub(offset) {
+                    None => self.voices[i].release(),
+                    Some(j) => self.slides[j].key_up(),
+                }
             }
+            return;
         }
-        keys
+        let mut keys = self.addressed_keys(target);
+        if keys == [0; 16] {
+            keys[c] = 1 << key;
+        }
+        self.keys_up(&keys);
     }
 
     /// Fade out the voices of the notes `target` addresses and let them fall silent
