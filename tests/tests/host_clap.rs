@@ -1110,8 +1110,8 @@ fn slide_pitch_between(audio: &Audio, a: f64, b: f64, expected: f64) -> f64 {
 
 /// A CLAP host's notes on one key may overlap, each with its note id: the first note's note-off
 /// (its id, channel and key) lets go of nothing while the second holds the key, so the piano
-/// renders to the bit as without it, where the plugin once passed it on as the key's note-off
-/// and the damper fell on the held note; the second's note-off then damps as a note-off does.
+/// renders to the bit as without it (passed on as the key's note-off, it would drop the damper
+/// on the held note); the second's note-off then damps as a note-off does.
 #[test]
 fn clap_a_note_off_by_id_leaves_a_later_note_on_its_key_held() {
     let bundle = release_bundle();

@@ -1270,8 +1270,9 @@ mod tests {
     /// The trailing finger rests only on the dead part of the string, between the nut and the
     /// slide: wherever it lays any force its window lies within them, and its force grows with
     /// the slide's position without a step. A note on the open string's key (its slide 5 mm from
-    /// the nut) rests no finger there, where the finger's window reached past the nut and 4.5 mm
-    /// under the speaking string; on D3 the finger rests with its whole force, clear of both.
+    /// the nut) rests no finger there (2 mm from the nut, its window would reach past the nut and
+    /// 4.5 mm under the speaking string); on D3 the finger rests with its whole force, clear of
+    /// both.
     #[test]
     fn the_trailing_finger_rests_only_on_the_dead_part_of_the_string() {
         let width = crate::preset::slide_guitar().left.width;
