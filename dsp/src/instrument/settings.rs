@@ -79,7 +79,9 @@ pub struct Settings {
     /// Control block N_b (samples), 1..=[`MAX_BLOCK`]: controls are sampled every N_b samples.
     pub block: usize,
     /// Highest mode frequency kept in every string (Hz), 1 kHz to 24 kHz (and below Nyquist):
-    /// the same modes, and so the same sound, at every sample rate above twice this.
+    /// the same modes, and so the same sound, at every sample rate above twice this. A piano
+    /// note takes it as it is struck; the slide voices' strings keep the value the instrument
+    /// was made with ([`Instrument::new`](super::Instrument::new)).
     pub max_frequency: f64,
     /// Felt stiffness κ relative to the per-note value, 0.1..=10.
     pub hardness: f64,
