@@ -189,9 +189,6 @@ pub fn spectral_centroid(x: &[f64], fs: f64) -> f64 {
 /// example.
 pub fn run(args: &ExamplesArgs, out: &mut dyn Write) -> Result<Vec<Example>, ExamplesError> {
     crate::folder::claim(&args.out, "examples", TITLE, args.force).map_err(ExamplesError::Setup)?;
-    if !args.out.is_dir() {
-        std::fs::create_dir_all(&args.out).map_err(io(&args.out))?;
-    }
     let mut made = Vec::new();
     for s in &SHOWCASES {
         let example = render_showcase(s, &args.scenes)?;

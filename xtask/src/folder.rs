@@ -12,7 +12,7 @@ pub const README: &str = "README.md";
 /// hidden files (`.gitkeep`, `.DS_Store`), or holds a [`README`] whose first line is `title`, or
 /// when `force`; else an error naming the folder and what would be replaced. A folder claimed
 /// without a README gets one with the title at once (made if missing), so that a run stopped
-/// before its end leaves a folder the next run takes as the task's own.
+/// before its end leaves a folder the next run takes as the task's own: a claimed folder exists.
 pub fn claim(dir: &Path, task: &str, title: &str, force: bool) -> Result<(), String> {
     let readme = dir.join(README);
     let first_line = std::fs::read_to_string(&readme).ok().and_then(|t| t.lines().next().map(str::to_owned));

@@ -348,7 +348,6 @@ fn excerpt(cases: &[cases::Case]) -> Option<&sim::CaseScene> {
 /// The full report: every sweep, every file. Returns the files written.
 fn full(args: &ReportArgs) -> Result<Vec<PathBuf>, ReportError> {
     let start = Instant::now();
-    std::fs::create_dir_all(&args.out).map_err(|source| ReportError::Io { path: args.out.clone(), source })?;
     let cases = cases::cases(&args.scenes)?;
     let configs = error::configs(&error::SWEPT_SEGMENTS, &error::OVERSAMPLING);
     let bar = progress(cases.len() * (3 * configs.len() + error::TIMING_RUNS + 1), "error vs run time");
