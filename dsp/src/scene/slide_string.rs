@@ -494,10 +494,19 @@ impl Elimination {
 /// §13.5): the string's end moves with the bridge, `u = v + b·x/L`, the body's modes move under
 /// the string's force on the bridge, and the bridge's acceleration is eliminated in closed form in
 /// each step, which only adds a rank-one term to the contacts' Gram matrix.
+///
+/// The body is heard by `Σ r_j ẍ_j`, the acceleration taken as the centred second difference of
+/// the modes' displacements. Through the scheme's step (its poles exact, its response a bilinear
+/// image of the mode's) that peaks at each mode's own frequency `sin θ_j/θ_j` below the mode's
+/// true acceleration, `θ_j = ω_jΔt` its damped frequency per step: −2.0 dB at 4 kHz at
+/// 22.05 kHz, −0.4 dB at 48 kHz. Each weight carries `θ_j/sin θ_j`, which makes up for it where the
+/// mode is heard most. Only the output changes (the string and the energy see `e` alone): the
+/// guitar's transmittance then holds within 3.4 % from 150 Hz to 10 kHz at 22.05 kHz and 0.5 % at
+/// 44.1 kHz (10 % and 3.0 % without).
 #[derive(Debug, Clone)]
 struct BodyCoupling {
     /// The body's modes (at the bridge), `e` (1 on each: `b = eᵀx`), `C∘e`, and each mode's
-    /// radiation weight `r_j` (what `Σ r_j ẍ_j` is heard as).
+    /// radiation weight `r_j θ_j/sin θ_j` (what `Σ r_j ẍ_j` is heard as).
     bank: ModalBank,
     sole: Vec<f64>,
     sole_gain: Vec<f64>,
@@ -542,10 +551,15 @@ impl BodyCoupling {
         for (j, m) in kept.iter().enumerate() {
             sole[j] = 1.0;
             sole_gain[j] = bank.input_gains()[j];
-            radiation[j] = m.radiation;
+            // The scheme's droop at the mode's own peak, made up for (see the struct's docs).
+            let omega0 = std::f64::consts::TAU * m.mode.frequency;
+            let sigma = 0.5 * m.mode.loss_factor * omega0;
+            let theta = (omega0 * omega0 - sigma * sigma).max(0.0).sqrt() / fs;
+            let weight = if theta > 0.0 { m.radiation * theta / theta.sin() } else { m.radiation };
+            radiation[j] = weight;
             match m.side {
-                Side::Left => sides[0][j] = m.radiation,
-                Side::Right => sides[1][j] = m.radiation,
+                Side::Left => sides[0][j] = weight,
+                Side::Right => sides[1][j] = weight,
                 Side::Centre => {}
             }
         }
@@ -577,6 +591,37 @@ impl BodyCoupling {
         self.heard = (0.0, 0.0);
         self.heard_sides = [(0.0, 0.0); 2];
         self.sides_now = [0.0; 2];
+    }
+
+    /// Step the body under the force `force` (N) on the bridge, `dt` (s) on from the last step
+    /// (its history taken), returning the radiated `Σ r_j ẍ_j` at this step (keeping each side's
+    /// share of it for [`SlideCore::heard_sides`]) and, with `MONITOR`, the energy of the body and
+    /// of the coupling at `n + 1/2` and what the body dissipated.
+    #[inline(always)]
+    fn advance<const MONITOR: bool>(&mut self, force: f64, dt: f64) -> (f64, StringEnergy) {
+        let forces = [(&self.sole_gain[..], force)];
+        let (b_next, mut energy) = if MONITOR {
+            let (b, stored, dissipated) = self.bank.advance_monitored(forces, &self.sole);
+            (b, StringEnergy { stored, dissipated })
+        } else {
+            (self.bank.advance_projecting(forces, &self.sole, []).0, StringEnergy::default())
+        };
+        let [heard_next, sides_next @ ..] =
+            self.bank.project_now_each([&self.radiation, &self.sides[0], &self.sides[1]]);
+        let heard = (heard_next - 2.0 * self.heard.1 + self.heard.0) / (dt * dt);
+        for ((now, sum), next) in self.sides_now.iter_mut().zip(&mut self.heard_sides).zip(sides_next) {
+            *now = (next - 2.0 * sum.1 + sum.0) / (dt * dt);
+            *sum = (sum.1, next);
+        }
+        if MONITOR {
+            // The lift has moved on already: `lifted` holds `(gᵀũ^n, gᵀũ^{n+1})`.
+            let (db, mean) = ((b_next - self.b.1) / dt, 0.5 * (b_next + self.b.1));
+            let cross = (self.lifted.1 - self.lifted.0) / dt * db;
+            energy.stored += cross + 0.5 * self.lift_mass * db * db + 0.5 * self.lift_stiffness * mean * mean;
+        }
+        self.b = (self.b.1, b_next);
+        self.heard = (self.heard.1, heard_next);
+        (heard, energy)
     }
 
     /// The energy of the body and of the string's motion with its end (J), the numerical
@@ -1624,37 +1669,12 @@ impl SlideCore {
         }
     }
 
-    /// Step the body under the force `force` (N) the string and the contacts put on the bridge,
-    /// returning the radiated `Σ r_j ẍ_j` at this step (keeping each side's share of it for
-    /// [`heard_sides`](Self::heard_sides)) and, with `MONITOR`, the energy of the body and of the
-    /// coupling at `n + 1/2` and what the body dissipated.
+    /// Step the body under the force `force` (N) the string and the contacts put on the bridge
+    /// ([`BodyCoupling::advance`]).
     #[inline(always)]
     fn advance_body<const MONITOR: bool>(&mut self, force: f64) -> (f64, StringEnergy) {
         let dt = self.dt;
-        let body = self.body.as_mut().expect("a plan with the bridge has a body");
-        let forces = [(&body.sole_gain[..], force)];
-        let (b_next, mut energy) = if MONITOR {
-            let (b, stored, dissipated) = body.bank.advance_monitored(forces, &body.sole);
-            (b, StringEnergy { stored, dissipated })
-        } else {
-            (body.bank.advance_projecting(forces, &body.sole, []).0, StringEnergy::default())
-        };
-        let [heard_next, sides_next @ ..] =
-            body.bank.project_now_each([&body.radiation, &body.sides[0], &body.sides[1]]);
-        let heard = (heard_next - 2.0 * body.heard.1 + body.heard.0) / (dt * dt);
-        for ((now, sum), next) in body.sides_now.iter_mut().zip(&mut body.heard_sides).zip(sides_next) {
-            *now = (next - 2.0 * sum.1 + sum.0) / (dt * dt);
-            *sum = (sum.1, next);
-        }
-        if MONITOR {
-            // The lift has moved on already: `lifted` holds `(gᵀũ^n, gᵀũ^{n+1})`.
-            let (db, mean) = ((b_next - body.b.1) / dt, 0.5 * (b_next + body.b.1));
-            let cross = (body.lifted.1 - body.lifted.0) / dt * db;
-            energy.stored += cross + 0.5 * body.lift_mass * db * db + 0.5 * body.lift_stiffness * mean * mean;
-        }
-        body.b = (body.b.1, b_next);
-        body.heard = (body.heard.1, heard_next);
-        (heard, energy)
+        self.body.as_mut().expect("a plan with the bridge has a body").advance::<MONITOR>(force, dt)
     }
 
     /// Move the slide vectors' state projections on by the string update's own recursion,
@@ -1741,6 +1761,52 @@ impl SlideCore {
                 out[i] = f.output;
                 [left[i], right[i]] = core.heard_sides();
             }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::string::Damping;
+
+    /// The guitar's body, coupled at the bridge, radiates what its transmittance says at every
+    /// rate: driven by a sinusoidal force on the bridge, from 150 Hz to 10 kHz (on both sides of
+    /// its top's highest modes, the notch at 2.5 kHz aside), its output's amplitude is within 4 % of
+    /// the transmittance's at 22.05 kHz (measured 3.4 %; 10 % without the weights' correction),
+    /// 1 % at 44.1 kHz (0.5 %; 3.0 % without) and 0.2 % at 96 kHz (0.1 %; 0.7 % without).
+    #[test]
+    fn a_coupled_body_radiates_its_transmittance_at_every_rate() {
+        let params = BodyParams::guitar();
+        let string_params = StringParams {
+            length: 0.65,
+            tension: 70.0,
+            linear_density: 1.1e-3,
+            bending_stiffness: 1e-5,
+            damping: Damping::Viscous { eta0: 0.5, eta2: 1e-6 },
+        };
+        for (fs, tolerance) in [(22_050.0, 0.04), (44_100.0, 0.01), (96_000.0, 0.002)] {
+            let string = ModalString::new(string_params, fs).expect("a valid string");
+            for f in [150.0, 1_000.0, 4_000.0, 4_775.0, 6_741.0, 8_000.0, 10_000.0] {
+                let mut body = BodyCoupling::new(&params, &string);
+                let n = (2.0 * fs) as usize;
+                let w = std::f64::consts::TAU * f / fs;
+                let (mut s, mut c) = (0.0, 0.0);
+                for k in 0..n {
+                    body.bank.history([&body.sole]);
+                    let (heard, _) = body.advance::<false>((k as f64 * w).sin(), 1.0 / fs);
+                    // The second difference is centred on the force's own sample.
+                    if k >= n / 2 {
+                        s += heard * (k as f64 * w).sin();
+                        c += heard * (k as f64 * w).cos();
+                    }
+                }
+                let got = 2.0 * s.hypot(c) / (n - n / 2) as f64;
+                let (re, im) = params.response(f);
+                let want = re.hypot(im);
+                println!("{f} Hz at {fs} Hz: {got:.6} against {want:.6} ({:+.2} %)", 100.0 * (got / want - 1.0));
+                assert!((got - want).abs() < tolerance * want, "{f} Hz at {fs} Hz: {got} against {want}");
+            }
         }
     }
 }
