@@ -12,6 +12,7 @@ mod slider;
 mod tests;
 mod views;
 
+use std::collections::VecDeque;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::Duration;
@@ -60,11 +61,14 @@ pub struct EditorApp {
     /// The latest snapshot.
     latest: Monitor,
     history: History,
-    /// Peak load shown and when it was taken (egui time, s).
-    peak_hold: (f32, f64),
+    /// The peak loads of the last [`PEAK_HOLD`] seconds that a later one has not exceeded, with
+    /// when each was taken (egui time, s), oldest and largest first: the first is shown.
+    peak_hold: VecDeque<(f64, f32)>,
     /// The sliders' gestures under way.
     gestures: slider::Gestures,
-    /// The voice count the editor last asked the host to restart the plugin for.
+    /// The voice count the editor last asked the host to restart the plugin for, forgotten once
+    /// the plugin runs with the count the parameter holds and when the window opens: a count
+    /// asked for, had, and left for another with the window closed is asked for again.
     restart_asked: Option<usize>,
     /// The voice count the parameter holds and since when (egui time, s).
     voices_since: (usize, f64),
@@ -73,6 +77,9 @@ pub struct EditorApp {
 /// How long a new voice count holds before the editor asks for a restart (s): the parameter
 /// reads what the host has taken, which can trail what the slider sent by a few calls.
 const VOICES_SETTLE: f64 = 0.3;
+
+/// How long the peak load is held (s).
+const PEAK_HOLD: f64 = 1.5;
 
 impl NiceEguiApp for EditorApp {
     fn build(
@@ -100,7 +107,7 @@ impl EditorApp {
             gui: None,
             latest: Monitor::default(),
             history: History::default(),
-            peak_hold: (0.0, 0.0),
+            peak_hold: VecDeque::new(),
             gestures: slider::Gestures::default(),
             restart_asked: None,
             voices_since: (0, 0.0),
@@ -115,6 +122,7 @@ impl EditorApp {
             self.gestures.end_all(&old.param_setter());
         }
         self.gui = Some(gui);
+        self.restart_asked = None;
     }
 
     /// A frame of the editor (what [`NiceEguiApp::ui`] draws; the tests draw it headless).
@@ -127,9 +135,14 @@ impl EditorApp {
         }
         let now = ui.input(|i| i.time);
         let load = self.shared.load.load(Ordering::Relaxed);
-        let peak = self.shared.peak.swap(0.0, Ordering::Relaxed);
-        if peak >= self.peak_hold.0 || now - self.peak_hold.1 > 1.5 {
-            self.peak_hold = (peak.max(load), now);
+        let peak = self.shared.peak.swap(0.0, Ordering::Relaxed).max(load);
+        let held = &mut self.peak_hold;
+        while held.back().is_some_and(|&(_, p)| p <= peak) {
+            held.pop_back();
+        }
+        held.push_back((now, peak));
+        while held.front().is_some_and(|&(t, _)| now - t > PEAK_HOLD) {
+            held.pop_front();
         }
 
         let Some(gui) = &self.gui else {
@@ -144,12 +157,15 @@ impl EditorApp {
             self.voices_since = (wanted, now);
         }
         let settled = now - self.voices_since.1 >= VOICES_SETTLE && !self.gestures.holds(voices);
-        if active != 0 && wanted != active && self.restart_asked != Some(wanted) && settled {
+        if wanted == active {
+            self.restart_asked = None;
+        } else if active != 0 && self.restart_asked != Some(wanted) && settled {
             gui.request_restart();
             self.restart_asked = Some(wanted);
         }
         let setter = gui.param_setter();
-        let (params, latest, history, peak) = (&*self.params, &self.latest, &self.history, self.peak_hold.0);
+        let peak = self.peak_hold.front().map_or(0.0, |&(_, p)| p);
+        let (params, latest, history) = (&*self.params, &self.latest, &self.history);
         let gestures = &self.gestures;
         egui::CentralPanel::default().show(ui, |ui| {
             header(ui, latest, load, peak);

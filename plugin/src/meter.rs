@@ -5,9 +5,13 @@
 //!   the time taken over the buffer's duration (1.0 = the whole real-time budget). The audio
 //!   thread keeps a smoothed value (time constant [`LOAD_TIME_CONSTANT`]) and a peak; both go to
 //!   the editor through [`AtomicF32`]s. The editor takes the peak with a swap, so it sees the
-//!   worst call since its last frame.
+//!   worst call since its last frame. The peak weighs calls of at least [`PEAK_SPAN`] samples
+//!   together: the framework splits a host's buffer at each parameter change, and a piece of a
+//!   few samples, paying a call's fixed cost against its own tiny budget, would read as an
+//!   overload the buffer never had.
 //! - **Monitor**: every [`SNAPSHOT_PERIOD`] seconds of audio (counted in samples, so it does not
-//!   depend on the host's buffer size) the audio thread takes the engine's
+//!   depend on the host's buffer size: a call spanning several periods pushes one snapshot for
+//!   each, the traces' time kept) the audio thread takes the engine's
 //!   [`Monitor`] and `force_push`es it into a fixed-capacity
 //!   [`ArrayQueue`]: when the editor falls behind, the oldest snapshot is dropped, never the audio
 //!   thread blocked. Then it asks the editor to repaint ([`RepaintNotifier`] is one atomic store).
@@ -32,6 +36,10 @@ pub const QUEUE_CAPACITY: usize = 8;
 
 /// Time constant of the smoothed load (s of audio).
 pub const LOAD_TIME_CONSTANT: f64 = 0.3;
+
+/// The fewest samples the peak load is taken over: calls shorter than this are weighed together
+/// with those after them (1.3 ms at 48 kHz, shorter than any host's buffer of note).
+pub const PEAK_SPAN: usize = 64;
 
 /// What the audio thread shares with the editor.
 #[derive(Debug)]
@@ -71,12 +79,15 @@ pub struct Tap {
     countdown: usize,
     /// Smoothed load (the audio thread's copy).
     load: f64,
+    /// Samples and time of the calls not yet weighed into the peak (fewer than [`PEAK_SPAN`]).
+    short: (usize, Duration),
 }
 
 impl Tap {
     /// A tap writing into `shared`, at 48 kHz until [`Tap::set_sample_rate`] is called.
     pub fn new(shared: Arc<Shared>) -> Self {
-        let mut tap = Self { shared, sample_rate: 48_000.0, period: 1, countdown: 0, load: 0.0 };
+        let mut tap =
+            Self { shared, sample_rate: 48_000.0, period: 1, countdown: 0, load: 0.0, short: (0, Duration::ZERO) };
         tap.set_sample_rate(48_000.0);
         tap
     }
@@ -99,6 +110,7 @@ impl Tap {
     /// while nothing runs, and the load measured after the next activation starts afresh.
     pub fn rest(&mut self, engine: Option<&Instrument>) {
         self.load = 0.0;
+        self.short = (0, Duration::ZERO);
         self.shared.load.store(0.0, Ordering::Relaxed);
         self.shared.peak.store(0.0, Ordering::Relaxed);
         let counts = engine.map_or((0, 0), |e| (e.shed_count(), e.guard_trips()));
@@ -114,33 +126,44 @@ impl Tap {
     }
 
     /// Account for one process call of `samples` samples that took `elapsed`: update the load and,
-    /// when a snapshot is due and `engine` is given, push its monitor and request a repaint.
-    /// Returns whether a snapshot was pushed. Allocation-free, lock-free.
-    pub fn after_process(&mut self, samples: usize, elapsed: Duration, engine: Option<&Instrument>) -> bool {
+    /// for each snapshot due and if `engine` is given, push its monitor and request a repaint.
+    /// Returns how many snapshots were pushed. Allocation-free, lock-free.
+    pub fn after_process(&mut self, samples: usize, elapsed: Duration, engine: Option<&Instrument>) -> usize {
         if samples == 0 {
-            return false;
+            return 0;
         }
         let duration = samples as f64 / self.sample_rate;
         let raw = elapsed.as_secs_f64() / duration;
         let a = 1.0 - (-duration / LOAD_TIME_CONSTANT).exp();
         self.load += a * (raw - self.load);
         self.shared.load.store(self.load as f32, Ordering::Relaxed);
-        self.shared.peak.fetch_max(raw as f32, Ordering::Relaxed);
+        self.short = (self.short.0 + samples, self.short.1 + elapsed);
+        if self.short.0 >= PEAK_SPAN {
+            let weighed = self.short.1.as_secs_f64() * self.sample_rate / self.short.0 as f64;
+            self.shared.peak.fetch_max(weighed as f32, Ordering::Relaxed);
+            self.short = (0, Duration::ZERO);
+        }
 
         if samples < self.countdown {
             self.countdown -= samples;
-            return false;
+            return 0;
         }
         // Overshoot carries over, so snapshots keep the audio-time rate for any buffer size.
+        let due = 1 + (samples - self.countdown) / self.period;
         let overshoot = (samples - self.countdown) % self.period;
         self.countdown = self.period - overshoot;
         let Some(engine) = engine else {
-            return false;
+            return 0;
         };
-        // A displaced (oldest) snapshot is plain data: dropping it frees nothing.
-        let _ = self.shared.monitors.force_push(engine.monitor());
+        // The engine's state at the call's end stands for each period the call spanned (at most
+        // a queue's worth). A displaced (oldest) snapshot is plain data: dropping it frees nothing.
+        let pushed = due.min(QUEUE_CAPACITY);
+        let monitor = engine.monitor();
+        for _ in 0..pushed {
+            let _ = self.shared.monitors.force_push(monitor);
+        }
         self.shared.repaint.request_repaint();
-        true
+        pushed
     }
 }
 
@@ -174,7 +197,7 @@ mod tests {
             engine.process(&mut left[..n], &mut right[..n]);
             // Pretend each call took a quarter of its budget.
             let elapsed = Duration::from_secs_f64(0.25 * n as f64 / fs);
-            pushed += usize::from(tap.after_process(n, elapsed, Some(&engine)));
+            pushed += tap.after_process(n, elapsed, Some(&engine));
             rendered += n;
         }
         // A snapshot at the first call, then one every 1600 samples: 0, 1600, ..., 11200.
@@ -201,8 +224,45 @@ mod tests {
             tap.after_process(tap.period(), Duration::ZERO, Some(&engine));
         }
         assert_eq!(shared.monitors.len(), QUEUE_CAPACITY);
-        assert!(!tap.after_process(4 * tap.period(), Duration::from_millis(1), None));
+        assert_eq!(tap.after_process(4 * tap.period(), Duration::from_millis(1), None), 0);
         assert!(shared.peak.load(Ordering::Relaxed) > 0.0);
+    }
+
+    /// Snapshots come thirty times a second of audio whatever the host's buffer size: at
+    /// 48 kHz, 1.024 s in calls of 2048, 4096 or 8192 samples (1.3, 2.6 and 5.1 periods each)
+    /// give 31 snapshots, one at each multiple of 1600 samples, as calls of 64 do.
+    #[test]
+    fn a_tap_gives_thirty_snapshots_a_second_whatever_the_buffer_size() {
+        let engine = Instrument::new(48_000.0, 4, Settings::default());
+        for size in [64, 2048, 4096, 8192] {
+            let shared = Arc::new(Shared::default());
+            let mut tap = Tap::new(shared.clone());
+            let (mut pushed, mut popped) = (0, 0);
+            for _ in 0..49_152 / size {
+                pushed += tap.after_process(size, Duration::ZERO, Some(&engine));
+                while shared.monitors.pop().is_some() {
+                    popped += 1;
+                }
+            }
+            assert_eq!((pushed, popped), (31, 31), "calls of {size} samples");
+        }
+    }
+
+    /// A host's buffer that the framework splits at a parameter change into 4 and 1020 samples
+    /// (taking 50 µs and 5 ms, a fixed cost of the short piece against its own 83 µs budget)
+    /// shows the buffer's peak load, 0.24, not the piece's 0.6; calls of 64 samples and more are
+    /// each their own peak.
+    #[test]
+    fn a_buffer_split_at_a_parameter_change_shows_the_peak_of_the_whole_buffer() {
+        let shared = Arc::new(Shared::default());
+        let mut tap = Tap::new(shared.clone());
+        tap.after_process(4, Duration::from_micros(50), None);
+        assert_eq!(shared.peak.load(Ordering::Relaxed), 0.0, "a short piece waits for the next");
+        tap.after_process(1020, Duration::from_millis(5), None);
+        let peak = shared.peak.swap(0.0, Ordering::Relaxed);
+        assert!((peak - 5.05 / (1024.0 / 48.0)).abs() < 1e-4, "peak {peak}");
+        tap.after_process(64, Duration::from_secs_f64(0.9 * 64.0 / 48_000.0), None);
+        assert!((shared.peak.load(Ordering::Relaxed) - 0.9).abs() < 1e-4);
     }
 
     /// A tap brought to rest (the plugin deactivated while a note sounds and the load is 45 %)

@@ -328,3 +328,65 @@ fn a_drag_the_window_closed_on_ends_when_the_editor_opens_again() {
     assert_eq!(*first.gestures.lock().unwrap(), [("begin", solver), ("end", solver)], "ended where it began");
     assert!(second.gestures.lock().unwrap().is_empty());
 }
+
+/// A voice count asked for before is asked for again once the plugin has run with another: asked
+/// for 48 against an activation with 32 and restarted with it, brought back to 32 with the
+/// editor away (a host's undo, restarted by the plugin itself), then set to 48 again, the editor
+/// asks a second time rather than leave the slider at 48 over a pool of 32.
+#[test]
+fn a_voice_count_asked_for_before_is_asked_for_again_after_the_plugin_ran_with_another() {
+    let shared = Arc::new(Shared::default());
+    let host = Arc::new(Host::default());
+    let params = Arc::new(QsaParams::default());
+    let mut app = EditorApp::new(params.clone(), shared.clone());
+    app.gui = Some(GuiContext::new(host.clone()));
+    let ctx = egui::Context::default();
+    let screen = Some(Rect::from_min_size(Pos2::ZERO, vec2(1000.0, 775.0)));
+    let mut time = 0.0;
+    let mut frames = |n: usize, app: &mut EditorApp| {
+        for _ in 0..n {
+            time += 0.05;
+            let input = RawInput { screen_rect: screen, time: Some(time), ..RawInput::default() };
+            ctx.run_ui(input, |ui| app.show(ui)).textures_delta.clear();
+        }
+        host.restarts.load(std::sync::atomic::Ordering::Relaxed)
+    };
+    #[allow(unsafe_code)] // nice-plug's type-erased parameter calls are `unsafe`; see SAFETY.
+    let voices = |n: i32| {
+        let voices = &params.engine.voices;
+        // SAFETY: the pointer comes from `params`, alive here.
+        unsafe { voices.as_ptr()._internal_set_normalized_value(voices.preview_normalized(n)) };
+    };
+    shared.voices.store(32, std::sync::atomic::Ordering::Relaxed);
+    voices(48);
+    assert_eq!(frames(10, &mut app), 1, "48 asked for");
+    shared.voices.store(48, std::sync::atomic::Ordering::Relaxed);
+    assert_eq!(frames(10, &mut app), 1, "restarted with 48");
+    voices(32);
+    shared.voices.store(32, std::sync::atomic::Ordering::Relaxed);
+    assert_eq!(frames(1, &mut app), 1, "back to 32, restarted without the editor");
+    voices(48);
+    assert_eq!(frames(10, &mut app), 2, "48 asked for again");
+}
+
+/// The peak load shown is the largest of the last 1.5 s: 90 % at 0 s, 80 % at 1.0 s and 10 % at
+/// 1.6 s show 90 %, 90 % and then 80 % (taken 0.6 s before), until 2.5 s, when 10 % is the
+/// largest left.
+#[test]
+fn a_peak_hold_that_expires_shows_the_largest_peak_of_its_window() {
+    let shared = Arc::new(Shared::default());
+    let mut app = EditorApp::new(Arc::new(QsaParams::default()), shared.clone());
+    let ctx = egui::Context::default();
+    let screen = Some(Rect::from_min_size(Pos2::ZERO, vec2(1000.0, 775.0)));
+    let mut shown = |time: f64, peak: f32| {
+        shared.peak.store(peak, std::sync::atomic::Ordering::Relaxed);
+        let input = RawInput { screen_rect: screen, time: Some(time), ..RawInput::default() };
+        ctx.run_ui(input, |ui| app.show(ui)).textures_delta.clear();
+        app.peak_hold.front().map(|&(_, p)| p)
+    };
+    assert_eq!(shown(0.0, 0.9), Some(0.9));
+    assert_eq!(shown(1.0, 0.8), Some(0.9));
+    assert_eq!(shown(1.6, 0.1), Some(0.8));
+    assert_eq!(shown(2.4, 0.0), Some(0.8));
+    assert_eq!(shown(2.6, 0.0), Some(0.1));
+}
