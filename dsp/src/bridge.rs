@@ -170,16 +170,22 @@ mod tests {
     use crate::string::ModalBank;
 
     /// The soundboard's mobility averaged over its band has the real part it was built for
-    /// (the mean-value relation `n/(4M)` holds to the bank's discreteness: within 25 % over
-    /// 200 Hz – 8 kHz, averaged on a log grid), and every mode is a valid mass.
+    /// (the mean-value relation `n/(4M)` holds to the bank's discreteness: within 10 % over
+    /// 200 Hz – 8 kHz, averaged on a log grid; measured 4.21e-4 s/kg, −5 %, and 4.27e-4 over
+    /// 100 Hz – 10 kHz, the figures docs/physics.md §12.2 gives), and every mode is a valid mass.
     #[test]
     fn the_soundboard_has_its_mean_conductance() {
         let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
         board.validate().unwrap();
         let n = 4000;
         let mean = (0..n).map(|k| board.mobility(200.0 * 40f64.powf(k as f64 / n as f64)).0).sum::<f64>() / n as f64;
-        println!("mean Re Y {mean:e} s/kg over 200 Hz – 8 kHz, {} modes", board.modes.len());
-        assert!((mean / SOUNDBOARD_CONDUCTANCE - 1.0).abs() < 0.25, "{mean:e}");
+        let whole = board.mean_conductance();
+        println!(
+            "mean Re Y {mean:e} s/kg over 200 Hz – 8 kHz, {whole:e} over 100 Hz – 10 kHz, {} modes",
+            board.modes.len()
+        );
+        assert!((mean / SOUNDBOARD_CONDUCTANCE - 1.0).abs() < 0.1, "{mean:e}");
+        assert!((mean / 4.21e-4 - 1.0).abs() < 5e-3 && (whole / 4.27e-4 - 1.0).abs() < 5e-3, "{mean:e}, {whole:e}");
     }
 
     /// A bridge mode, stepped as the unison steps it (an oscillator of a [`ModalBank`]), rings at

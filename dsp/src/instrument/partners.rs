@@ -95,9 +95,10 @@ impl PartnerTable {
             p.linear_density *= s;
             p.tension *= s;
             p.bending_stiffness *= s;
-            // Up to the PARTNER_MODES-th partial (stretched a little by inharmonicity).
+            // Up to the PARTNER_MODES-th partial, stretched by inharmonicity, with a third of the
+            // fundamental to spare.
             let f0 = p.fundamental();
-            let band = (PARTNER_MODES as f64 + 0.3) * f0;
+            let band = p.partial(PARTNER_MODES) + 0.3 * f0;
             let band = band.min(PARTNER_BAND.max(1.2 * f0)).min(0.45 * self.sample_rate);
             // The rule's strings and the clamped settings always give a valid string.
             let _ = string.retune(p, self.sample_rate, band);
@@ -226,6 +227,23 @@ mod tests {
                 let kept = &partner.angular_frequencies()[..partner.modes()];
                 for (i, (w, w_own)) in kept.iter().zip(own.angular_frequencies()).enumerate() {
                     assert!((w / w_own - 1.0).abs() < 1e-12, "key {key}, mode {}: {w} against {w_own}", i + 1);
+                }
+            }
+        }
+    }
+
+    /// A partner keeps its lowest [`PARTNER_MODES`] modes wherever the band allows them, however
+    /// inharmonic: at 48 kHz and brightness 1 and 4, every key whose partner's 16th partial lies
+    /// below [`PARTNER_BAND`] keeps 16 modes (G3, B = 2.1e-4, has its 16th partial at 16.43 times
+    /// its fundamental, beyond a band of 16.3 times it).
+    #[test]
+    fn a_partner_keeps_its_lowest_modes_however_inharmonic() {
+        for brightness in [1.0, 4.0] {
+            let table = PartnerTable::new(48_000.0, &Settings { brightness, ..Settings::default() });
+            for (index, key) in PARTNER_KEYS.enumerate() {
+                let partner = table.string(index);
+                if partner.params().partial(PARTNER_MODES) < PARTNER_BAND {
+                    assert_eq!(partner.modes(), PARTNER_MODES, "key {key} at brightness {brightness}");
                 }
             }
         }

@@ -1772,8 +1772,8 @@ mod tests {
 
     /// The guitar's body, coupled at the bridge, radiates what its transmittance says at every
     /// rate: driven by a sinusoidal force on the bridge, from 150 Hz to 10 kHz (on both sides of
-    /// its top's highest modes, the notch at 2.5 kHz aside), its output's amplitude is within 4 % of
-    /// the transmittance's at 22.05 kHz (measured 3.4 %; 10 % without the weights' correction),
+    /// its top's highest modes, the notch at 2.5 kHz aside), its output's amplitude is within 4 %
+    /// of the transmittance's at 22.05 kHz (measured 3.4 %; 10 % without the weights' correction),
     /// 1 % at 44.1 kHz (0.5 %; 3.0 % without) and 0.2 % at 96 kHz (0.1 %; 0.7 % without).
     #[test]
     fn a_coupled_body_radiates_its_transmittance_at_every_rate() {

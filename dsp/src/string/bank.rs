@@ -1,6 +1,6 @@
 //! A bank of independent modes stepped together: the modes of several strings and of other
 //! modal bodies (a bridge) in one set of arrays, so that one pass over the modes advances them
-//! all (docs/physics.md §6.2 and §11).
+//! all (docs/physics.md §6.2 and §12).
 //!
 //! Every mode has the exact per-mode scheme of the modal string,
 //! `m_i δ_tt u_i + R̂_i δ_t· u_i + K̂_i μ_t² u_i = f_i`, that is
