@@ -1002,9 +1002,16 @@ impl UnisonCore {
             + 0.5 * c.lift_stiffness * mean * mean
     }
 
-    /// `(compression y^n (m), latest contact force (N))`.
+    /// `(compression y^n (m), latest contact force (N))`. Once the hammer is retired its
+    /// projections are no longer kept: the compression is measured from the state.
     pub fn contact(&self) -> (f64, f64) {
-        (self.y_now, self.last_force)
+        if self.retired {
+            let (c, f) = (&self.coupled, &self.free);
+            let strings = self.coupled_bank.project_state(&c.shape).1 + self.free_bank.project_state(&f.shape).1;
+            (strings + self.ell * self.b.1 - self.hammer.position(), 0.0)
+        } else {
+            (self.y_now, self.last_force)
+        }
     }
 
     /// Whether the felt is touching or about to.
@@ -1027,9 +1034,14 @@ impl UnisonCore {
                 > self.coupling.reach * (2.0 * self.system_energy().max(0.0)).sqrt() + self.background_reach
     }
 
-    /// One step with `solver`; with `MONITOR` the frame also carries the energy terms.
+    /// One step with `solver`; with `MONITOR` the frame also carries the energy terms. A hammer
+    /// retired by [`process_output`](Self::process_output) is back in play: every projection and
+    /// the compressions are measured again from the state, which the retired steps moved on.
     #[inline]
     pub fn step<S: ContactSolver, const MONITOR: bool>(&mut self, solver: &mut S) -> Frame {
+        if self.retired {
+            self.measure();
+        }
         let (dt, ell) = (self.dt, self.ell);
         let dt2 = dt * dt;
         let c = self.coupling;
@@ -1232,11 +1244,14 @@ pub struct HammerUnison<S> {
 }
 
 impl<S: ContactSolver> HammerUnison<S> {
-    /// `core` retuned and struck; the solver is started from its compressions.
-    pub fn new(core: UnisonCore, mut solver: S) -> Self {
+    /// `core` retuned and struck; the solver is started from its compressions, and the books
+    /// are opened on the whole energy `H^{n−1/2}`, the bridge's and the coupling's terms with it
+    /// (a core struck while it rings has them).
+    pub fn new(mut core: UnisonCore, mut solver: S) -> Self {
         let (y_prev, y_now) = core.compressions();
         solver.start(y_prev, y_now);
-        let initial_energy = core.energy() + solver.stored_energy(y_now, y_prev);
+        (core.losses, core.background_work) = (0.0, 0.0);
+        let initial_energy = core.system_energy() + core.hammer.energy() + solver.stored_energy(y_now, y_prev);
         Self { core, solver, initial_energy }
     }
 
@@ -1680,6 +1695,64 @@ mod tests {
         println!("peak {peak:.3} N, worst difference {worst:.2e} N, retired at the end: {}", fast.core.retired());
         assert!(worst < 1e-9 * peak, "{worst:e} of {peak}");
         assert!(fast.core.retired());
+    }
+
+    /// Frames stepped after the real-time path retired the hammer go on from where that path
+    /// left the strings and the bridge: a detuned trichord on the soundboard, 0.5 s of the
+    /// real-time path (the hammer retired), then 0.1 s of frames gives what 0.1 s more of the
+    /// real-time path gives, to 1e-9 of the peak; and the retired hammer's compression is its
+    /// distance from the strings as they are, measured afresh from the state.
+    #[test]
+    fn frames_after_the_hammer_retired_go_on_from_the_real_time_path() {
+        let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
+        let y_ref = law(3).compression_at_energy(0.5 * 3.0 * 2.97e-3 * 3.5 * 3.5);
+        let solver = QsaSolver::new(QuadSpline::new(law(3), y_ref, 6).unwrap());
+        let mut scene = HammerUnison::new(c4_unison(3, [-1.0, 0.2, 0.8], &board), solver);
+        let mut head = vec![0.0; 24_000];
+        scene.process_output(&mut head);
+        assert!(scene.core.retired());
+        let mut measured = scene.core.clone();
+        measured.measure();
+        let (y, force) = scene.core.contact();
+        println!("retired hammer: compression {y:.4} m, measured {:.4} m", measured.y_now);
+        assert!((y - measured.y_now).abs() < 1e-12 && y < -0.1 && force == 0.0);
+        let peak = head.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let mut fast = scene.clone();
+        let mut tail = vec![0.0; 4_800];
+        fast.process_output(&mut tail);
+        let mut frames = vec![Frame::default(); 4_800];
+        scene.process(&mut frames);
+        let worst = tail.iter().zip(&frames).map(|(x, f)| (x - f.output).abs()).fold(0.0, f64::max);
+        println!("peak {peak:.3} N, worst difference {worst:.2e} N");
+        assert!(worst < 1e-9 * peak, "{worst:e} of {peak}");
+    }
+
+    /// A scene made on a trichord that rings (struck, 0.1 s on the soundboard, struck again)
+    /// opens its books on the whole energy, the bridge's and the coupling's terms with it: its
+    /// balance holds from the first frame, to 1e-9 of the peak energy over 0.1 s.
+    #[test]
+    fn a_scene_made_on_a_ringing_unison_balances_from_its_first_frame() {
+        let board = BridgeParams::soundboard(SOUNDBOARD_CONDUCTANCE);
+        let y_ref = law(3).compression_at_energy(2.0 * 0.5 * 3.0 * 2.97e-3 * 3.5 * 3.5);
+        let solver = || QsaSolver::new(QuadSpline::new(law(3), y_ref, 6).unwrap());
+        let mut first = HammerUnison::new(c4_unison(3, [-1.0, 0.2, 0.8], &board), solver());
+        first.process(&mut vec![Frame::default(); 4_800]);
+        let mut core = first.core;
+        let c4 = chaigne_askenfelt_c4();
+        core.strike(&HammerParams {
+            mass: 3.0 * c4.hammer_mass,
+            velocity: 3.5,
+            position: c4.strike_position,
+            gap: 0.0,
+        });
+        let mut scene = HammerUnison::new(core, solver());
+        let mut frames = vec![Frame::default(); 4_800];
+        scene.process(&mut frames);
+        let start = scene.initial_energy();
+        let peak = frames.iter().map(|f| f.energy).fold(start, f64::max);
+        let drift = frames.iter().map(|f| (f.balance() - start).abs()).fold(0.0, f64::max) / peak;
+        println!("drift {drift:.2e} of the peak energy");
+        assert!(drift < 1e-9, "{drift:e}");
     }
 
     /// With a bridge that does not move (one mode of 10¹² kg) and three identical strings, the
