@@ -602,6 +602,17 @@ fn bad_scenes() -> Vec<Bad> {
         // A speed whose energy ½ m v0² leaves the floats: the default V_ref is named as a default.
         bad("v0 beyond the floats", e("v0 = 2.0", "v0 = 1e160"), &["solver.v_ref", "not given", "speeds"]),
         bad("inf gain", e("gain = 1.0", "gain = inf"), &["output.gain", "finite"]),
+        // A mass whose coupling Δt²/m leaves the floats (the explicit solver then returns NaN).
+        bad("mass too light for the floats", e("mass = 0.01", "mass = 1e-320"), &["mass.mass", "at least 1e-9 kg"]),
+        // A default V_ref in the floats whose compression under the law is not.
+        bad(
+            "default v_ref compressing beyond the floats",
+            e("kappa = 1e8", "kappa = 1e-300")
+                .replace("alpha = 1.3", "alpha = 1")
+                .replace("mass = 0.01", "mass = 1000.0")
+                .replace("v0 = 2.0", "v0 = 1000.0"),
+            &["solver.v_ref", "not given", "compresses this contact law"],
+        ),
         // Wrong types.
         bad(
             "string sample rate",
@@ -892,6 +903,59 @@ fn a_string_with_too_many_modes_or_none_at_the_scenes_rate_is_a_clear_error() {
         assert!(!result.stderr.contains("string.length"), "no key the file may lack: {}", result.stderr);
         assert_eq!(listing(dir.path()), names(&["case.toml"]), "nothing written");
     }
+}
+
+/// Values of the string scenes beyond reason are refused, naming a key the file gave: a hammer or
+/// a slide too light for the floats, the two damping forms mixed (named by the key of the second
+/// form that was given), and a hand height or a finger force far beyond any gesture (whose lane
+/// would otherwise interpolate out of the floats: −1e308 to 1e308 m gives NaN).
+#[test]
+fn string_scene_values_beyond_reason_are_refused_naming_a_key_the_file_gave() {
+    let soft = fs::read_to_string(fig4_path().with_file_name("hammer-c4-soft.toml")).unwrap();
+    let phrase = fs::read_to_string(fig4_path().with_file_name("slide-phrase.toml")).unwrap();
+    let height = "points = [[0.0, 3e-3], [0.15, 3e-3], [0.25, -1.5e-3], [2.45, -1.5e-3], [3.0, 1.5e-3]]";
+    let cases = [
+        (edit(&soft, "velocity = 1.0 ", "mass = 1e-320\nvelocity = 1.0 "), "hammer.mass: must be at least 1e-9 kg"),
+        (edit(&phrase, "[control]", "[slide]\nmass = 1e-12\n\n[control]"), "slide.mass: must be at least 1e-9 kg"),
+        (edit(&soft, "eta0 = 8.0 ", "eta0 = 8.0\nb3 = 1e-9 "), "string.b3: give damping either"),
+        (edit(&phrase, height, "points = [[0.0, -1e308], [1.0, 1e308]]"), "-1e308 m at t = 0 s is beyond ±1 m"),
+        (edit(&phrase, "[0.4, 1.5]", "[0.4, 1500.0]"), "1.5e3 N at t = 0.4 s is beyond ±1000 N"),
+    ];
+    for (text, why) in cases {
+        let error = parse_scene(&text).err().map(|e| e.to_string());
+        assert!(error.as_deref().is_some_and(|e| e.contains(why)), "{why}: {error:?}");
+    }
+}
+
+/// A library render given chunk sizes of 0 for ever ends: the sizes are skipped up to as many
+/// as there are frames, and the rest is rendered in one call, bit for bit as with no sizes.
+#[test]
+fn a_render_given_only_chunk_sizes_of_zero_ends_with_the_frames_of_one_call() {
+    let scene = parse_scene(&fig4_text()).unwrap();
+    let zeros = render(&scene, std::iter::repeat(0)).unwrap();
+    let whole = render(&scene, std::iter::empty()).unwrap();
+    assert_eq!(zeros.frames.len(), whole.frames.len());
+    assert!(zeros.frames.iter().zip(&whole.frames).all(|(a, b)| a.force.to_bits() == b.force.to_bits()));
+}
+
+/// An input beyond 16 MiB, a scene file (Fig. 4 with 17 MiB of comments) or a MIDI file, is
+/// refused without being read whole, and nothing is written.
+#[test]
+fn an_input_beyond_sixteen_mebibytes_is_refused() {
+    let dir = TempDir::new().unwrap();
+    let mut text = fig4_text();
+    let comment = format!("# {}\n", "x".repeat(1021));
+    text.push_str(&comment.repeat(17 << 10));
+    let scene = write_scene(dir.path(), "big.toml", &text);
+    let out = render_to(&scene, &dir.path().join("out.wav"), &[]);
+    assert_eq!(out.code, 1, "{}", out.stderr);
+    assert!(out.stderr.contains("more than 16777216 bytes (16 MiB)"), "{}", out.stderr);
+    let midi = dir.path().join("big.mid");
+    fs::write(&midi, vec![0u8; (16 << 20) + 1]).unwrap();
+    let out = xtask(&[OsString::from("render"), OsString::from("--midi"), midi.into_os_string()]);
+    assert_eq!(out.code, 1, "{}", out.stderr);
+    assert!(out.stderr.contains("more than 16777216 bytes (16 MiB)"), "{}", out.stderr);
+    assert_eq!(listing(dir.path()), names(&["big.toml", "big.mid"]));
 }
 
 /// A preset's contact law serves only its own collider: the C4 preset's felt under a slide and

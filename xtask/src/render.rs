@@ -225,9 +225,28 @@ pub fn run(args: &RenderArgs, stdout: &mut dyn Write) -> Result<Outcome, RenderE
     Ok(summary)
 }
 
+/// The most bytes a scene or MIDI file may have (16 MiB), far beyond any that is written.
+pub const MAX_INPUT_BYTES: usize = 16 << 20;
+
+/// The bytes of the input file `path`, at most [`MAX_INPUT_BYTES`]: a larger file, or a pipe or
+/// device that never ends, is refused after reading one byte more, not read into memory.
+pub fn read_input(path: &Path) -> Result<Vec<u8>, RenderError> {
+    use std::io::Read;
+    let read = |source| RenderError::Read { path: path.to_owned(), source };
+    let mut bytes = Vec::new();
+    fs::File::open(path).and_then(|f| f.take(MAX_INPUT_BYTES as u64 + 1).read_to_end(&mut bytes)).map_err(read)?;
+    if bytes.len() > MAX_INPUT_BYTES {
+        let too_long = format!("more than {MAX_INPUT_BYTES} bytes (16 MiB), the most an input may have");
+        return Err(read(std::io::Error::new(std::io::ErrorKind::InvalidData, too_long)));
+    }
+    Ok(bytes)
+}
+
 fn run_scene(args: &RenderArgs, scene_path: &Path) -> Result<Summary, RenderError> {
-    let text =
-        fs::read_to_string(scene_path).map_err(|source| RenderError::Read { path: scene_path.to_owned(), source })?;
+    let text = String::from_utf8(read_input(scene_path)?).map_err(|e| RenderError::Read {
+        path: scene_path.to_owned(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()),
+    })?;
     let scene = parse_scene(&text).map_err(|source| RenderError::Scene { path: scene_path.to_owned(), source })?;
     let wav_path = args.out.clone().unwrap_or_else(|| scene_path.with_extension("wav"));
     let csv_path = args.csv.then(|| wav_path.with_extension("csv"));

@@ -17,7 +17,7 @@ use super::mass_barrier::MassBarrierDescription;
 use super::parse::SceneDescription;
 use super::string_scenes::{HammerStringDescription, SlideStringDescription};
 use crate::body::BodyParams;
-use crate::contact::{ContactSolver, Method, SolverSettings, WithSolver};
+use crate::contact::{ContactError, ContactSolver, Method, SolverSettings, WithSolver};
 use crate::control::{ControlSource, Fixed};
 use crate::scene::{Frame, HammerString, MassBarrier, Scene, SlideControls, SlideString, SlideStringParams};
 use crate::string::{MAX_MODES, ModalString, StringParams};
@@ -118,7 +118,19 @@ pub fn build<J: SceneJob>(
         SceneDescription::HammerString(d) => solver.build(law, default_v_ref, Described { scene: d, run }),
         SceneDescription::SlideString(d) => solver.build(law, default_v_ref, Described { scene: d, run }),
     };
-    built.map_err(|e| SceneError::contact("contact", e))
+    built.map_err(|e| match e {
+        // The default's energy is in the floats, but the compression it reaches under this law
+        // is not: the fault is again in the values it comes from.
+        ContactError::Invalid { key: "v_ref", value, .. } if solver.v_ref.is_none() => SceneError::invalid(
+            "solver.v_ref",
+            format!(
+                "not given, and its default, the largest energy the scene can put into the contact \
+                 ({default_v_ref:e} J), compresses this contact law beyond the range a float holds (got \
+                 {value:e}): the scene's masses, speeds or contact.kappa are too far apart"
+            ),
+        ),
+        e => SceneError::contact("contact", e),
+    })
 }
 
 /// Every frame of a run, and its initial energy.
@@ -133,15 +145,19 @@ pub struct Run {
 }
 
 /// Advance `scene` over `frames` in calls of the sizes `chunks` yields (sizes of 0 are skipped;
-/// when the iterator ends, the rest goes in one call). The frames are the same for any chunking.
+/// when the iterator ends, the rest goes in one call, as it does once it has given as many sizes
+/// of 0 as there are frames). The frames are the same for any chunking.
 pub fn fill_frames(scene: &mut impl Scene, frames: &mut [Frame], mut chunks: impl Iterator<Item = usize>) {
     let samples = frames.len();
-    let mut done = 0;
+    let (mut done, mut zeros) = (0, 0);
     while done < samples {
         let n = match chunks.next() {
-            Some(0) => continue,
-            Some(n) => n.min(samples - done),
-            None => samples - done,
+            Some(0) if zeros < samples => {
+                zeros += 1;
+                continue;
+            }
+            Some(n) if n > 0 => n.min(samples - done),
+            _ => samples - done,
         };
         scene.process(&mut frames[done..done + n]);
         done += n;

@@ -13,7 +13,7 @@
 use serde::Deserialize;
 
 use super::error::SceneError;
-use super::tables::{Common, ContactTable, Head, OutputTable, SolverTable, common, finite, positive};
+use super::tables::{Common, ContactTable, Head, OutputTable, SolverTable, common, finite, mass};
 use crate::scene::MassBarrierParams;
 
 /// A validated mass–barrier scene.
@@ -75,7 +75,7 @@ impl MassBarrierFile {
         let head = Head { sample_rate: self.sample_rate, duration: self.duration };
         let common = common(&head, &self.solver, &self.contact, None, &self.output)?;
         let params = MassBarrierParams {
-            mass: positive("mass.mass", self.mass.mass)?,
+            mass: mass("mass.mass", self.mass.mass)?,
             u0: finite("mass.u0", self.mass.u0)?,
             v0: finite("mass.v0", self.mass.v0)?,
             barrier: finite("barrier.position", self.barrier.position)?,

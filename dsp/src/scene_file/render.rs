@@ -16,8 +16,9 @@ pub struct Rendered {
 }
 
 /// Render `scene` with its own solver settings, advancing in calls of the sizes `chunks` yields
-/// (sizes of 0 are skipped; when the iterator ends, the rest is rendered in one call). The frames
-/// are bit-identical for any chunking.
+/// (sizes of 0 are skipped; when the iterator ends, or once it has given as many sizes of 0 as
+/// there are frames, the rest is rendered in one call). The frames are bit-identical for any
+/// chunking.
 pub fn render(scene: &SceneDescription, chunks: impl Iterator<Item = usize>) -> Result<Rendered, SceneError> {
     let run = build(scene, &scene.common().solver, Sampling::NATIVE, Frames { chunks })?;
     let measurements = Measurements::measure(scene, &run);

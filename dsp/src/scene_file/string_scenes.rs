@@ -71,8 +71,8 @@ use serde::Deserialize;
 use super::automation::{CONTROL_TARGETS, SlideAutomation};
 use super::error::SceneError;
 use super::tables::{
-    Common, ContactTable, Head, OutputTable, SolverTable, common, finite, fraction, non_negative, positive, required,
-    unity, yes,
+    Common, ContactTable, Head, OutputTable, SolverTable, common, finite, fraction, mass, non_negative, positive,
+    required, unity, yes,
 };
 use crate::body::BodyParams;
 use crate::control::Breakpoints;
@@ -80,6 +80,12 @@ use crate::exciter::{FingerParams, HammerParams, SlideParams};
 use crate::preset::{chaigne_askenfelt_c4, piano_note, slide_guitar};
 use crate::scene::{HammerStringParams, OutputKind, Pickup, SlideStringParams};
 use crate::string::{Damping, StringParams};
+
+/// The farthest a scene may hold the hand from the string, above or pressed in (m).
+pub const MAX_HAND_HEIGHT: f64 = 1.0;
+
+/// The largest force a scene may give a finger (N).
+pub const MAX_FINGER_FORCE: f64 = 1000.0;
 
 /// Most samples per control block a scene file may ask for (the plugin's own, smaller bound is
 /// [`MAX_BLOCK`](crate::instrument::MAX_BLOCK)).
@@ -217,7 +223,8 @@ impl StringTable {
         let eta = self.eta0.is_some() || self.eta2.is_some();
         let per_mode = self.b1.is_some() || self.b3.is_some();
         if eta && per_mode {
-            return Err(SceneError::invalid("string.b1", "give damping either as eta0/eta2 or as b1/b3, not both"));
+            let key = if self.b1.is_some() { "string.b1" } else { "string.b3" };
+            return Err(SceneError::invalid(key, "give damping either as eta0/eta2 or as b1/b3, not both"));
         }
         // A coefficient not given is the base's in the same form; a form other than the base's
         // replaces its damping whole, so it needs both of its coefficients.
@@ -342,7 +349,7 @@ impl HammerStringFile {
         let common = common(&head, &self.solver, &self.contact, extras.hammer_law, &self.output.options())?;
         let h = &self.hammer;
         let hammer = HammerParams {
-            mass: positive("hammer.mass", required("hammer.mass", h.mass, extras.hammer_mass)?)?,
+            mass: mass("hammer.mass", required("hammer.mass", h.mass, extras.hammer_mass)?)?,
             velocity: non_negative("hammer.velocity", h.velocity)?,
             position: fraction("hammer.position", required("hammer.position", h.position, extras.strike_position)?)?,
             gap: positive("hammer.gap", h.gap.unwrap_or(HammerParams::DEFAULT_GAP))?,
@@ -488,7 +495,7 @@ impl SlideStringFile {
         let preset_slide = extras.slide;
         let s = &self.slide;
         let slide = SlideParams {
-            mass: positive("slide.mass", required("slide.mass", s.mass, preset_slide.map(|p| p.mass))?)?,
+            mass: mass("slide.mass", required("slide.mass", s.mass, preset_slide.map(|p| p.mass))?)?,
             stiffness: non_negative(
                 "slide.stiffness",
                 required("slide.stiffness", s.stiffness, preset_slide.map(|p| p.stiffness))?,
@@ -588,6 +595,19 @@ impl SlideStringFile {
                         return Err(SceneError::invalid(
                             &key,
                             format!("position {x} m at t = {t} s is outside the string (0, {length}) m"),
+                        ));
+                    }
+                }
+            }
+            // Far beyond any gesture, and a lane between its bounds interpolates in the floats.
+            let (bound, unit) =
+                if target.ends_with("force") { (MAX_FINGER_FORCE, "N") } else { (MAX_HAND_HEIGHT, "m") };
+            if !target.ends_with("position") {
+                for &(t, v) in lane.points() {
+                    if v.abs() > bound {
+                        return Err(SceneError::invalid(
+                            &key,
+                            format!("{v:e} {unit} at t = {t} s is beyond ±{bound} {unit}"),
                         ));
                     }
                 }

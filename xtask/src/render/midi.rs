@@ -249,13 +249,8 @@ pub fn apply_set(params: &mut ParamValues, assignment: &str) -> Result<(), Strin
 /// `render --midi`: read, render, write the WAV; return the summary.
 pub fn run(args: &super::RenderArgs, path: &std::path::Path) -> Result<MidiSummary, super::RenderError> {
     use super::RenderError;
-    let read = |source| RenderError::Read { path: path.to_owned(), source };
-    // A file far beyond any performance is refused before it is read into memory.
-    let size = std::fs::metadata(path).map_err(read)?.len();
-    if size > MAX_FILE_BYTES as u64 {
-        return Err(RenderError::Midi(format!("{}: {size} bytes; at most {MAX_FILE_BYTES} (16 MiB)", path.display())));
-    }
-    let bytes = std::fs::read(path).map_err(read)?;
+    // A file far beyond any performance is refused without being read into memory.
+    let bytes = super::read_input(path)?;
     let mut params = match &args.preset {
         None => ParamValues::default(),
         Some(name) => preset_values(name).map_err(RenderError::Midi)?,
