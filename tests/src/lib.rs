@@ -430,7 +430,8 @@ pub fn click_strength(x: &[f64], fs: f64, exclude: &[std::ops::Range<usize>]) ->
     let mut around = Vec::with_capacity(2 * reach);
     for k in 0..energy.len() {
         let start = k * w;
-        if exclude.iter().any(|e| e.start < start + w + 2 && start < e.end) {
+        // The window's residuals read `x[start..start + w + 3]`.
+        if exclude.iter().any(|e| e.start < start + w + 3 && start < e.end) {
             continue;
         }
         around.clear();
@@ -461,6 +462,20 @@ pub const CLICK_DB: f64 = 20.0;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A step left out of the search is left out of every window whose residuals read it: at
+    /// 48 kHz (windows of 24 samples), silence and then a step at sample 50 that the search
+    /// excludes from there on leaves nothing to find, though the window starting at sample 24
+    /// reads sample 50 in its last residual.
+    #[test]
+    fn an_excluded_step_is_left_out_of_every_window_that_reads_it() {
+        let x: Vec<f64> = (0..2_000).map(|i| if i < 50 { 0.0 } else { 1.0 }).collect();
+        let step = 50..400;
+        let (db, at) = click_strength(&x, 48_000.0, std::slice::from_ref(&step));
+        assert!(db < CLICK_DB, "{db} dB at {at}");
+        let (db, at) = click_strength(&x, 48_000.0, &[]);
+        assert!(db > CLICK_DB, "not excluded, the step is found: {db} dB at {at}");
+    }
 
     #[test]
     fn gamma_matches_known_values() {

@@ -155,15 +155,23 @@ fn the_loudness_meter_reads_a_reference_sine_as_bs1770_specifies() {
     assert!((lufs - (-20.0)).abs() < 0.1, "{lufs}");
 }
 
-/// A held piano note carries no DC: once the hammer has left, the bridge force of a string
-/// vibrating in its modes averages to zero. Over 0.1–2 s after the strike (Hann-weighted) the
-/// mean is below −60 dB of the RMS on the lowest, middle and highest keys, soft and loud.
+/// A held piano note carries no DC: once the hammer has left, the bridge force of strings and a
+/// bridge vibrating in their modes averages to zero. In the dry output (the bridge force itself:
+/// the soundboard, heard by its velocity, would hide a DC in it), over 0.1–2 s after the strike
+/// (Hann-weighted) the mean is below −60 dB of the RMS on the lowest, middle and highest keys,
+/// soft and loud.
 #[test]
 fn a_held_piano_note_has_no_dc() {
     for key in [21u8, 60, 108] {
         for velocity in [30u8, 127] {
-            let out: Vec<f64> =
-                loudness::strike(&[key], velocity, &Settings::default(), 2.0).0.into_iter().map(f64::from).collect();
+            let mut piano = Instrument::new(48_000.0, 1, Settings::default());
+            piano.set_raw_output(true);
+            piano.handle(Event::NoteOn { channel: 0, key, velocity: f32::from(velocity) / 127.0 });
+            let (mut left, mut right) = (vec![0.0f32; 96_000], vec![0.0f32; 96_000]);
+            for (l, r) in left.chunks_mut(512).zip(right.chunks_mut(512)) {
+                piano.process(l, r);
+            }
+            let out: Vec<f64> = left.into_iter().map(f64::from).collect();
             let db = dc_db(&out, 4_800..out.len());
             let rms = (out[4_800..].iter().map(|x| x * x).sum::<f64>() / (out.len() - 4_800) as f64).sqrt();
             println!("key {key} velocity {velocity}: DC {db:.1} dB of the RMS {rms:.2e}");

@@ -20,18 +20,20 @@
 //!   1.5 Hz vibrato by pitch bend, so that the slide and the finger trailing it move at every
 //!   sample: the plugin's slide voice where it costs most;
 //! - `piano/c4`: one C4 voice of the instrument at 48 kHz; its line says how many such voices fit
-//!   in real time on one core (`1/rtf`, rounded down); `piano/c4/nb1` the same with a control
-//!   block of one sample (every block's work done every sample);
+//!   in real time on one core: the radiating soundboards' cost (the voice's RTF less that of its
+//!   dry output) paid once, each voice's over it ([`voices_that_fit`]);
+//!   `piano/c4/nb1` the same with a control block of one sample (every block's work done every
+//!   sample);
 //! - `piano/88-keys`: all 88 keys (A0 to C8) struck together, pedal down, 48 kHz: the whole
 //!   piano at once; `piano/88-keys/late-pedal` the same with the pedal pressed 0.5 s after the
 //!   strike, when every key brings its partners onto its bridge (its worst call);
 //! - `piano/automated` (a line of its own, not in the table): 8 keys ringing under the pedal, a
 //!   second of calls with every continuous parameter moved before each call against the same
 //!   second with them still; the ratio is 1 within the noise;
-//! - `piano/restrike/{qsa,exp,imp}`: the 16 keys struck together again every 40 ms, 50 times,
-//!   each time at a seeded random velocity in [`RESTRIKE_VELOCITIES`] (the same for all 16, so
-//!   that their contacts overlap), in calls of 16 samples, for each solver: every voice in
-//!   contact at once, strike after strike, with contacts of many strengths.
+//! - `piano/restrike/{qsa,exp,imp}`: the 16 keys struck together at velocity 0.7, then again every
+//!   40 ms, 49 times, each time at a seeded random velocity in [`RESTRIKE_VELOCITIES`] (the same
+//!   for all 16, so that their contacts overlap), in calls of 16 samples, for each solver: every
+//!   voice in contact at once, strike after strike, with contacts of many strengths.
 //!
 //! Instrument cases also time every process call: for each call the fastest of the runs (which
 //! removes most of the machine's noise), then `call_mean_us`; `first_call_us`, the call that
@@ -367,8 +369,7 @@ pub fn measure(name: &str, scene: &SceneDescription, runs: usize) -> Result<Benc
         let wall = timed()?;
         rtfs.push(wall / seconds);
     }
-    rtfs.sort_by(f64::total_cmp);
-    let rtf = rtfs[rtfs.len() / 2];
+    let rtf = median(&mut rtfs);
     Ok(BenchLine {
         name: name.to_owned(),
         method: common.solver.method.name(),
@@ -390,6 +391,23 @@ pub fn measure(name: &str, scene: &SceneDescription, runs: usize) -> Result<Benc
 
 /// Sample rate of the instrument cases (Hz).
 const PIANO_RATE: f64 = 48_000.0;
+
+/// The median of `values` (sorted in place): the middle one, or the mean of the middle two.
+pub fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n % 2 == 1 { values[n / 2] } else { 0.5 * (values[n / 2 - 1] + values[n / 2]) }
+}
+
+/// How many voices fit in real time on one core, from the RTF of an instrument with one voice
+/// sounding, `with_one`, and the part of it the instrument pays once whatever sounds, `shared`
+/// (its radiating soundboards): that part once, and each voice's over it until the core is full.
+/// `None` if the voice costs nothing measurable.
+pub fn voices_that_fit(with_one: f64, shared: f64) -> Option<usize> {
+    let shared = shared.max(0.0);
+    let voice = with_one - shared;
+    (voice > 0.0 && shared < 1.0).then(|| ((1.0 - shared) / voice) as usize)
+}
 
 /// Velocities of the re-strikes (0..1, as the instrument takes them): hammer speeds of 0.64 to
 /// 2.85 m/s ([`qsa_dsp::instrument::hammer_speed`]), soft enough that the 16 contacts of a strike
@@ -414,6 +432,8 @@ pub struct Performance<'a> {
     /// A vibrato of this rate (Hz) by pitch bend, ±half the bend range, set before every call:
     /// a slide that never stops moving.
     pub vibrato: Option<f64>,
+    /// Whether the instrument gives its dry output, without the radiating soundboards.
+    pub dry: bool,
 }
 
 /// Time the instrument with `settings` playing `play` for `seconds` in calls of `call` samples,
@@ -441,6 +461,7 @@ pub fn measure_piano(
     };
     let once = || {
         let mut piano = Instrument::new(PIANO_RATE, keys.len().max(1), settings);
+        piano.set_raw_output(play.dry);
         let mut velocities = rand_pcg::Pcg64::seed_from_u64(play.restrike.map_or(0, |r| r.1));
         if play.arpeggio.is_none() {
             strike(&mut piano, 0.7);
@@ -499,10 +520,10 @@ pub fn measure_piano(
         }
     }
     let calls = CallStats::of(&fastest, keys.len(), call);
-    rtfs.sort_by(f64::total_cmp);
-    let rtf = rtfs[rtfs.len() / 2];
-    // Every mode a voice steps: a piano key's strings and its copy of the soundboard; a slide
-    // voice's string, and the acoustic guitar's body when it sounds on one.
+    let rtf = median(&mut rtfs);
+    // The modes a voice steps as it is struck: a piano key's strings and its copy of the
+    // soundboard (not the partner strings it steps with the pedal down); a slide voice's string,
+    // and the acoustic guitar's body when it sounds on one.
     let board = qsa_dsp::bridge::BridgeParams::soundboard(qsa_dsp::bridge::SOUNDBOARD_CONDUCTANCE);
     let board_modes = board.modes.iter().filter(|m| m.frequency < 0.49 * PIANO_RATE).count();
     let body_modes = match settings.slide_body {
@@ -652,7 +673,7 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
     let piano = Settings { mode: Mode::Piano, ..Settings::default() };
     let slide = Settings { mode: Mode::Slide, ..Settings::default() };
     let acoustic = Settings { slide_body: SlideBody::Acoustic, ..slide };
-    let once = |keys| Performance { keys, restrike: None, late_pedal: None, arpeggio: None, vibrato: None };
+    let once = |keys| Performance { keys, restrike: None, late_pedal: None, arpeggio: None, vibrato: None, dry: false };
     // Every 120 calls of 16 samples: 40 ms, 50 strikes in 2 s.
     let restrike = Performance { restrike: Some((120, 6)), ..once(&sixteen) };
     // A key every 80 ms, the pedal up, held: 16 keys in 1.28 s.
@@ -685,7 +706,9 @@ pub fn run(args: &BenchArgs, stdout: &mut dyn Write) -> Result<Vec<BenchLine>, B
         if name.contains(&args.filter) {
             let mut line = measure_piano(name, settings, play, 2.0, call, args.runs);
             if name == "piano/c4" {
-                line.fit = Some((1.0 / line.rtf) as usize);
+                let dry = Performance { dry: true, ..play };
+                let dry = measure_piano("piano/c4/dry", settings, dry, 2.0, call, args.runs);
+                line.fit = voices_that_fit(line.rtf, line.rtf - dry.rtf);
             }
             emit(line, &mut lines);
             let twin = |name: &str| measure_piano(name, settings, play, 2.0, call, args.runs);
@@ -845,6 +868,24 @@ mod tests {
 
     fn call(micros: f64, in_contact: usize, after: usize) -> Call {
         Call { seconds: micros * 1e-6, in_contact, after }
+    }
+
+    /// The median of an even number of runs is the mean of the middle two, not the slower one.
+    #[test]
+    fn the_median_of_an_even_count_is_the_mean_of_the_middle_two() {
+        assert_eq!(median(&mut [3.0, 1.0]), 2.0);
+        assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert_eq!(median(&mut [5.0, 1.0, 3.0]), 3.0);
+    }
+
+    /// The soundboards' cost is paid once, not once per voice: with the README's figures, a C4
+    /// voice and the instrument at 6.16e-3 of the core, the soundboards' share 2.9e-3 of it,
+    /// 305 voices fit, not the 162 that `1/rtf` gives; a voice costing nothing says nothing.
+    #[test]
+    fn voices_that_fit_pay_the_instruments_own_cost_once() {
+        assert_eq!(voices_that_fit(6.16e-3, 2.9e-3), Some(305));
+        assert_eq!(voices_that_fit(6.16e-3, 0.0), Some(162));
+        assert_eq!(voices_that_fit(2.9e-3, 2.9e-3), None);
     }
 
     #[test]
