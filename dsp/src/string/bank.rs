@@ -263,19 +263,25 @@ impl ModalBank {
         (&self.u_prev[range.clone()], &self.u_now[range])
     }
 
-    /// Set the whole state (slices of [`modes`](Self::modes) entries).
+    /// Set the whole state (slices of [`modes`](Self::modes) entries), the padding beyond them
+    /// zeroed (see [`ModalString::set_state`](super::ModalString::set_state)).
     pub fn set_state(&mut self, previous: &[f64], now: &[f64]) {
         let m = self.modes;
         self.u_prev[..m].copy_from_slice(previous);
         self.u_now[..m].copy_from_slice(now);
+        self.u_prev[m..].fill(0.0);
+        self.u_now[m..].fill(0.0);
         self.history_ready = false;
     }
 
-    /// Every mode at `value` (m) at both steps (tests of what follows a corrupt state).
+    /// Every mode at `value` (m) at both steps (tests of what follows a corrupt state), the
+    /// padding zeroed.
     pub fn fill(&mut self, value: f64) {
         let m = self.modes;
         self.u_prev[..m].fill(value);
         self.u_now[..m].fill(value);
+        self.u_prev[m..].fill(0.0);
+        self.u_now[m..].fill(0.0);
         self.history_ready = false;
     }
 

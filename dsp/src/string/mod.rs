@@ -178,6 +178,27 @@ mod tests {
         }
     }
 
+    /// A string set to rest after a step under a force that was not finite sounds nothing: the
+    /// NaN the step left in every mode, the padding beyond the modes too (the C4 string keeps 59
+    /// modes at 48 kHz, in arrays of 64), is gone, and free steps output zeros.
+    #[test]
+    fn a_string_set_to_rest_after_a_nan_force_outputs_zero() {
+        let mut s = ModalString::new(c4(), 48_000.0).unwrap();
+        assert!(s.padded_len() > s.modes(), "the case has padding");
+        let (shape, output) = (vec![1.0; s.padded_len()], s.vector());
+        let mut gain = s.vector();
+        gain.iter_mut().zip(s.input_gains()).for_each(|(g, c)| *g = *c);
+        s.history([&shape]);
+        s.advance_projecting([(&gain[..], f64::NAN)], &output, [&shape]);
+        let rest = vec![0.0; s.modes()];
+        s.set_state(&rest, &rest);
+        let mut out = vec![1.0; 64];
+        let pickup = vec![1.0; s.padded_len()];
+        s.free_steps(&pickup, &mut out);
+        assert!(out.iter().all(|&x| x == 0.0), "{:?}", &out[..4]);
+        assert_eq!(s.energy(), 0.0);
+    }
+
     /// Damping so heavy that `A = 2P` rounds to `B = 1 + Q` (`P → ½`, `Q → 0`) leaves the modes
     /// no stiffness in their recursion: held under a force they stay at 0 rather than at `f/0`.
     #[test]

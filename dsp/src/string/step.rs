@@ -73,18 +73,24 @@ impl ModalString {
     }
 
     /// Set the modal state `ũ^{n−1}`, `ũ^n` (m). Slices must have [`modes`](Self::modes) entries.
+    /// The padding beyond them is zeroed: a step under a force that was not finite leaves NaN
+    /// there, which the projections' zero weights would carry (`0·NaN`) into every output.
     pub fn set_state(&mut self, previous: &[f64], now: &[f64]) {
         let m = self.modes();
         self.u_prev[..m].copy_from_slice(previous);
         self.u_now[..m].copy_from_slice(now);
+        self.u_prev[m..].fill(0.0);
+        self.u_now[m..].fill(0.0);
         self.history_ready = false;
     }
 
     /// `(ũ^{n−1}, ũ^n)` (m, M entries each) to be written in place (what follows must not rely
-    /// on a `z̃` computed before).
+    /// on a `z̃` computed before); the padding is zeroed, as by [`set_state`](Self::set_state).
     pub(crate) fn state_mut(&mut self) -> (&mut [f64], &mut [f64]) {
         let m = self.modes();
         self.history_ready = false;
+        self.u_prev[m..].fill(0.0);
+        self.u_now[m..].fill(0.0);
         (&mut self.u_prev[..m], &mut self.u_now[..m])
     }
 
