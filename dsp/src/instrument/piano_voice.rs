@@ -618,10 +618,15 @@ impl PianoVoice {
     }
 
     /// The string a key gets under `settings`: the per-note rule with the relative settings, and
-    /// tuned by the octave stretch (a lighter or heavier string: the pitch moves, B stays).
+    /// tuned by the octave stretch (a lighter or heavier string: the pitch moves, B stays). A
+    /// brighter or duller string, its bending stiffness scaled, is weighted so that its first
+    /// partial stays where the rule puts it, `ρA` times `(1 + B')/(1 + B)`, as a tuner would tune
+    /// it: brightness changes the timbre, not the tuning.
     pub fn string_for(key: u8, settings: &Settings) -> StringParams {
         let mut string = piano_note(key).string;
+        let rule = string.inharmonicity();
         string.bending_stiffness *= settings.brightness;
+        string.linear_density *= (1.0 + string.inharmonicity()) / (1.0 + rule);
         let ratio = 2f64.powf(settings.stretch * stretch_cents(key, settings.brightness) / 1200.0);
         string.linear_density /= ratio * ratio;
         string.damping = match string.damping {
@@ -1583,23 +1588,29 @@ mod tests {
     /// with B.
     #[test]
     fn stretched_octaves_are_beatless_on_the_lower_keys_second_partial() {
-        let stretched = Settings::default();
         let partial = |key: u8, n: usize, s: &Settings| PianoVoice::string_for(key, s).partial(n);
-        for key in 21..=108u8 {
-            let f1 = partial(key, 1, &stretched);
-            if key > 69 {
-                let below = partial(key - 12, 2, &stretched);
-                assert!((f1 / below - 1.0).abs() < 1e-12, "key {key}: {f1} Hz against {below} Hz");
-            } else if key < 58 {
-                let above = partial(key + 12, 1, &stretched);
-                let second = partial(key, 2, &stretched);
-                assert!((second / above - 1.0).abs() < 1e-12, "key {key}: {second} Hz against {above} Hz");
-            } else {
-                assert!((f1 / key_frequency(key) - 1.0).abs() < 1e-12, "key {key} in the temperament octave");
+        for brightness in [0.0, 0.5, 1.0, 2.0, 4.0] {
+            let stretched = Settings { brightness, ..Settings::default() };
+            for key in 21..=108u8 {
+                let f1 = partial(key, 1, &stretched);
+                if key > 69 {
+                    let below = partial(key - 12, 2, &stretched);
+                    assert!((f1 / below - 1.0).abs() < 1e-12, "key {key} at {brightness}: {f1} Hz against {below} Hz");
+                } else if key < 58 {
+                    let (above, second) = (partial(key + 12, 1, &stretched), partial(key, 2, &stretched));
+                    assert!(
+                        (second / above - 1.0).abs() < 1e-12,
+                        "key {key} at {brightness}: {second} against {above}"
+                    );
+                } else {
+                    assert!((f1 / key_frequency(key) - 1.0).abs() < 1e-12, "key {key} at {brightness}: temperament");
+                }
+                let equal = Settings { stretch: 0.0, ..stretched };
+                let f1 = partial(key, 1, &equal);
+                assert!((f1 / key_frequency(key) - 1.0).abs() < 1e-12, "key {key} at {brightness} unstretched");
             }
-            let equal = Settings { stretch: 0.0, ..stretched };
-            assert!((partial(key, 1, &equal) / key_frequency(key) - 1.0).abs() < 1e-12, "key {key} unstretched");
         }
+        let stretched = Settings::default();
         let cents = |key: u8, s: &Settings| 1200.0 * (partial(key, 1, s) / key_frequency(key)).log2();
         let brighter = Settings { brightness: 2.0, ..stretched };
         println!(
