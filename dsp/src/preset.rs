@@ -29,8 +29,10 @@
 //!   weights, from 12.4 g at A0 to 5.8 g at C8, shared among the key's strings; felt stiffness κ (one string's
 //!   share) log-linear through 4e8, 4.5e9, 1e12 N/m^α, clamped to [1e8, 1e13]; exponent α linear
 //!   through 2.3, 2.5, 3.0, clamped to [2, 3.5]; striking position linear through 0.12, 0.12,
-//!   0.0625 of L, clamped to [0.04, 0.2].
-//!
+//!   0.0625 of L, clamped to [1/17, 0.2]: the top octave's hammers strike between 1/12 and 1/17
+//!   of the length (Conklin, KTH lecture "Where should the hammer hit the string", C8 usually
+//!   1/12–1/17; Fandrich, PTG list 1998, 1/12–1/16 at C88), which the line through C7 leaves
+//!   from D♯7 up ([`SHORTEST_STRIKE`]).
 //!
 //! Each key has one to three strings ([`unison_strings`]), all the same string retensioned to a
 //! small detuning ([`unison_detune`]); the hammer values above are one string's share.
@@ -202,8 +204,12 @@ pub fn stretch_cents(key: u8, brightness: f64) -> f64 {
 /// Where the rule's hammer strikes MIDI key `key`'s strings (fraction of the length): the
 /// [`PianoNote::strike_position`] of [`piano_note`], without the rest of the rule.
 pub fn strike_position(key: u8) -> f64 {
-    through(f64::from(key.min(127)), [0.12, 0.12, 0.0625]).clamp(0.04, 0.2)
+    through(f64::from(key.min(127)), [0.12, 0.12, 0.0625]).clamp(SHORTEST_STRIKE, 0.2)
 }
+
+/// The shortest striking distance the rule gives (fraction of the length): 1/17, the short end
+/// of what grands' top octaves are voiced to (module docs).
+pub const SHORTEST_STRIKE: f64 = 1.0 / 17.0;
 
 /// A plausible piano string and hammer for MIDI key `key` (0..=127): the rule in the module docs.
 pub fn piano_note(key: u8) -> PianoNote {
@@ -235,6 +241,19 @@ pub fn piano_note(key: u8) -> PianoNote {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The top octave's hammers strike within what grands are voiced to, 1/12 to 1/17 of the
+    /// length (Conklin; Fandrich 1/12–1/16 at C8): the line through C7's 1/16 would reach 1/23
+    /// at C8; below C7 the rule is its line.
+    #[test]
+    fn the_top_octave_strikes_within_the_published_range() {
+        for key in 96..=108u8 {
+            let x = strike_position(key);
+            assert!((1.0 / 17.0 - 1e-12..=1.0 / 12.0).contains(&x), "key {key}: 1/{:.1}", 1.0 / x);
+        }
+        assert_eq!(strike_position(96), 0.0625);
+        assert_eq!(strike_position(60), 0.12);
+    }
 
     #[test]
     fn c4_matches_the_derived_values_of_physics_8_2() {
