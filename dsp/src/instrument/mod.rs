@@ -1041,7 +1041,7 @@ impl Instrument {
         // The same key again: strike the same string.
         if let Some(i) = self.voices.iter().position(|v| v.upcoming_key() == Some(strike.key)) {
             if self.voices[i].fading() {
-                self.voices[i].steal(strike, self.sample_rate, now);
+                self.voices[i].steal(strike, &settings, now);
             } else {
                 Self::meet_elsewhere(&mut self.voices, i, strike.key, &settings);
                 self.voices[i].play_with(strike, &settings, now, Some((self.partners.ready(), dampers)));
@@ -1073,7 +1073,7 @@ impl Instrument {
             .map(|(i, _)| i);
         if let Some(i) = victim {
             self.steals += 1;
-            self.voices[i].steal(strike, self.sample_rate, now);
+            self.voices[i].steal(strike, &settings, now);
         }
         victim
     }
@@ -1243,8 +1243,9 @@ impl Instrument {
         // only those with live notes can be either.
         let (pianos, slides) = self.pools();
         for i in self.notes.live_in(pianos) {
-            if let Some(key) = self.voices[i].starts_now() {
-                Self::meet_elsewhere(&mut self.voices, i, key, &self.settings);
+            if let Some((key, settings)) = self.voices[i].starts_now() {
+                let settings = *settings;
+                Self::meet_elsewhere(&mut self.voices, i, key, &settings);
             }
             let v = &mut self.voices[i];
             if !(v.sounding || v.fading()) {

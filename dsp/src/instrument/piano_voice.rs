@@ -182,7 +182,7 @@ pub const STEAL_TIME: f64 = 0.005;
 /// The shortest window over which a voice's loudness is measured (s): longer than the hammer's
 /// contact on every key (about 4 ms in the bass, Askenfelt & Jansson, JASA 88(1) 52–63, 1990; at
 /// most 5.8 ms here, at C1: docs/physics.md §8.4), so that a note is heard past its strike before
-/// it can be stolen, and than a period of the fundamental of every key from G1 (49 Hz) up, so
+/// it can be stolen, and than a period of the fundamental of every key from G♯1 (51.9 Hz) up, so
 /// that a low note is not judged by where in its period a window falls.
 pub const LOUDNESS_WINDOW: f64 = 0.020;
 
@@ -546,10 +546,12 @@ pub struct PianoVoice {
     /// What the next strike meets of the strings' motion on other voices' bridges
     /// ([`meet`](Self::meet)).
     meets: Elsewhere,
-    /// Samples of steal fade left before `pending` starts.
+    /// Samples of steal fade left before `pending` starts, counted down as they are rendered.
     fade_left: usize,
-    /// A note waiting for the fade to finish.
+    /// A note waiting for the fade to finish, and the settings of its own sample, which it is
+    /// struck with wherever the block it starts in falls.
     pending: Option<Strike>,
+    pending_settings: Settings,
     /// Whether the pending note's key was released while it waited.
     pending_released: bool,
     /// Whether the note (or the pending one) has a brightness of its own, which its channel's
@@ -608,6 +610,7 @@ impl PianoVoice {
             meets: Elsewhere::default(),
             fade_left: 0,
             pending: None,
+            pending_settings: Settings::default(),
             pending_released: false,
             own_brightness: false,
             shedding: false,
@@ -918,13 +921,15 @@ impl PianoVoice {
         }
     }
 
-    /// Fade out over [`STEAL_TIME`], then play `strike` (a stolen voice). A voice fading out
+    /// Fade out over [`STEAL_TIME`], then play `strike` under `settings`, those of its own sample
+    /// (a stolen voice): it starts at the first control block after the fade. A voice fading out
     /// already keeps its fade, which has been taking its modes down at [`STEAL_RATE`] since it
     /// began: begun again, a key struck faster than the fade lasts would put its note off at every
     /// strike, and never sound.
-    pub fn steal(&mut self, strike: Strike, sample_rate: f64, now: u64) {
-        let fading = self.fading();
+    pub fn steal(&mut self, strike: Strike, settings: &Settings, now: u64) {
+        let (fading, sample_rate) = (self.fading(), self.core.string().sample_rate());
         self.pending = Some(strike);
+        self.pending_settings = *settings;
         self.pending_released = false;
         self.own_brightness = false;
         self.shedding = false;
@@ -974,9 +979,10 @@ impl PianoVoice {
         self.fade_left == 0 || self.guard_fade.is_fading()
     }
 
-    /// The key of the pending note this voice starts at the coming block's start.
-    pub fn starts_now(&self) -> Option<u8> {
-        self.pending.filter(|_| self.pending_starts_now()).map(|p| p.key)
+    /// The key of the pending note this voice starts at the coming block's start, and the
+    /// settings it is struck with.
+    pub fn starts_now(&self) -> Option<(u8, &Settings)> {
+        self.pending.filter(|_| self.pending_starts_now()).map(|p| (p.key, &self.pending_settings))
     }
 
     /// The MIDI channel whose pedals reach this voice from the coming block's start: that of the
@@ -1033,6 +1039,16 @@ impl PianoVoice {
     fn trip(&mut self) {
         self.trips += 1;
         self.silence();
+    }
+
+    /// [`trip`](Self::trip), a note waiting for the voice kept: it starts at the next block's
+    /// start, from rest, its steal fade no longer needed.
+    fn trip_keeping_pending(&mut self) {
+        let waiting = self.pending.map(|strike| (strike, self.pending_released));
+        self.trip();
+        if let Some((strike, released)) = waiting {
+            (self.pending, self.pending_released) = (Some(strike), released);
+        }
     }
 
     /// Measure the strings' swing at their damper's pad and each partner's at its own.
@@ -1121,10 +1137,14 @@ impl PianoVoice {
         if self.guard_fade.is_fading() {
             // The guard's fade has silenced the old note; a note waiting for the voice starts on
             // it now, from rest, its steal fade no longer needed.
-            let waiting = self.pending.map(|strike| (strike, self.pending_released));
-            self.trip();
-            let Some((strike, released)) = waiting else { return };
-            (self.pending, self.pending_released) = (Some(strike), released);
+            self.trip_keeping_pending();
+            if self.pending.is_none() {
+                return;
+            }
+        }
+        if !self.sounding {
+            // A silent voice renders nothing, so counts no fade down: it has nothing to fade.
+            self.fade_left = 0;
         }
         let fs = self.core.string().sample_rate();
         self.heard.close((LOUDNESS_WINDOW * fs).ceil() as usize);
@@ -1139,11 +1159,11 @@ impl PianoVoice {
             self.shedding = false;
             self.sounding = false;
             let partners = partners.as_deref_mut().map(|table| (table.ready(), dampers));
-            self.play_with(strike, settings, now, partners);
+            let own = self.pending_settings;
+            self.play_with(strike, &own, now, partners);
             self.key_down = !self.pending_released;
         }
         if self.fading() {
-            self.fade_left = self.fade_left.saturating_sub(len);
             return;
         }
         if self.restruck.is_some() && self.core.hammer_leaving() {
@@ -1301,9 +1321,10 @@ impl PianoVoice {
             Method::Exp => self.core.process_shared(&mut s.exp, out, shared),
         }
         self.heard.add(out);
+        self.fade_left = self.fade_left.saturating_sub(out.len());
         if !self.heard.sum.is_finite() {
             out.fill(0.0);
-            self.trip();
+            self.trip_keeping_pending();
         } else {
             self.guard_fade.apply(out);
         }
@@ -1411,6 +1432,66 @@ mod tests {
         }
     }
 
+    /// A stolen note starts at the first control block after its fade, wherever in a block the
+    /// steal falls: stolen one sample into a block of 256 at 48 kHz (its fade 240 samples), it
+    /// starts at the next block, 255 samples on, not one block later.
+    #[test]
+    fn a_stolen_note_starts_at_the_first_block_after_its_fade() {
+        let (mut voice, settings) = struck(20);
+        let mut out = [0.0; 256];
+        voice.begin_block(&settings, Dampers::default(), 256, 0, None, &mut 0);
+        voice.render(&mut out[..1]);
+        let strike = Strike { channel: 0, key: 62, velocity: 0.7, shifted: false, timbre: None };
+        voice.steal(strike, &settings, 1);
+        voice.render(&mut out[1..]);
+        voice.begin_block(&settings, Dampers::default(), 256, 256, None, &mut 0);
+        assert!(voice.pending.is_none() && voice.strike.key == 62, "started at the block after the fade");
+    }
+
+    /// A stolen note is struck with the settings of its own sample, not those of the block it
+    /// starts in: stolen under a soft felt (hardness 0.3), it sounds as a steal under that felt
+    /// whose block also has it, though its block has the hardest (3.0).
+    #[test]
+    fn a_stolen_note_keeps_the_settings_of_its_own_sample() {
+        let strike = Strike { channel: 0, key: 62, velocity: 0.7, shifted: false, timbre: None };
+        let soft = Settings { hardness: 0.3, ..Settings::default() };
+        let play = |block: &Settings| {
+            let (mut voice, settings) = struck(20);
+            voice.steal(strike, &soft, 0);
+            let mut out = vec![0.0; 1024];
+            for (k, chunk) in out.chunks_mut(64).enumerate() {
+                voice.begin_block(if k == 0 { &settings } else { block }, Dampers::default(), 64, 0, None, &mut 0);
+                voice.render(chunk);
+            }
+            out
+        };
+        let (own, hardest) = (play(&soft), play(&Settings { hardness: 3.0, ..soft }));
+        assert!(own == hardest, "the note's own felt");
+    }
+
+    /// A note waiting for a voice whose state turns non-finite during its steal fade still
+    /// sounds: the old note's trip is counted, and the new one starts at the next block.
+    #[test]
+    fn a_note_waiting_on_a_voice_that_turns_non_finite_still_sounds() {
+        let (mut voice, settings) = struck(20);
+        let strike = Strike { channel: 0, key: 62, velocity: 0.7, shifted: false, timbre: None };
+        voice.steal(strike, &settings, 0);
+        voice.core.fill_state(f64::NAN);
+        let mut out = [0.0; 64];
+        voice.render(&mut out);
+        assert!(out.iter().all(|&x| x == 0.0) && voice.guard_trips() == 1);
+        voice.begin_block(&settings, Dampers::default(), 64, 64, None, &mut 0);
+        voice.render(&mut out);
+        assert!(voice.sounding && voice.strike.key == 62, "the waiting note sounds");
+        assert!(out.iter().all(|x| x.is_finite()) && out.iter().any(|&x| x != 0.0));
+    }
+
+    /// The loudness window spans a period of every key's fundamental from G♯1 up.
+    #[test]
+    fn the_loudness_window_spans_a_period_from_g_sharp_1_up() {
+        assert!(LOUDNESS_WINDOW * key_frequency(32) >= 1.0 && LOUDNESS_WINDOW * key_frequency(31) < 1.0);
+    }
+
     /// A note that steals a voice the guard is fading, held or let go while it waits, sounds in
     /// full at the next block as on a fresh voice: the old note's trip is counted, and the fade
     /// the guard began has silenced the voice already. It starts at that block for the
@@ -1425,11 +1506,12 @@ mod tests {
             voice.begin_block(&settings, Dampers::default(), 64, 0, None, &mut 0);
             voice.render(&mut out);
             let strike = Strike { channel: 3, key: 62, velocity: 0.7, shifted: false, timbre: None };
-            voice.steal(strike, FS, 0);
+            voice.steal(strike, &settings, 0);
             if released {
                 voice.key_up(3, 62);
             }
-            assert_eq!((voice.starts_now(), voice.channel_now()), (Some(62), 3), "released {released}");
+            let starts = voice.starts_now().map(|(key, _)| key);
+            assert_eq!((starts, voice.channel_now()), (Some(62), 3), "released {released}");
             let mut fresh = PianoVoice::new(200, FS);
             fresh.play(strike, &settings, 0);
             if released {
