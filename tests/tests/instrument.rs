@@ -1616,10 +1616,12 @@ fn the_heard_output_back_from_the_dry_starts_from_boards_at_rest() {
 }
 
 /// A host's notes on one key may overlap: C4 struck as note 1, struck again as note 2 while
-/// held, then note 1's note-off by its id, channel and key lets go of nothing (note 2 holds the
-/// key: the render is the same to the bit as without that note-off), and note 2's own then lets
-/// go of the key as a MIDI note-off does. On the slide alike. A note-off naming an id the engine
-/// was never told lets go of its key, as a MIDI note-off does, rather than leave it held.
+/// held, then note 1's note-off by its id, channel and key, or by its id alone, lets go of nothing
+/// (note 2 holds the key: the render is the same to the bit as without that note-off), and note
+/// 2's own then lets go of the key as a MIDI note-off does. On the slide alike. A note-off naming
+/// an id the engine was never told lets go of its key, as a MIDI note-off does, rather than leave
+/// it held. On a slide not following keys, whose presses each take a voice, note 1's note-off or
+/// choke (by its id, with or without its key) is its voice's alone, as on another channel.
 #[test]
 fn a_note_off_by_id_lets_go_of_its_own_note_not_a_later_one_on_its_key() {
     let with_id = |voice| Event::NoteOnWithId { channel: 0, key: 52, velocity: 0.8, voice };
@@ -1633,6 +1635,9 @@ fn a_note_off_by_id_lets_go_of_its_own_note_not_a_later_one_on_its_key() {
         let by_key = render(&vec![(0, with_id(1)), (9_600, with_id(2)), (28_800, off(52))]);
         let held = render(&vec![(0, with_id(1)), (9_600, with_id(2))]);
         assert!(overlapped == without, "{mode:?}: note 1's note-off changed the sound");
+        let id_alone = Event::Release { note: NoteTarget::voice(1) };
+        let by_id_alone = render(&vec![(0, with_id(1)), (9_600, with_id(2)), (19_200, id_alone), (28_800, off_id(2))]);
+        assert!(by_id_alone == without, "{mode:?}: note 1's note-off by its id alone changed the sound");
         assert!(without == by_key, "{mode:?}: note 2's note-off is not its key's");
         let (after, still) = (rms(&without[38_400..]), rms(&held[38_400..]));
         println!("{mode:?}: rms after note 2's note-off {after:.2e}, held {still:.2e}");
@@ -1653,6 +1658,19 @@ fn a_note_off_by_id_lets_go_of_its_own_note_not_a_later_one_on_its_key() {
     let other_channel = Event::NoteOn { channel: 1, key: 52, velocity: 0.8 };
     let apart = render(&vec![(0, on(52, 0.8)), (9_600, other_channel), (19_200, off(52))]);
     assert!(by_id == apart, "note 1's note-off is not its voice's alone");
+    let by_id_alone =
+        render(&vec![(0, with_id(1)), (9_600, with_id(2)), (19_200, Event::Release { note: NoteTarget::voice(1) })]);
+    assert!(by_id_alone == apart, "note 1's note-off by its id alone is not its voice's alone");
+    // So with a choke: note 1's voice fades, and note 2 rings on held.
+    let choked_apart = render(&vec![
+        (0, on(52, 0.8)),
+        (9_600, other_channel),
+        (19_200, Event::Choke { note: NoteTarget::key(0, 52) }),
+    ]);
+    for note in [NoteTarget::voice(1), NoteTarget { voice: Some(1), channel: Some(0), key: Some(52) }] {
+        let choked = render(&vec![(0, with_id(1)), (9_600, with_id(2)), (19_200, Event::Choke { note })]);
+        assert!(choked == choked_apart, "a choke of note 1 ({note:?}) is not its voice's alone");
+    }
 }
 
 /// Following keys switched on under notes that each took a voice on one channel (D3, then E3,

@@ -699,9 +699,11 @@ impl Instrument {
             }
             Event::Release { note } => self.release(note),
             Event::Choke { note } => {
-                // Faded first: a choked slide following keys lets go rather than gliding back to
-                // a key still held.
-                let keys = self.addressed_keys(note);
+                // A note a later press of its key came over fades alone, the key kept held; any
+                // other's keys go up, faded first: a choked slide following keys lets go rather
+                // than gliding back to a key still held.
+                let note = self.with_its_key(note);
+                let keys = if self.take_under(note) { [0; 16] } else { self.addressed_keys(note) };
                 self.choke(note);
                 self.keys_up(&keys);
             }
@@ -906,20 +908,18 @@ impl Instrument {
     }
 
     /// The note-off of the notes `target` addresses ([`Event::Release`]): the keys they hold go
-    /// up. A note-off naming an id, a channel and a key is that note's: for a note a later press
-    /// of its key came over, held down, only its own voice lets go (a slide not following keys
-    /// gives each press a voice), the key staying held; for an id that addresses nothing (one the
-    /// engine was never told), its key goes up as at a MIDI note-off.
+    /// up. A note-off naming an id, a channel and a key (or an id alone, which the held key
+    /// pressed with it gives the rest: [`with_its_key`](Self::with_its_key)) is that note's: for
+    /// a note a later press of its key came over, held down, only its own voice lets go (a slide
+    /// not following keys gives each press a voice), the key staying held; for an id that
+    /// addresses nothing (one the engine was never told), its key goes up as at a MIDI note-off.
     fn release(&mut self, target: NoteTarget) {
-        let (Some(id), Some(channel), Some(key)) = (target.voice, target.channel, target.key) else {
+        let target = self.with_its_key(target);
+        let (Some(_), Some(channel), Some(key)) = (target.voice, target.channel, target.key) else {
             self.keys_up(&self.addressed_keys(target));
             return;
         };
-        let (c, key) = (usize::from(channel & 15), key & 127);
-        let held = self.keys_down[c] >> key & 1 == 1;
-        let press = &mut self.pressed[c][usize::from(key)];
-        if let Some(slot) = press.under.iter_mut().find(|under| **under == Some(id)).filter(|_| held) {
-            *slot = None;
+        if self.take_under(target) {
             let offset = self.voices.len();
             for (i, _) in self.notes.addressed(target) {
                 match i.checked_sub(offset) {
@@ -931,9 +931,55 @@ impl Instrument {
         }
         let mut keys = self.addressed_keys(target);
         if keys == [0; 16] {
-            keys[c] = 1 << key;
+            keys[usize::from(channel & 15)] = 1 << (key & 127);
         }
         self.keys_up(&keys);
+    }
+
+    /// `target` with the channel and key it leaves out filled in, when it names an id that
+    /// exactly one held key was pressed with or came over (a host may end a note by its id
+    /// alone); else `target` as it is.
+    fn with_its_key(&self, target: NoteTarget) -> NoteTarget {
+        let Some(id) = target.voice.filter(|_| target.channel.is_none() || target.key.is_none()) else {
+            return target;
+        };
+        let mut found = None;
+        for c in 0..16u8 {
+            if target.channel.is_some_and(|channel| channel & 15 != c) {
+                continue;
+            }
+            for k in 0..128u8 {
+                let press = &self.pressed[usize::from(c)][usize::from(k)];
+                let held = self.keys_down[usize::from(c)] >> k & 1 == 1;
+                if held
+                    && target.key.is_none_or(|key| key & 127 == k)
+                    && (press.id == Some(id) || press.under.contains(&Some(id)))
+                {
+                    if found.is_some() {
+                        return target;
+                    }
+                    found = Some((c, k));
+                }
+            }
+        }
+        found.map_or(target, |(c, k)| NoteTarget { voice: Some(id), channel: Some(c), key: Some(k) })
+    }
+
+    /// Whether `target` (an id, a channel and a key) names a note that a later press of its key,
+    /// still held, came over: then it is struck off the press's list, and only its own voice is
+    /// to let go or fade.
+    fn take_under(&mut self, target: NoteTarget) -> bool {
+        let (Some(id), Some(channel), Some(key)) = (target.voice, target.channel, target.key) else { return false };
+        let (c, key) = (usize::from(channel & 15), key & 127);
+        let held = self.keys_down[c] >> key & 1 == 1;
+        let press = &mut self.pressed[c][usize::from(key)];
+        match press.under.iter_mut().find(|under| **under == Some(id)).filter(|_| held) {
+            Some(slot) => {
+                *slot = None;
+                true
+            }
+            None => false,
+        }
     }
 
     /// Fade out the voices of the notes `target` addresses and let them fall silent
