@@ -94,7 +94,8 @@ impl ExplicitSolver {
         let consistent = self.law.potential_slope(y);
         let alpha = self.law.alpha();
         if alpha > 1.0 && nyquist > 0.0 {
-            consistent.min(8.0 * STILL_SHARE * y / ((alpha - 1.0) * nyquist))
+            // Off contact (y ≤ 0) both are 0: the bound's sign follows y's.
+            consistent.min(8.0 * STILL_SHARE * y.max(0.0) / ((alpha - 1.0) * nyquist))
         } else {
             consistent
         }
@@ -168,6 +169,18 @@ mod tests {
     /// force and stays still: the law's `V'(y)` (ψ = √(2V(y))) while its explicit stiffness
     /// `k_e = F(α − 1)/(2y)` is within the share of `4/q_N`, and at the share beyond (ψ short of
     /// √(2V(y))); the law's at any press with α = 1.
+    /// Off contact no force holds: `still_force` is 0 at and below a compression of 0, with
+    /// α above 1 and at 1.
+    #[test]
+    fn no_still_force_holds_off_contact() {
+        for alpha in [1.0, 1.5, 3.0] {
+            let exp = ExplicitSolver::new(PowerLaw::new(1e9, alpha).unwrap());
+            for y in [0.0, -1e-9, -1e-6, -1e-3] {
+                assert_eq!(exp.still_force(y, 7.1e-5), 0.0, "α {alpha}, y {y}");
+            }
+        }
+    }
+
     #[test]
     fn a_still_start_holds_its_force() {
         let (nyquist, q) = (7.1e-5, 2.2e-5);

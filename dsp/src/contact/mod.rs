@@ -83,7 +83,8 @@ pub struct ContactProblem {
 pub struct ContactSolution {
     /// `s = y^{n+1} − y^{n−1}` (m).
     pub s: f64,
-    /// Contact force `F^n = (s + z)/q` (N); ≤ 0, it pushes the compression back down.
+    /// Contact force `F^n = (s + z)/q` (N); ≤ 0 to rounding (an ulp of `z` over `q` at a grazing
+    /// exit), it pushes the compression back down.
     pub force: f64,
 }
 

@@ -47,7 +47,7 @@
 //!
 //! Per step, with ⌈·⌉ = ⌈log2(N+1)⌉: free flight costs no sign test; the warm-started search costs
 //! at most `2⌈·⌉ + 1` sign tests (1 for the guess, at most ⌈·⌉ galloping, at most ⌈·⌉ − 1 in the
-//! final bisection) and exactly 2 when the segment is unchanged; the plain binary search costs at
+//! final bisection) and at most 2 when the segment is unchanged; the plain binary search costs at
 //! most ⌈·⌉. The root then costs one square root. Nothing else depends on the data.
 
 use super::{ContactProblem, ContactSolution, ContactSolver, Method, QuadSpline};

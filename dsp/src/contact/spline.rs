@@ -173,7 +173,9 @@ impl QuadSpline {
     }
 
     /// Segment containing `y`: 0 for `y ≤ 0`, else `min(⌈y/Δy⌉, N)` (seed eq. 26 with the clamp
-    /// the seed's text implies). A point on a knot belongs to the lower segment.
+    /// the seed's text implies). A point on a knot belongs to the lower segment, to rounding: as
+    /// computed, `knot(j)/Δy` can round just above `j` (about one knot in twenty), and the knot
+    /// then falls in the upper segment, which meets the lower one there in value and slope.
     #[inline]
     pub fn segment_of(&self, y: f64) -> usize {
         if y > 0.0 {

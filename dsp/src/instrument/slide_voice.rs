@@ -859,7 +859,8 @@ impl SlideVoice {
     }
 
     /// Stop at once: the string and the slide at rest, the slide lifted off the string and the
-    /// fingers off, so that nothing of the note is heard in the next.
+    /// fingers off, and the contact solver started afresh there (EXP's ψ holding nothing), so
+    /// that nothing of the note is heard in the next.
     pub fn silence(&mut self) {
         self.shed_fade.clear();
         self.guard_fade.clear();
@@ -869,6 +870,8 @@ impl SlideVoice {
         self.mute = 0.0;
         self.unweighed = 0;
         self.rest_lifted();
+        let (_, y) = self.core.compressions();
+        self.solvers.start_still(y, 0.0);
     }
 
     /// As made under `settings`, but for the guitar it was last on and the guard's count of
@@ -1669,7 +1672,12 @@ mod tests {
 
     /// [`plucked`] on the guitar `body`.
     fn plucked_on(body: SlideBody, blocks: usize) -> (SlideVoice, Settings) {
-        let settings = Settings { mode: crate::instrument::Mode::Slide, slide_body: body, ..Settings::default() };
+        plucked_with(Settings { slide_body: body, ..Settings::default() }, blocks)
+    }
+
+    /// [`plucked_on`] under `settings` (in slide mode).
+    fn plucked_with(settings: Settings, blocks: usize) -> (SlideVoice, Settings) {
+        let settings = Settings { mode: crate::instrument::Mode::Slide, ..settings };
         let mut voice = SlideVoice::new(FS, &settings);
         voice.play(STRIKE, &settings, &ChannelState::default(), false, 0);
         let mut out = [0.0; 64];
@@ -1862,16 +1870,19 @@ mod tests {
     }
 
     /// Silenced at once (all sound off), a ringing voice keeps nothing of its note: on either
-    /// guitar its string, slide and body hold no energy, and the slide is lifted.
+    /// guitar and with each solver its string, slide, body and contact hold no energy (EXP's
+    /// ψ too, which the pressed slide had charged), and the slide is lifted.
     #[test]
     fn a_silenced_voice_keeps_nothing_of_its_note() {
-        for body in [SlideBody::Pickup, SlideBody::Acoustic] {
-            let (mut voice, _) = plucked_on(body, 40);
+        for (body, method) in
+            [SlideBody::Pickup, SlideBody::Acoustic].into_iter().flat_map(|b| Method::ALL.map(|m| (b, m)))
+        {
+            let (mut voice, _) = plucked_with(Settings { slide_body: body, method, ..Settings::default() }, 40);
             let ringing = voice.energy();
             assert!(ringing > 1e-6, "{body:?}: {ringing} J before");
             voice.silence();
             assert!(!voice.sounding);
-            assert_eq!(voice.energy(), 0.0, "{body:?}: the energy left");
+            assert_eq!(voice.energy(), 0.0, "{body:?}, {method:?}: the energy left");
             assert_eq!(voice.core.compressions(), (-HAND_RANGE.0, -HAND_RANGE.0), "{body:?}: the slide lifted");
         }
     }
