@@ -355,8 +355,12 @@ impl Plugin for QsaStrings {
         // The voice pool is sized at activation. A new count the open editor did not set (it asks
         // once its slider has settled), a state loaded with the editor closed say, asks the host
         // to restart the plugin, once per count.
+        // A count asked for and then left (back to the pool's own) is asked for again if it comes
+        // back while the host has not restarted.
         let voices = self.params.engine.voices.value().clamp(1, 128) as usize;
-        if voices != engine.voices() && !self.editor_state.is_open() && self.restart_asked != Some(voices) {
+        if voices == engine.voices() {
+            self.restart_asked = None;
+        } else if !self.editor_state.is_open() && self.restart_asked != Some(voices) {
             context.request_restart();
             self.restart_asked = Some(voices);
         }

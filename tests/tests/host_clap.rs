@@ -982,7 +982,7 @@ fn a_state_from_a_later_version_loads_what_it_can() {
 /// A state loaded while the plugin runs with the editor closed, with another voice count than
 /// the pool was built for, asks the host to restart the plugin (the pool is sized at
 /// activation) once for that count, and the restart builds the pool it asks for; a state with
-/// the count the pool has asks for nothing.
+/// the count the pool has asks for nothing, and a count asked for again after it asks again.
 #[test]
 fn a_state_with_another_voice_count_asks_the_host_for_a_restart() {
     let bundle = release_bundle();
@@ -1004,6 +1004,13 @@ fn a_state_with_another_voice_count_asks_the_host_for_a_restart() {
     p.restart(|_| {});
     p.render_blocks(&score, 1_024, 256);
     assert_eq!(p.restarts_requested(), 1, "restarted with 8 voices, nothing more to ask");
+    // A count asked for, left for the pool's own and asked for again, with the host not
+    // restarting in between, is asked for again.
+    for (voices, asked) in [(32, 2), (8, 2), (32, 3)] {
+        assert!(p.load(&with_voices(voices)), "the state loads");
+        p.render_blocks(&score, 1_024, 256);
+        assert_eq!(p.restarts_requested(), asked, "{voices} voices against a pool of 8");
+    }
 }
 
 /// A state that leaves parameters out (an older version's, or a hand-made one) gives each its

@@ -2281,6 +2281,20 @@ fn a_reset_instrument_ends_its_next_notes_where_one_just_made_does() {
     }
 }
 
+/// The notes a reset ends are reported at sample 0, where the reset's clock starts again, with
+/// those that ended before it in the same call: a note-on at velocity 0 with an id (a note that
+/// ends at once) at sample 1,000 and a sounding C4, reset, report both at sample 0, not the
+/// first at 1,000 (which a host would place after the reset's own ends).
+#[test]
+fn notes_ended_before_a_reset_are_reported_at_its_sample_zero() {
+    let mut p = Instrument::new(FS, 2, Settings::default());
+    let _ = play(&mut p, &vec![(0, on(60, 0.7))], 1_000, || 64);
+    p.handle(Event::NoteOnWithId { channel: 0, key: 62, velocity: 0.0, voice: 7 });
+    p.reset();
+    let ends: Vec<(u8, u64)> = p.drain_ended().map(|n| (n.note.key, n.at)).collect();
+    assert_eq!(ends, vec![(62, 0), (60, 0)]);
+}
+
 /// CC121 (reset all controllers) on a channel is, to the bit, each of that channel's controllers
 /// moved to rest by its own message at that sample: the pitch bend to the centre, the channel
 /// and poly pressures and the mod wheel to 0, the sustain, sostenuto and soft pedals up. Another

@@ -57,7 +57,8 @@ impl Default for Monitor {
 }
 
 impl Instrument {
-    /// A snapshot of the loudest voice (the one whose string moves most). All zeros when silent.
+    /// A snapshot of the loudest voice (the one whose string moves most); when none sounds, the
+    /// [`Monitor::default`] with the counts of guard trips and sheds.
     pub fn monitor(&self) -> Monitor {
         let piano = self.voices.iter().filter(|v| v.sounding).map(|v| {
             let energies = (v.energy(), v.vibration());

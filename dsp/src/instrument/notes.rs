@@ -153,6 +153,9 @@ impl NoteBook {
     /// Every live note ends at sample `at`, in the order of its voice's index.
     pub(crate) fn end_all(&mut self, at: u64) {
         self.check_live(at, |_| false);
+        // Notes queued already ended by `at` at the latest: after a reset, whose clock starts
+        // again from 0, none is reported later than the reset's notes.
+        self.ended.iter_mut().for_each(|e| e.at = e.at.min(at));
     }
 
     /// [`check`](Self::check) every voice with a live note, in the order of their indices, with

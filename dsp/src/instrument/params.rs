@@ -957,7 +957,7 @@ impl ParamValues {
     /// (`gain` in dB, like the plugin shows it), `on`/`off` for switches, option ids for the
     /// choices (`piano`/`slide`, `qsa`/`exp`/`imp`, `param`/`modwheel`/`chanpress`/`polypress`/
     /// `cc74`, `electric`/`acoustic`); a number outside the parameter's range is refused, naming
-    /// it.
+    /// it, and a stepped one takes its nearest step.
     pub fn set(&mut self, id: &str, value: &str) -> Result<(), ParamError> {
         let spec = param_spec(id).ok_or_else(|| ParamError::UnknownId(id.to_owned()))?;
         let shown = spec.parse(value).map_err(|expected| ParamError::BadValue {
@@ -972,6 +972,12 @@ impl ParamValues {
                 range: spec.range_text(),
             });
         }
+        // A stepped parameter takes the step nearest the value, as the plugin's own rounds what a
+        // host sends (`(v/step).round()·step`), so that a render plays what the plugin would.
+        let shown = match spec.kind {
+            ParamKind::Float { step: Some(step), .. } => (shown / step).round() * step,
+            _ => shown,
+        };
         (spec.put)(self, spec.to_plain(shown));
         Ok(())
     }
@@ -1016,6 +1022,17 @@ mod tests {
     /// Text typed by hand reads as a number with or without its unit, a decimal comma, a whole
     /// number rounded, a switch in any case; NaN, infinities, other words and a bare unit read as
     /// nothing.
+    /// A stepped parameter set between its steps takes the nearest, as the plugin's parameter
+    /// does: `bend = 1.3` (steps of 0.5) plays a range of 1.5 semitones, and 1.2 one of 1.0.
+    #[test]
+    fn a_stepped_parameter_set_between_steps_takes_the_nearest() {
+        let mut values = ParamValues::default();
+        for (given, taken) in [("1.3", 1.5), ("1.2", 1.0), ("24", 24.0), ("0.1", 0.0)] {
+            values.set("bend", given).unwrap();
+            assert_eq!(values.plain("bend"), Some(taken), "bend = {given}");
+        }
+    }
+
     #[test]
     fn typed_text_reads_as_a_finite_value_or_nothing() {
         let spec = |id| param_spec(id).unwrap();
