@@ -4,16 +4,17 @@
 //! the strings moving together drain into the bridge fast, their antisymmetric motion, which only
 //! the mistuning excites, barely at all; docs/physics.md §12).
 //!
-//! A partial's level is measured by heterodyning the output at the partial's frequency over
-//! 50 ms windows; a stage's decay rate (dB/s) is the least-squares slope of the level over its
-//! span: the prompt sound over 0.05–0.6 s, the aftersound over 2–4.5 s, struck at velocity 0.6
-//! and held, the pedal up (`xtask::realism::two_stages`, which also makes the report's pictures).
+//! A partial's level is measured by heterodyning the output at the partial's frequency on Hann
+//! windows every 50 ms, at least four periods of the fundamental long; a stage's decay rate (dB/s)
+//! is the least-squares slope of the level over its span: the prompt sound over 0.05–0.6 s, the
+//! aftersound over 2–4.5 s, struck at velocity 0.6 and held, the pedal up
+//! (`xtask::realism::two_stages`, which also makes the report's pictures).
 
 use xtask::realism::two_stages as stages;
 
 /// Mid-range keys (G3, C4, G4, C5) with the default unison spread: the second partial's prompt
-/// sound decays at least twice as fast as its aftersound (measured 3.9–5.9 times; the prompt
-/// sound 27–57 dB/s, the aftersound 6–10 dB/s).
+/// sound decays at least twice as fast as its aftersound (measured 3.9–6.0 times; the prompt
+/// sound 27–58 dB/s, the aftersound 6–10 dB/s).
 #[test]
 fn a_mistuned_unison_decays_in_two_stages() {
     for key in [55u8, 60, 67, 72] {
@@ -29,7 +30,7 @@ fn a_mistuned_unison_decays_in_two_stages() {
 
 /// The same C4 with its three strings tuned exactly alike: the hammer moves them together, the
 /// aftersound's antisymmetric motion is never excited, and the second partial decays in one
-/// stage (the two rates within 15 % of each other; measured 21.0 and 20.9 dB/s, 0.5 %).
+/// stage (the two rates within 15 % of each other; measured 21.1 and 21.1 dB/s, 0.1 %).
 #[test]
 fn an_exact_unison_decays_in_one_stage() {
     let (prompt, after) = stages(60, 2, 0.0);

@@ -392,7 +392,8 @@ pub fn spectrogram_png(path: &Path, x: &[f64], fs: f64, title: &str) -> Result<(
     let ratio = (f_hi / f_lo).powf(1.0 / ROWS as f64);
     let bin_hz = fs / WINDOW as f64;
     let cells = frames.iter().enumerate().flat_map(|(i, spectrum)| {
-        let t0 = (i * HOP) as f64 / fs;
+        // Each frame is drawn over the hop around its window's centre.
+        let t0 = (i * HOP + WINDOW / 2 - HOP / 2) as f64 / fs;
         let t1 = t0 + HOP as f64 / fs;
         (0..ROWS).map(move |r| {
             let (lo, hi) = (f_lo * ratio.powi(r as i32), f_lo * ratio.powi(r as i32 + 1));

@@ -50,6 +50,10 @@ pub const FS: f64 = 48_000.0;
 /// Window of the partial levels (s).
 pub const LEVEL_WINDOW: f64 = 0.05;
 
+/// The slowest a partial can decay (dB/s): the strings' own loss alone, `b1` = 0.5 1/s on every
+/// key (docs/physics.md §8.2), 20·0.5/ln 10.
+pub const OWN_LOSS_RATE: f64 = 10.0 / std::f64::consts::LN_10;
+
 /// The prompt sound's and the aftersound's spans (s) for decay rates.
 pub const PROMPT: (f64, f64) = (0.05, 0.6);
 pub const AFTERSOUND: (f64, f64) = (2.0, 4.5);
@@ -96,7 +100,7 @@ pub fn held_note(key: u8, velocity: f32, detune: f64, seconds: f64) -> Vec<f64> 
 
 /// [`held_note`], struck with the soft pedal down (`soft`: the una corda, one string fewer).
 pub fn held_note_shifted(key: u8, velocity: f32, detune: f64, soft: bool, seconds: f64) -> Vec<f64> {
-    let settings = Settings { unison_detune: detune, ..Settings::default() };
+    let settings = Settings { unison_detune: detune, limiter: false, ..Settings::default() };
     let mut piano = Instrument::new(FS, 4, settings);
     // The strings' own decay: the dry bridge force, without the soundboard's radiation (whose
     // modes add their own ringing to a partial's envelope).
@@ -111,21 +115,31 @@ pub fn held_note_shifted(key: u8, velocity: f32, detune: f64, soft: bool, second
     left.into_iter().map(f64::from).collect()
 }
 
-/// The level (dB) of the component at `frequency` (Hz) in each [`LEVEL_WINDOW`] of `signal`
-/// (sampled at [`FS`]), by heterodyning.
-pub fn partial_levels(signal: &[f64], frequency: f64) -> Vec<f64> {
-    let w = (LEVEL_WINDOW * FS) as usize;
-    signal
-        .chunks_exact(w)
-        .enumerate()
-        .map(|(k, chunk)| {
+/// The level (dB) of the component at `frequency` (Hz) of `signal` (sampled at [`FS`]), by
+/// heterodyning, every [`LEVEL_WINDOW`], among partials `spacing` (Hz) apart: each level is taken
+/// over a Hann window centred on its [`LEVEL_WINDOW`] and at least four partials' periods of
+/// beating long (`4/spacing`), so that the neighbouring partials, four of its bins away, leak in
+/// more than 60 dB down (a 50 ms rectangle, 20 Hz wide, let C1's neighbours in at −15 dB). The
+/// signal is silent before its start; the levels run while a whole window fits before its end.
+pub fn partial_levels(signal: &[f64], frequency: f64, spacing: f64) -> Vec<f64> {
+    let hop = (LEVEL_WINDOW * FS) as usize;
+    let w = hop.max((4.0 / spacing * FS).ceil() as usize);
+    let hann = |i: usize| 0.5 - 0.5 * (std::f64::consts::TAU * (i as f64 + 0.5) / w as f64).cos();
+    let gain: f64 = (0..w).map(hann).sum();
+    (0..)
+        .map(|k| (k * hop + hop / 2) as isize - (w / 2) as isize)
+        .take_while(|&start| start + w as isize <= signal.len() as isize)
+        .map(|start| {
             let (mut re, mut im) = (0.0, 0.0);
-            for (i, x) in chunk.iter().enumerate() {
-                let phase = std::f64::consts::TAU * frequency * (k * w + i) as f64 / FS;
-                re += x * phase.cos();
-                im += x * phase.sin();
+            for i in 0..w {
+                let n = start + i as isize;
+                let Some(&x) = usize::try_from(n).ok().and_then(|n| signal.get(n)) else { continue };
+                let phase = std::f64::consts::TAU * frequency * n as f64 / FS;
+                let h = hann(i) * x;
+                re += h * phase.cos();
+                im += h * phase.sin();
             }
-            10.0 * ((re * re + im * im) / (w * w) as f64).log10()
+            10.0 * ((re * re + im * im) / (gain * gain)).log10()
         })
         .collect()
 }
@@ -149,7 +163,7 @@ pub fn decay_rate(levels: &[f64], span: (f64, f64)) -> f64 {
 /// `detune` cents: `(prompt sound, aftersound)`.
 pub fn two_stages(key: u8, partial: usize, detune: f64) -> (f64, f64) {
     let out = held_note(key, 0.6, detune, 5.0);
-    let levels = partial_levels(&out, tuned(key).partial(partial));
+    let levels = partial_levels(&out, tuned(key).partial(partial), pitch(key));
     (decay_rate(&levels, PROMPT), decay_rate(&levels, AFTERSOUND))
 }
 
@@ -233,7 +247,7 @@ pub const WHOLE: (f64, f64) = (0.05, 6.0);
 /// [`WHOLE`] (one rate for both stages, as a T60 read off a recorded tone).
 pub fn fundamental_t60(key: u8, pedal: bool) -> f64 {
     let out = held_with_pedal(key, pedal.then_some(0.0), WHOLE.1 + 0.5);
-    let levels = partial_levels(&out, tuned(key).partial(1));
+    let levels = partial_levels(&out, tuned(key).partial(1), pitch(key));
     -60.0 / decay_rate(&levels, WHOLE)
 }
 
@@ -425,8 +439,9 @@ fn envelopes(path: &Path) -> Result<Vec<Envelope>, String> {
     let spread = Settings::default().unison_detune;
     let (detuned, exact) = (held_note(60, 0.6, spread, 5.0), held_note(60, 0.6, 0.0, 5.0));
     let c4 = tuned(60);
-    let mut rows: Vec<Envelope> = (1..=3).map(|p| (p, spread, partial_levels(&detuned, c4.partial(p)))).collect();
-    rows.push((2, 0.0, partial_levels(&exact, c4.partial(2))));
+    let mut rows: Vec<Envelope> =
+        (1..=3).map(|p| (p, spread, partial_levels(&detuned, c4.partial(p), c4.partial(1)))).collect();
+    rows.push((2, 0.0, partial_levels(&exact, c4.partial(2), c4.partial(1))));
     let lines =
         rows.iter().zip([BLUE, GREEN, RED, PURPLE]).map(|((partial, detune, levels), colour)| match *detune > 0.0 {
             true => (levels.as_slice(), colour, format!("partial {partial}, unison spread {detune} cents"), 2),
@@ -448,7 +463,9 @@ fn una_corda(path: &Path) -> Result<Vec<Shifted>, String> {
     let c4 = tuned(60);
     let rows: Vec<Shifted> = [1, 2]
         .into_iter()
-        .flat_map(|p| notes.iter().map(move |(soft, out)| (p, *soft, partial_levels(out, c4.partial(p)))))
+        .flat_map(|p| {
+            notes.iter().map(move |(soft, out)| (p, *soft, partial_levels(out, c4.partial(p), c4.partial(1))))
+        })
         .collect();
     let lines = rows.iter().zip([BLUE, BLUE, RED, RED]).map(|((partial, soft, levels), colour)| match soft {
         true => (levels.as_slice(), colour, format!("partial {partial}, una corda: two strings struck"), 1),
@@ -483,7 +500,7 @@ fn half_pedal(path: &Path) -> Result<Vec<HalfPedal>, String> {
                 (0.0, Event::NoteOn { channel: 0, key: 36, velocity: 0.7 }),
                 (HALF_PEDAL_RELEASE, Event::NoteOff { channel: 0, key: 36 }),
             ];
-            (depth, partial_levels(&performed(&events, 5.0), c2.partial(1)))
+            (depth, partial_levels(&performed(&events, 5.0), c2.partial(1), c2.partial(1)))
         })
         .collect();
     let lines = rows.iter().zip([BLACK, RED, GREEN, BLUE, PURPLE]).map(|((depth, levels), colour)| {
@@ -685,7 +702,7 @@ fn decays(path: &Path) -> Result<Vec<Decay>, String> {
         .map(|k| {
             let out = held_note(k, 0.6, spread, WHOLE.1 + 0.5);
             let note = tuned(k);
-            let levels = [1, 2].map(|p| partial_levels(&out, note.partial(p)));
+            let levels = [1, 2].map(|p| partial_levels(&out, note.partial(p), note.partial(1)));
             let rates = levels.each_ref().map(|l| (-decay_rate(l, PROMPT), -decay_rate(l, AFTERSOUND)));
             (k, rates, -decay_rate(&levels[0], WHOLE))
         })
@@ -1005,6 +1022,19 @@ fn played_at_samples(instrument: &mut Instrument, mut events: Vec<(usize, Event)
 /// A published T60 row beside the model's: `((key, up, down), model up, model down)` (s).
 type T60Row = ((u8, f64, f64), f64, f64);
 
+/// Whether a partial's decay rates (dB/s, positive for a decay) read two stages: a prompt sound at
+/// least twice as fast as an aftersound that is no slower than the strings' own loss allows (a
+/// slower one reads a beat slower than the span it is fitted over, not a stage).
+pub fn two_stage(prompt: f64, after: f64) -> bool {
+    after >= OWN_LOSS_RATE && prompt >= 2.0 * after
+}
+
+/// An aftersound's rate (dB/s) as a table shows it: slower than the strings' own loss allows, it
+/// reads a beat slower than the span it is fitted over, and says so.
+fn aftersound_cell(rate: f64) -> String {
+    if rate < OWN_LOSS_RATE { format!("{rate:.1} (a beat)") } else { format!("{rate:.1}") }
+}
+
 fn readme(
     envelopes: &[Envelope],
     (shifted, half): (&[Shifted], &[HalfPedal]),
@@ -1014,7 +1044,7 @@ fn readme(
     (sympathy, undamped, held): (&Sympathy, [(u8, f64); 2], [HeldRing; 3]),
     (guitars, stereo): (&Guitars, &StereoGuitar),
 ) -> String {
-    let spread = Settings::default().unison_detune;
+    let (spread, own) = (Settings::default().unison_detune, OWN_LOSS_RATE);
     let at = |levels: &[f64], span| -decay_rate(levels, span);
     let mut rows = String::new();
     for (partial, detune, levels) in envelopes {
@@ -1036,11 +1066,11 @@ fn readme(
     for (partial, soft, levels) in shifted {
         let whole = shifted.iter().find(|r| r.0 == *partial && !r.1).map_or(f64::NAN, |r| first(&r.2));
         una_rows += &format!(
-            "| {partial} | {} | {:+.1} | {:.1} | {:.1} |\n",
+            "| {partial} | {} | {:+.1} | {:.1} | {} |\n",
             if *soft { "down (two strings)" } else { "up (three strings)" },
             first(levels) - whole,
             at(levels, PROMPT),
-            at(levels, AFTERSOUND)
+            aftersound_cell(at(levels, AFTERSOUND))
         );
     }
     let half_rows: String = half
@@ -1075,7 +1105,7 @@ fn readme(
         .collect();
     let contact = |key: u8| contacts.iter().find(|c| c.0 == key).map_or(f64::NAN, |c| c.1);
     let crossover = contacts.iter().find(|c| c.1 * 1e-3 * pitch(c.0) >= 1.0).map_or(0, |c| c.0);
-    let two_stage = decays.iter().filter(|d| d.1[1].0 >= 2.0 * d.1[1].1).count();
+    let two_stage = decays.iter().filter(|d| two_stage(d.1[1].0, d.1[1].1)).count();
     let b = |key: u8| piano_note(key).string.inharmonicity();
     let percent = |ratio: f64| 100.0 * (ratio - 1.0);
     let span = |values: &mut dyn Iterator<Item = f64>| {
@@ -1156,7 +1186,8 @@ fn readme(
          ## Two-stage decay\n\n\
          ![C4's partial levels](realism/envelopes.png)\n\n\
          C4 struck at velocity 0.6 ({:.1} m/s) and held, the pedal up, on the dry bridge force. Each partial's level is its heterodyned \
-         amplitude over 50 ms windows; a stage's decay rate is the least-squares slope over the prompt sound \
+         amplitude on a Hann window every 50 ms, at least four periods of the fundamental long (the \
+         neighbouring partials kept out); a stage's decay rate is the least-squares slope over the prompt sound \
          ({}–{} s) and the aftersound ({}–{} s). With the unison's strings mistuned (the default spread, {spread} \
          cents) the strings soon move apart, and the motion that does not push the bridge decays slowly: the \
          aftersound, with beats. Tuned exactly alike they stay together and decay in one stage (Weinreich, JASA \
@@ -1169,7 +1200,8 @@ fn readme(
          as above. The string the hammer misses rings from the bridge alone, and the strings start out of \
          step, so more of the motion lies in patterns that barely move the bridge: both partials start \
          lower and their prompt sounds decay more slowly; the aftersound's rates differ partial by \
-         partial, as its beats fall elsewhere. Over all partials the note's first 0.1 s is about 2 dB \
+         partial, as its beats fall elsewhere (a rate below the strings' own loss, {own:.2} dB/s, reads a \
+         beat slower than the 2–4.5 s it is fitted over). Over all partials the note's first 0.1 s is about 2 dB \
          softer and its sound 2–3 s later stands higher against it (docs/physics.md §12.9 measures both at E2, C4 and \
          C5).\n\n\
          | partial | soft pedal | first 0.1 s (dB) | prompt sound (dB/s) | aftersound (dB/s) |\n|---|---|---|---|---|\n{una_rows}\n\
@@ -1186,8 +1218,10 @@ fn readme(
          ## Decay rates against key\n\n\
          ![decay rates](realism/decay.png)\n\n\
          Every third key from C1 to C7, struck at velocity 0.6 and held: the second partial's prompt sound decays \
-         at least twice as fast as its aftersound on {two_stage} of {} keys. The black line is the fundamental's \
-         whole decay, one least-squares rate over {}–{} s, as a T60 is read off a recorded tone; the dots are a \
+         at least twice as fast as its aftersound on {two_stage} of {} keys (an aftersound no slower than the \
+         strings' own loss allows: a slower one reads a beat slower than its span). The black line is the \
+         fundamental's whole decay, one least-squares rate over {}–{} s, as a T60 is read off a recorded \
+         tone; the dots are a \
          grand's measured fundamentals (Lehtonen et al., JASA 122(3), 2007, Table III; their D5 and C6 rows were \
          not read). Struck at velocity 0.7 and held, with the pedal up and with it down from the strike:\n\n\
          | key | T60 measured, pedal up (s) | model (s) | model / measured | T60 measured, pedal down (s) | model (s) | pedal's lengthening, measured | model |\n\
@@ -1287,4 +1321,46 @@ fn readme(
         colour.1,
         a3,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two decaying partials `spacing` (Hz) apart, the second `louder` (dB) above the first at
+    /// the start: `(rate of the first, rate of the second)` (dB/s) as the estimator reads them
+    /// over the prompt sound's span.
+    fn read_rates(f0: f64, rates: (f64, f64), louder: f64) -> (f64, f64) {
+        let n = (1.0 * FS) as usize;
+        let gain = 10f64.powf(louder / 20.0);
+        let signal: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 / FS;
+                let decay = |rate: f64| 10f64.powf(-rate * t / 20.0);
+                decay(rates.0) * (std::f64::consts::TAU * f0 * t).sin()
+                    + gain * decay(rates.1) * (std::f64::consts::TAU * 2.0 * f0 * t).sin()
+            })
+            .collect();
+        let rate = |f| -decay_rate(&partial_levels(&signal, f, f0), PROMPT);
+        (rate(f0), rate(2.0 * f0))
+    }
+
+    /// A partial's level keeps its neighbours out, at C1 too, where two partials lie 32.7 Hz
+    /// apart: a fundamental decaying at 5 dB/s under a second partial 10 dB louder decaying at
+    /// 20 dB/s reads 5 dB/s within 0.2, and the second 20 within 0.2 (a 50 ms rectangle, 20 Hz
+    /// wide, read the first at 6.6).
+    #[test]
+    fn a_partial_at_c1_does_not_read_its_neighbours_decay() {
+        let (first, second) = read_rates(32.7, (5.0, 20.0), 10.0);
+        println!("C1: {first:.2} and {second:.2} dB/s");
+        assert!((first - 5.0).abs() < 0.2 && (second - 20.0).abs() < 0.2, "{first}, {second}");
+    }
+
+    /// An aftersound slower than the strings' own loss allows is a beat, not a stage.
+    #[test]
+    fn a_sub_floor_aftersound_does_not_count_as_two_stage() {
+        assert!(!two_stage(9.8, 2.2));
+        assert!(two_stage(29.4, 5.8));
+        assert!(!two_stage(21.1, 21.1));
+    }
 }
