@@ -354,9 +354,8 @@ impl Plugin for QsaStrings {
         engine.set_settings(&self.params.settings());
         // The voice pool is sized at activation. A new count the open editor did not set (it asks
         // once its slider has settled), a state loaded with the editor closed say, asks the host
-        // to restart the plugin, once per count.
-        // A count asked for and then left (back to the pool's own) is asked for again if it comes
-        // back while the host has not restarted.
+        // to restart the plugin, once per count; a count asked for, left for the pool's own and
+        // set again before the host restarted is asked for again.
         let voices = self.params.engine.voices.value().clamp(1, 128) as usize;
         if voices == engine.voices() {
             self.restart_asked = None;

@@ -38,7 +38,8 @@ pub const QUEUE_CAPACITY: usize = 8;
 pub const LOAD_TIME_CONSTANT: f64 = 0.3;
 
 /// The fewest samples the peak load is taken over: calls shorter than this are weighed together
-/// with those after them (1.3 ms at 48 kHz, shorter than any host's buffer of note).
+/// with those after them (1.3 ms at 48 kHz: with a host's buffers of 32 samples, two are weighed
+/// together, and an overrun in one shows at about half).
 pub const PEAK_SPAN: usize = 64;
 
 /// What the audio thread shares with the editor.

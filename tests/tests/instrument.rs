@@ -2281,6 +2281,29 @@ fn a_reset_instrument_ends_its_next_notes_where_one_just_made_does() {
     }
 }
 
+/// A stolen note is struck with the settings of its own sample, the partner strings its strings
+/// ring with too, whatever the settings are when its steal fade ends: C3 under the pedal on one
+/// voice, C4 stealing it under brightness 2, and brightness 0.5 set a sample later for notes to
+/// come, sounds to the bit as with brightness 2 kept (blocks of 256 samples, so that C4 starts
+/// one block on).
+#[test]
+fn a_stolen_note_keeps_the_settings_of_its_own_sample_with_its_partners() {
+    let bright = Settings { brightness: 2.0, block: 256, ..Default::default() };
+    let score: Score = vec![(0, Event::Sustain { channel: 0, depth: 1.0 }), (0, on(48, 0.7)), (4_800, on(60, 0.7))];
+    let render = |later: Option<Settings>| {
+        let mut p = Instrument::new(FS, 1, bright);
+        let mut out = play(&mut p, &score, 4_801, || 64);
+        if let Some(later) = later {
+            p.set_settings(&later);
+        }
+        out.extend(play(&mut p, &vec![], 24_000, || 64));
+        out
+    };
+    let (kept, changed) = (render(None), render(Some(Settings { brightness: 0.5, ..bright })));
+    let first = kept.iter().zip(&changed).position(|(a, b)| a.to_bits() != b.to_bits());
+    assert_eq!(first, None, "C4 heard otherwise from sample {first:?}");
+}
+
 /// The notes a reset ends are reported at sample 0, where the reset's clock starts again, with
 /// those that ended before it in the same call: a note-on at velocity 0 with an id (a note that
 /// ends at once) at sample 1,000 and a sounding C4, reset, report both at sample 0, not the

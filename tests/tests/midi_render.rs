@@ -105,7 +105,7 @@ fn bad_midi_input_is_refused() {
         (midi(&stopped, "stopped.wav"), "tempo of 0"),
         (midi(&short_tempo, "short.wav"), "a tempo event of 2 bytes"),
         (midi(&frameless, "frameless.wav"), "0 ticks per frame"),
-        (midi(&huge, "huge-file.wav"), "at most 16777216"),
+        (midi(&huge, "huge-file.wav"), "more than 16777216 bytes"),
         (
             RenderArgs { rate: Some(768_000), tail: Some(590.0), ..midi(&file("whole.mid", &whole), "huge.wav") },
             "at most 6e7",

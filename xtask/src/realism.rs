@@ -448,7 +448,7 @@ fn envelopes(path: &Path) -> Result<Vec<Envelope>, String> {
             false => (levels.as_slice(), colour, format!("partial {partial}, unison tuned exactly alike"), 1),
         });
     let caption =
-        format!("C4 struck at {:.1} m/s (velocity 0.6) and held: partial levels (50 ms windows)", hammer_speed(0.6));
+        format!("C4 struck at {:.1} m/s (velocity 0.6) and held: partial levels (every 50 ms)", hammer_speed(0.6));
     draw_levels(path, &caption, lines.collect())?;
     Ok(rows)
 }
@@ -472,7 +472,7 @@ fn una_corda(path: &Path) -> Result<Vec<Shifted>, String> {
         false => (levels.as_slice(), colour, format!("partial {partial}, all three strings struck"), 2),
     });
     let caption = format!(
-        "C4 struck at {:.1} m/s (velocity 0.6) and held, with and without the una corda (50 ms windows)",
+        "C4 struck at {:.1} m/s (velocity 0.6) and held, with and without the una corda (levels every 50 ms)",
         hammer_speed(0.6)
     );
     draw_levels(path, &caption, lines.collect())?;
@@ -514,7 +514,7 @@ fn half_pedal(path: &Path) -> Result<Vec<HalfPedal>, String> {
         };
         (levels.as_slice(), colour, label, 2)
     });
-    let caption = "C2 struck at velocity 0.7, let go at 0.5 s: its fundamental's level (50 ms windows)";
+    let caption = "C2 struck at velocity 0.7, let go at 0.5 s: its fundamental's level (every 50 ms)";
     draw_levels(path, caption, lines.collect())?;
     Ok(rows)
 }

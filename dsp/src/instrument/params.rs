@@ -1019,9 +1019,6 @@ pub fn plain_values_differ(a: f32, b: f32) -> bool {
 mod tests {
     use super::*;
 
-    /// Text typed by hand reads as a number with or without its unit, a decimal comma, a whole
-    /// number rounded, a switch in any case; NaN, infinities, other words and a bare unit read as
-    /// nothing.
     /// A stepped parameter set between its steps takes the nearest, as the plugin's parameter
     /// does: `bend = 1.3` (steps of 0.5) plays a range of 1.5 semitones, and 1.2 one of 1.0.
     #[test]
@@ -1033,6 +1030,9 @@ mod tests {
         }
     }
 
+    /// Text typed by hand reads as a number with or without its unit, a decimal comma, a whole
+    /// number rounded, a switch in any case; NaN, infinities, other words and a bare unit read as
+    /// nothing.
     #[test]
     fn typed_text_reads_as_a_finite_value_or_nothing() {
         let spec = |id| param_spec(id).unwrap();

@@ -1158,9 +1158,17 @@ impl PianoVoice {
             self.pending = None;
             self.shedding = false;
             self.sounding = false;
-            let partners = partners.as_deref_mut().map(|table| (table.ready(), dampers));
+            // The partner strings are tuned as the note's own strings are, for its settings, and
+            // the table goes back to the block's for the voices after it.
             let own = self.pending_settings;
-            self.play_with(strike, &own, now, partners);
+            let table = partners.as_deref_mut().map(|table| {
+                table.request(&own);
+                (table.ready(), dampers)
+            });
+            self.play_with(strike, &own, now, table);
+            if let Some(table) = partners.as_deref_mut() {
+                table.request(settings);
+            }
             self.key_down = !self.pending_released;
         }
         if self.fading() {

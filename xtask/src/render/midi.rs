@@ -38,8 +38,9 @@ impl Score {
 
 /// Largest MIDI file read (bytes): far beyond any performance (a 600 s render of a
 /// thousand events a second takes about 2 MB), and small enough that the parsed events and the
-/// timeline made from them (about 100 bytes an event) stay within a few hundred MB.
-pub const MAX_FILE_BYTES: usize = 16 << 20;
+/// timeline made from them (about 100 bytes an event) stay within a few hundred MB: the most any
+/// input may have ([`super::MAX_INPUT_BYTES`]).
+pub const MAX_FILE_BYTES: usize = super::MAX_INPUT_BYTES;
 
 /// Most samples a MIDI render may ask for: the render holds about 16 bytes a sample (both
 /// channels, and the WAV made from them), so this bounds its memory near 1 GB.
