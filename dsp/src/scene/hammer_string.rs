@@ -508,12 +508,7 @@ mod tests {
         scene.process_output(&mut head);
         assert!(scene.core.retired() && scene.core.next_hz.is_some());
         let peak = head.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let mut fast = scene.clone();
-        let mut tail = vec![0.0; 4_800];
-        fast.process_output(&mut tail);
-        let mut frames = vec![Frame::default(); 4_800];
-        scene.process(&mut frames);
-        let worst = tail.iter().zip(&frames).map(|(x, f)| (x - f.output).abs()).fold(0.0, f64::max);
+        let worst = crate::scene::frames_against_the_real_time_path(&scene, 4_800);
         println!("peak {peak:.3} N, worst difference {worst:.2e} N");
         assert!(worst < 1e-9 * peak, "{worst:e} of {peak}");
     }

@@ -67,3 +67,16 @@ pub trait Scene {
     /// energy bookkeeping. Gives the same output as [`process`](Self::process).
     fn process_output(&mut self, out: &mut [f64]);
 }
+
+/// The largest difference (in the output's unit) between `scene` stepped on for `samples` by the
+/// real-time path and by frames: the two paths give the same output from any state, the one the
+/// real-time path left included.
+#[cfg(test)]
+pub(crate) fn frames_against_the_real_time_path<S: Scene + Clone>(scene: &S, samples: usize) -> f64 {
+    let mut fast = scene.clone();
+    let mut tail = vec![0.0; samples];
+    fast.process_output(&mut tail);
+    let mut frames = vec![Frame::default(); samples];
+    scene.clone().process(&mut frames);
+    tail.iter().zip(&frames).map(|(x, f)| (x - f.output).abs()).fold(0.0, f64::max)
+}

@@ -1717,12 +1717,7 @@ mod tests {
         println!("retired hammer: compression {y:.4} m, measured {:.4} m", measured.y_now);
         assert!((y - measured.y_now).abs() < 1e-12 && y < -0.1 && force == 0.0);
         let peak = head.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let mut fast = scene.clone();
-        let mut tail = vec![0.0; 4_800];
-        fast.process_output(&mut tail);
-        let mut frames = vec![Frame::default(); 4_800];
-        scene.process(&mut frames);
-        let worst = tail.iter().zip(&frames).map(|(x, f)| (x - f.output).abs()).fold(0.0, f64::max);
+        let worst = crate::scene::frames_against_the_real_time_path(&scene, 4_800);
         println!("peak {peak:.3} N, worst difference {worst:.2e} N");
         assert!(worst < 1e-9 * peak, "{worst:e} of {peak}");
     }
