@@ -81,9 +81,10 @@ impl std::fmt::Display for BridgeError {
 impl std::error::Error for BridgeError {}
 
 /// The soundboard's mean driving-point conductance, `Re Y` averaged over modes (s/kg): an
-/// impedance of 2,500 kg/s, within the range measured at piano bridges (about 1,000 kg/s at
-/// 100 Hz falling to 10 kg/s at 10 kHz in magnitude on an upright, Wogram; the real part lies
-/// below the magnitude between resonances). See docs/physics.md §12 for what it sets.
+/// impedance of 2,500 kg/s, above the magnitudes Wogram measured at an upright's bridge (about
+/// 1,000 kg/s at 100 Hz falling to 10 kg/s at 10 kHz): the mobility's real part lies below its
+/// magnitude between resonances, and a grand's board is larger. See docs/physics.md §12.2 for
+/// what it sets.
 pub const SOUNDBOARD_CONDUCTANCE: f64 = 4e-4;
 
 /// The soundboard's loss factor (dimensionless): the ~2 % mean modal loss factor Ege and

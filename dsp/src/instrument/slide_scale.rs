@@ -42,11 +42,12 @@
 //!
 //! What the player's slide does to the pitch is left as it is, as a player hears it: the slide's
 //! mass `M` on the hand's spring `K_H` raises partial `n` by the end correction
-//! `T/(Mω_n² − K_H)` (0.44 mm at 440 Hz for 30 g), and a softer contact lowers it.
+//! `T/(Mω_n² − K_H)` (0.456 mm at 440 Hz for 30 g on 10⁴ N/m), and a softer contact lowers it.
 
 use crate::string::ModalString;
 
-/// Nearest the nut the slide goes (m): the open string's key sounds 5 mm shorter than the string.
+/// Nearest the nut the slide goes (m): the open string's key sounds as a string shorter by 5 mm
+/// plus the end correction there (0.54 mm).
 const NEAREST_NUT: f64 = 0.005;
 
 /// Farthest from the nut the slide goes, as a fraction of the string's length.
