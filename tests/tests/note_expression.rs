@@ -160,6 +160,35 @@ fn a_slide_note_bent_before_its_note_on_starts_at_its_bent_pitch() {
     assert!((early / key_frequency(62) - 1.0).abs() < 0.01, "the next note starts at {early} Hz");
 }
 
+/// An MPE controller hands the channel of a note let go to a later note, whose own bend it
+/// sends before that note-on: the note let go, still ringing out, keeps its bend rather than
+/// glide with the new note's. On a member channel of an MPE zone, key 50 bent +12 semitones is
+/// let go at 0.2 s; 10 ms later, its finger's mute not yet complete, its channel is bent back to
+/// 0 for key 57's note-on. The whole renders as the bent note alone plus key 57 alone (to f32
+/// rounding, as the other pairs here), where a released note that followed its channel would
+/// swoop an octave down as it dies away.
+#[test]
+fn a_note_let_go_keeps_its_bend_when_its_channel_plays_another_note() {
+    let rpn = |controller: u8, value: u8| Event::RegisteredParameter { channel: 0, controller, value };
+    let zone: Score = [rpn(101, 0), rpn(100, 6), rpn(6, 15)].iter().map(|&e| (0, e)).collect();
+    let bend = |value: f32| Event::PitchBend { channel: 2, value };
+    let first: Score = vec![(0, bend(0.25)), (0, on(2, 50, 1)), (9_600, Event::NoteOff { channel: 2, key: 50 })];
+    let second: Score = vec![(10_080, bend(0.0)), (10_080, on(2, 57, 2))];
+    let render = |parts: &[&Score]| {
+        let mut score = zone.clone();
+        parts.iter().for_each(|part| score.extend(part.iter().copied()));
+        score.sort_by_key(|e| e.0);
+        play(&mut slide(Settings::default()), &score, 43_200, 256)
+    };
+    let (both, alone, next) = (render(&[&first, &second]), render(&[&first]), render(&[&second]));
+    let ringing = peak(&alone[10_080..10_560]) / peak(&alone);
+    println!("the note let go, 10-20 ms after its release: {ringing:.2e} of its peak");
+    assert!(ringing > 1e-2, "the note let go still sounds when its channel is taken");
+    let error = mixture_error(&both, &alone, &next);
+    println!("the pair against the notes alone: {error:.2e} of the peak");
+    assert!(error < 1e-6, "the later note's bend reached the note let go ({error:e} of the peak)");
+}
+
 /// Polyphonic modulation offsets a setting for one note: with the slide at 5 semitones (not
 /// following keys), +3 semitones for voice 22 at its note-on renders exactly as the setting at 8
 /// for everyone (and sounds at 8 semitones above the open string); a hand-height offset of

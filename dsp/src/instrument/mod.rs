@@ -1140,6 +1140,9 @@ impl Instrument {
     fn slide_on(&mut self, strike: Strike) -> Option<usize> {
         let (now, settings) = (self.now, self.note_settings());
         let channel = self.channel_state(strike.channel);
+        for v in self.slides.iter_mut().filter(|v| v.strike.channel == strike.channel) {
+            v.leave_channel();
+        }
         // Following keys, a new key while another is held on the channel glides there (legato).
         if settings.follow_key
             && let Some(i) =

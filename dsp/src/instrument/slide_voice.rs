@@ -519,6 +519,12 @@ pub struct SlideVoice {
     /// The channel's state at the latest note from silence: where its hand height came from,
     /// for the note's tuning and offsets that follow it before it renders.
     channel: ChannelState,
+    /// The channel's state as the voice read it at its latest control block.
+    channel_read: ChannelState,
+    /// Once its key is let go and another note starts on its channel, the channel's state as the
+    /// voice last read it, which the released note keeps rather than follow the new note's
+    /// controls: an MPE controller hands the channel of a note let go to the next note.
+    kept_channel: Option<ChannelState>,
     /// Sample index of its latest note-on.
     pub started: u64,
     /// Poly pressure of its key, 0..=1.
@@ -637,6 +643,8 @@ impl SlideVoice {
             sounding: false,
             key_down: false,
             channel: ChannelState::default(),
+            channel_read: ChannelState::default(),
+            kept_channel: None,
             started: 0,
             poly_pressure: 0.0,
             brightness: None,
@@ -709,6 +717,7 @@ impl SlideVoice {
         }
         self.strike = strike;
         self.key_down = true;
+        self.kept_channel = None;
         self.mute = 0.0;
         // A voice taken while it was being shed sounds again: its output turns back up over
         // `STEAL_TIME` from where the fade had got to, not in one step.
@@ -835,6 +844,14 @@ impl SlideVoice {
         self.key_down = false;
     }
 
+    /// Another note started on this voice's channel: a note let go keeps the channel's controls
+    /// as it last read them from now on (a note still held goes on following them).
+    pub fn leave_channel(&mut self) {
+        if self.sounding && !self.key_down && self.kept_channel.is_none() {
+            self.kept_channel = Some(self.channel_read);
+        }
+    }
+
     /// Fade the output out over [`STEAL_TIME`] and fall silent, the string brought to rest and
     /// the note ending: a sounding voice given up to lighten the load. Whether it began to fade
     /// (not if silent or fading already).
@@ -866,6 +883,7 @@ impl SlideVoice {
         self.guard_fade.clear();
         self.sounding = false;
         self.key_down = false;
+        self.kept_channel = None;
         self.pluck = None;
         self.mute = 0.0;
         self.unweighed = 0;
@@ -1016,6 +1034,8 @@ impl SlideVoice {
         if !self.sounding {
             return;
         }
+        let channel = &self.kept_channel.unwrap_or(*channel);
+        self.channel_read = *channel;
         if self.guard_fade.is_fading() {
             self.trip();
             return;
