@@ -3,23 +3,31 @@
 //! rather than leave the host to drop whole buffers.
 //!
 //! Each `process` call's load is its time over its buffer's duration (1 = the whole real-time
-//! budget), counted up to [`MAX_COUNTED_LOAD`] and smoothed over [`GUARD_TIME_CONSTANT`] of audio,
-//! or over [`CALLS_SMOOTHED`] calls where the host's buffers are longer than that allows, so that
-//! one call the operating system held up does not weigh like many at any buffer size (a 1024-sample
-//! call would otherwise carry a third of the smoothed load, and one held up 30 ms would shed a
-//! third of the voices). Once the smoothed load
-//! exceeds [`OVERLOAD`] (the host needs some of the budget for itself and other plugins), the
-//! guard sheds the share of the sounding voices that brings it to [`TARGET_LOAD`], taking every
-//! voice to cost alike, then waits [`SETTLE_TIME`] for the load to show the effect before it
-//! sheds again. The plugin runs it in real-time processing only, while its `Overload guard`
-//! switch is on: an offline render takes the time it needs and sounds the same on every machine,
-//! and a user measuring how much of the CPU a performance takes can switch it off.
+//! budget; calls shorter than [`SHORTEST_SPAN`] are weighed with the next), counted up to
+//! [`MAX_COUNTED_LOAD`] and smoothed over [`GUARD_TIME_CONSTANT`] of audio, or over
+//! [`CALLS_SMOOTHED`] calls where the host's buffers are longer than that allows, so that one call
+//! the operating system held up does not weigh like many at any buffer size (a 1024-sample call
+//! would otherwise carry a third of the smoothed load, and one held up 30 ms would shed a third of
+//! the voices). Once the smoothed load exceeds [`OVERLOAD`] (the host needs some of the budget for
+//! itself and other plugins), the guard sheds the share of the sounding voices that brings it to
+//! [`TARGET_LOAD`], taking every voice to cost alike, then waits [`SETTLE_TIME`] for the load to
+//! show the effect before it sheds again. The plugin runs it in real-time processing only, while
+//! its `Overload guard` switch is on: an offline render takes the time it needs and sounds the same
+//! on every machine, and a user measuring how much of the CPU a performance takes can switch it
+//! off.
 
 /// Time constant of the guard's smoothed load (s of audio).
 pub const GUARD_TIME_CONSTANT: f64 = 0.05;
 
 /// The most one call's load counts for.
 pub const MAX_COUNTED_LOAD: f64 = 2.0;
+
+/// The shortest span of audio whose load is counted (s): shorter calls are weighed together with
+/// those after them. The framework splits a host's buffer at each parameter change, and the
+/// engine's work for a control block falls in whichever piece its start lands in: a piece of a
+/// sample or two would count that work against its own tiny budget, up to [`MAX_COUNTED_LOAD`]
+/// and no further, so the guard would read a buffer's overload as lower than it is.
+pub const SHORTEST_SPAN: f64 = 1e-3;
 
 /// The fewest calls the load is smoothed over: its time constant is at least this many calls'
 /// duration, so that a call weighs at most `1 − e^(−1/8)`, 12 %, of the smoothed load.
@@ -36,12 +44,14 @@ pub const TARGET_LOAD: f64 = 0.7;
 /// two of their longer time constant ([`CALLS_SMOOTHED`]) instead.
 pub const SETTLE_TIME: f64 = 2.0 * GUARD_TIME_CONSTANT;
 
-/// The guard's state: the smoothed load, the time left to settle, and whether it is switched off.
+/// The guard's state: the smoothed load, the time left to settle, whether it is switched off,
+/// and the audio and time of the calls not yet counted (shorter together than [`SHORTEST_SPAN`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct OverloadGuard {
     load: f64,
     settle: f64,
     off: bool,
+    short: (f64, f64),
 }
 
 impl OverloadGuard {
@@ -51,6 +61,12 @@ impl OverloadGuard {
         if self.off || !(duration > 0.0) || !elapsed.is_finite() {
             return 0;
         }
+        let (duration, elapsed) = (self.short.0 + duration, self.short.1 + elapsed);
+        if duration < SHORTEST_SPAN {
+            self.short = (duration, elapsed);
+            return 0;
+        }
+        self.short = (0.0, 0.0);
         let raw = (elapsed / duration).clamp(0.0, MAX_COUNTED_LOAD);
         let time_constant = GUARD_TIME_CONSTANT.max(CALLS_SMOOTHED * duration);
         let a = 1.0 - (-duration / time_constant).exp();
@@ -194,6 +210,29 @@ mod tests {
         let load = guard.load();
         guard.switch(true);
         assert!(load > OVERLOAD && guard.load() == load, "switching on twice keeps the load measured");
+    }
+
+    /// A host's 64-sample buffers at 48 kHz, each split by a parameter change into a call of one
+    /// sample that bears the control block's work (10.85 samples' worth of time) and one of 63
+    /// at a load of 0.85: a whole buffer's load is (10.85 + 0.85·63)/64 = 1.006, past the
+    /// threshold, and the guard sheds within a second, as it does for the same work in whole
+    /// buffers. Counted call by call, the one-sample piece's load of 10.85 was cut to 2 and the
+    /// smoothed load settled at 0.87, shedding nothing.
+    #[test]
+    fn a_buffer_split_at_a_parameter_change_counts_its_whole_load() {
+        let sample = 1.0 / 48_000.0;
+        let mut split = OverloadGuard::default();
+        let mut whole = OverloadGuard::default();
+        let (mut shed_split, mut shed_whole) = (0, 0);
+        for _ in 0..750 {
+            shed_split += split.after_call(sample, 10.85 * sample, 40);
+            shed_split += split.after_call(63.0 * sample, 0.85 * 63.0 * sample, 40);
+            shed_whole += whole.after_call(CALL, (10.85 + 0.85 * 63.0) * sample, 40);
+        }
+        let (a, b) = (split.load(), whole.load());
+        println!("split buffers: load {a:.3}, shed {shed_split}; whole: load {b:.3}, shed {shed_whole}");
+        assert!((split.load() - whole.load()).abs() < 1e-9, "{} vs {}", split.load(), whole.load());
+        assert!(shed_split > 0 && shed_split == shed_whole, "{shed_split} vs {shed_whole}");
     }
 
     /// Nothing to shed, a zero-length call or a non-finite time asks for nothing.
