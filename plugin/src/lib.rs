@@ -61,7 +61,7 @@ use qsa_dsp::instrument::{Event, Instrument, Note, NoteTarget, ParamKind, ParamS
 
 use meter::{Shared, Tap};
 use overload::OverloadGuard;
-use params::QsaParams;
+use params::{PRESET_FIELD, QsaParams};
 
 /// The plugin. (No `Debug`: the framework's parameter types do not implement it.)
 #[allow(missing_debug_implementations)]
@@ -266,8 +266,14 @@ impl Plugin for QsaStrings {
     /// and would store a non-finite number as it is. The player's settings
     /// ([`PLAYER_SETTINGS`](qsa_dsp::instrument::PLAYER_SETTINGS)) stay as the player set them
     /// instead. The engine then never hears a value the parameter cannot take, and the state the
-    /// host saves next can be read back.
+    /// host saves next can be read back. The factory preset the editor names (the `preset`
+    /// field) is none when the state names none or names it as anything but a JSON string: the
+    /// name of the preset the instance had would otherwise stay over values it no longer has.
     fn filter_state(state: &mut PluginState) {
+        let named = state.fields.get(PRESET_FIELD).is_some_and(|f| serde_json::from_str::<String>(f).is_ok());
+        if !named {
+            state.fields.insert(PRESET_FIELD.to_owned(), "\"\"".to_owned());
+        }
         for spec in &qsa_dsp::instrument::PARAMETERS {
             match state.params.get(spec.id).map(|saved| state_value(spec, saved)) {
                 Some(Some(value)) => {

@@ -126,6 +126,9 @@ pub const POLY_SLIDE: u32 = 0;
 /// Polyphonic modulation id of `hand`.
 pub const POLY_HAND: u32 = 1;
 
+/// The key under which a saved state holds the factory preset last chosen ([`QsaParams::preset`]).
+pub const PRESET_FIELD: &str = "preset";
+
 /// The polyphonic modulation id of the per-note offset `note`.
 fn poly_id(note: NoteParam) -> u32 {
     match note {
@@ -302,7 +305,7 @@ pub struct QsaParams {
     #[nested(group = "Output")]
     pub output: OutputParams,
     /// Id of the factory preset last chosen in the editor (empty: none), saved with the state
-    /// under the key `preset`.
+    /// under the key `preset` ([`PRESET_FIELD`]).
     #[persist = "preset"]
     pub preset: Arc<std::sync::RwLock<String>>,
 }

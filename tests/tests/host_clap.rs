@@ -1016,7 +1016,9 @@ fn a_state_with_another_voice_count_asks_the_host_for_a_restart() {
 /// A state that leaves parameters out (an older version's, or a hand-made one) gives each its
 /// default rather than the value the instance had: a float (width), a choice (the guitar's
 /// body), a switch (the limiter) and a whole number (control block). The player's settings it
-/// leaves out (voices) stay as the player set them.
+/// leaves out (voices) stay as the player set them. Loaded into an instance that had a factory
+/// preset chosen, it names none (the state the instance saves next holds an empty `preset`),
+/// whether it leaves the field out or holds something other than a JSON string there.
 #[test]
 fn a_state_that_leaves_parameters_out_gives_them_their_defaults() {
     let ids = ["width", "sbody", "limit", "nb", "voices"];
@@ -1032,12 +1034,27 @@ fn a_state_that_leaves_parameters_out_gives_them_their_defaults() {
     for id in ids {
         assert!(params.remove(id).is_some(), "{id} was saved");
     }
+    let fields = state["fields"].as_object_mut().expect("a fields object");
+    assert!(fields.remove("preset").is_some(), "the preset was saved");
     let body = serde_json::to_vec(&state).expect("JSON");
+    let named = |p: &mut Plugin, preset: &str| {
+        let mut named = state_json(&p.save());
+        named["fields"]["preset"] = serde_json::json!(serde_json::to_string(preset).unwrap());
+        assert!(p.load(&state_bytes(&named)), "the state naming {preset} loads");
+        assert_eq!(state_json(&p.save())["fields"]["preset"], serde_json::json!(format!("\"{preset}\"")));
+    };
+    named(&mut p, "lap-steel");
     assert!(p.load(&[&(body.len() as u64).to_le_bytes()[..], &body].concat()), "the state loads");
     for (i, id) in ids.iter().enumerate() {
         let want = if *id == "voices" { set[i] } else { defaults[i] };
         assert_eq!(p.value(clap_id(id)), Some(want), "{id}");
     }
+    assert_eq!(state_json(&p.save())["fields"]["preset"], serde_json::json!("\"\""), "a state without a preset");
+    named(&mut p, "lap-steel");
+    let mut garbled = state.clone();
+    garbled["fields"]["preset"] = serde_json::json!("lap-steel");
+    assert!(p.load(&state_bytes(&garbled)), "the state with a garbled preset loads");
+    assert_eq!(state_json(&p.save())["fields"]["preset"], serde_json::json!("\"\""), "a garbled preset");
 }
 
 /// A state whose numbers lie beyond their parameters' ranges (a hand-edited or corrupt preset)
