@@ -736,7 +736,8 @@ fn qsa_force_approaches_imp_as_segments_increase() {
 /// run the 180 (κ, α, v0, fs) combinations. Every frame must be finite, the energy drift ≤ 1e-7
 /// relative (docs/physics.md §3.5 measured 1.8e-8 worst with the re-centred root; this sweep
 /// 1.6e-11), and where the contact finished inside the run, the rebound speed equals v0 to 1e-7 (a
-/// drift d changes it by d/2; docs/physics.md §9.4 measured ≤ 2e-8).
+/// drift d changes it by d/2; docs/physics.md §9.4 measured ≤ 2e-8): at least 800 runs of the 900
+/// (measured 844; the other contacts outlast 40,000 steps).
 #[test]
 fn extreme_parameter_sweep_is_finite_and_conserves_energy() {
     let mass = 0.01;
@@ -790,6 +791,7 @@ fn extreme_parameter_sweep_is_finite_and_conserves_energy() {
         counts[0]
     );
     assert_eq!(counts[0] + counts[1], 900, "540 QSA + 180 IMP + 180 EXP runs");
+    assert!(counts[1] >= 800, "the rebound is checked on most runs: {} finished their contact", counts[1]);
 }
 
 /// The solvers' direct API is usable on the mass–barrier: a QSA, Newton and explicit solver built
@@ -806,6 +808,7 @@ fn helpers_build_the_same_solvers_as_the_public_api() {
     ];
     for (scheme, hand) in [Scheme::qsa(5), Scheme::Imp, Scheme::Exp].into_iter().zip(&by_hand) {
         let helper = run_scheme(scheme, law, params, FIG4_SAMPLE_RATE, stop);
+        assert_eq!(helper.frames.len(), hand.frames.len(), "{}", scheme.label());
         assert!(helper.frames.iter().zip(&hand.frames).all(|(a, b)| same_bits(a, b)), "{}", scheme.label());
         assert!(helper.contact_samples() > 0);
     }

@@ -1,7 +1,7 @@
 //! Where the plugin bundles are, and a check that they are there and current (shared by the
 //! real-host tests).
 //!
-//! A bundle that is missing, or older than any source file of the plugin or the engine, fails
+//! A bundle that is missing, or older than any file it is built from, fails
 //! the test with the command that builds it: testing a stale binary would test other code.
 //! `QSA_ALLOW_STALE_BUNDLE=1` skips the age check (when iterating on the tests themselves).
 
@@ -43,7 +43,7 @@ fn newest_under(dir: &Path) -> Option<(SystemTime, PathBuf)> {
     newest
 }
 
-/// `path` if it exists and is newer than every source file of the plugin and the engine;
+/// `path` if it exists and is newer than everything it is built from ([`BUNDLE_INPUTS`]);
 /// otherwise a failure that says to run `build`.
 pub fn checked_bundle(path: PathBuf, build: &str) -> PathBuf {
     assert!(
@@ -56,16 +56,27 @@ pub fn checked_bundle(path: PathBuf, build: &str) -> PathBuf {
     }
     let built = std::fs::metadata(&path).and_then(|m| m.modified()).expect("bundle modification time");
     let root = workspace_root();
-    for dir in ["plugin/src", "dsp/src"] {
-        if let Some((changed, file)) = newest_under(&root.join(dir)) {
-            assert!(
-                changed <= built,
-                "the plugin bundle {} is older than {}: run `{build}` again (or set {ALLOW_STALE_ENV}=1 to test it \
-                 anyway)",
-                path.display(),
-                file.display()
-            );
-        }
+    for input in BUNDLE_INPUTS {
+        let input = root.join(input);
+        let newest = if input.is_dir() {
+            newest_under(&input)
+        } else {
+            std::fs::metadata(&input).and_then(|m| m.modified()).ok().map(|t| (t, input.clone()))
+        };
+        let (changed, file) =
+            newest.unwrap_or_else(|| panic!("{} is not there to compare the bundle with", input.display()));
+        assert!(
+            changed <= built,
+            "the plugin bundle {} is older than {}: run `{build}` again (or set {ALLOW_STALE_ENV}=1 to test it \
+             anyway)",
+            path.display(),
+            file.display()
+        );
     }
     path
 }
+
+/// What the bundle is built from: the plugin's and the engine's sources, the factory presets the
+/// engine embeds, and the manifests and lock file that pick the code compiled with them.
+const BUNDLE_INPUTS: [&str; 7] =
+    ["plugin/src", "dsp/src", "presets", "Cargo.toml", "Cargo.lock", "plugin/Cargo.toml", "dsp/Cargo.toml"];
