@@ -305,10 +305,12 @@ impl ModalBank {
 
     /// Add the decay rates `extra` (1/s, one per mode of `range`; missing entries count as 0) to
     /// the own rates of the modes in `range`, as [`ModalString::set_extra_decay`] does: each
-    /// mode decays faster and rings at its own frequency; the state is untouched.
+    /// mode decays faster and rings at its own frequency; the state is untouched. The part of
+    /// `range` beyond the bank's modes is left out: the padding holds no mode (a massless entry
+    /// given coefficients would carry an infinite force gain).
     pub fn set_extra_decay(&mut self, range: Range<usize>, extra: &[f64]) {
         let dt = 1.0 / self.sample_rate;
-        for (k, i) in range.enumerate() {
+        for (k, i) in (range.start..range.end.min(self.modes)).enumerate() {
             let extra = extra.get(k).copied().unwrap_or(0.0);
             let c = Coefficients::with_extra_decay(self.own_p[i], self.own_q[i], extra, dt, self.mass[i]);
             self.coef_a[i] = c.a;
@@ -542,6 +544,31 @@ mod tests {
         small.finish();
         let got = arrays(&mut small, kept);
         assert!(got.iter().zip(&reference).all(|(g, r)| g[..] == r[..kept]));
+    }
+
+    /// Extra decay asked for over a range running past the bank's modes into its padding
+    /// changes the modes it covers and nothing beyond them: the bank's state and energy stay
+    /// finite through a thousand steps, and its arrays past the modes stay zero.
+    #[test]
+    fn extra_decay_past_the_modes_leaves_the_padding_alone() {
+        let fs = 48_000.0;
+        let mut bank = ModalBank::with_capacity(3, fs);
+        for f in [100.0, 200.0, 300.0] {
+            bank.push_oscillator(std::f64::consts::TAU * f, 1.0, 1.0).expect("room");
+        }
+        bank.finish();
+        let (n, padded) = (bank.modes(), bank.coef_a.len());
+        assert!(padded > n, "the bank is padded to its lanes: {padded} for {n} modes");
+        let before = arrays(&mut bank, n);
+        bank.set_extra_decay(0..padded, &vec![5.0; padded]);
+        let after = arrays(&mut bank, n);
+        assert!(before.iter().zip(&after).any(|(b, a)| b != a), "the modes decay faster");
+        assert!(bank.arrays_mut().iter().all(|v| v[n..].iter().all(|&x| x == 0.0)), "the padding holds no mode");
+        bank.set_state(&[1e-3; 3], &[1e-3; 3]);
+        let mut out = [0.0; 1_000];
+        bank.free_steps(&vec![1.0; padded], &mut out);
+        assert!(out.iter().all(|x| x.is_finite()), "the output stays finite");
+        assert!(bank.energy().is_finite() && bank.energy() > 0.0, "energy {}", bank.energy());
     }
 
     /// The books close on the recursion as stored: a 10 Hz mode at 192 kHz (`ωΔt` = 3.3e-4, where
