@@ -415,7 +415,8 @@ pub fn spectral_peak(signal: &[f64], fs: f64, f_lo: f64, f_hi: f64) -> f64 {
 /// window its ratio (dB) to the median of the windows within 10 ms on either side (leaving out
 /// the window's immediate neighbours); it returns the largest ratio and the sample where that
 /// window starts, skipping windows that overlap `exclude` (note attacks: a hammer's impact is the
-/// sound, not a click). A floor 160 dB below full scale keeps silence from counting.
+/// sound, not a click). A floor 160 dB below full scale keeps silence from counting. It panics
+/// when `exclude` leaves no window to judge: a test that judged nothing would pass whatever.
 ///
 /// The threshold the tests use, [`CLICK_DB`], is set between what clean renders of this engine
 /// give and what a small known step gives (see `tests/tests/instrument.rs`,
@@ -447,6 +448,7 @@ pub fn click_strength(x: &[f64], fs: f64, exclude: &[std::ops::Range<usize>]) ->
             worst = (db, start);
         }
     }
+    assert!(worst.0 > f64::NEG_INFINITY, "the exclusions leave no window of {} samples to judge", x.len());
     worst
 }
 

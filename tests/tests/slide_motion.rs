@@ -153,7 +153,7 @@ fn glide_adds_no_buzz_at_the_block_rate() {
 /// doing, probably the slide's path, which kinks at the blocks' ends, brought out by the body's
 /// output (its acceleration).
 #[test]
-fn a_slide_vibrato_adds_no_buzz_at_the_block_rate() {
+fn a_slide_vibrato_adds_no_buzz_at_the_block_rate_through_the_pickup() {
     const BUZZ_DB: f64 = 10.0;
     let render = |body: SlideBody, block: usize| {
         let base = Settings {
