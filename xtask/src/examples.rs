@@ -25,8 +25,8 @@ use rustfft::num_complex::Complex;
 
 use crate::render::midi;
 
-/// Sample rate of the examples (Hz): the engine keeps every mode below 16 kHz, and a 3.4 s mono
-/// 16-bit file stays near 220 kB.
+/// Sample rate of the examples (Hz): the engine keeps every mode below 16 kHz, and a 3.4 s stereo
+/// 16-bit file stays near 435 kB.
 pub const RATE: u32 = 32_000;
 
 /// Peak level the examples are normalised to (dBFS).
@@ -282,6 +282,16 @@ fn temp_beside(path: &Path) -> Result<tempfile::NamedTempFile, ExamplesError> {
 fn persist(temp: tempfile::NamedTempFile, path: &Path) -> Result<(), ExamplesError> {
     temp.persist(path).map_err(|e| ExamplesError::Io { path: path.to_owned(), message: e.error.to_string() })?;
     Ok(())
+}
+
+/// Draw a picture into `path` through a temporary file beside it (the encoder goes by its
+/// extension), put in place once `draw` has succeeded: a failed or interrupted drawing leaves the
+/// picture that was there.
+pub(crate) fn draw_atomically<T>(path: &Path, draw: impl FnOnce(&Path) -> Result<T, String>) -> Result<T, String> {
+    let temp = temp_beside(path).map_err(|e| e.to_string())?;
+    let made = draw(temp.path())?;
+    persist(temp, path).map_err(|e| e.to_string())?;
+    Ok(made)
 }
 
 pub(crate) fn write_atomically(

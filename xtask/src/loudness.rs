@@ -2,7 +2,7 @@
 //!
 //! Each key is struck alone at a MIDI velocity, held (no damper) for [`SECONDS`], and its
 //! integrated loudness measured as ITU-R BS.1770-4 / EBU R128 define it (K-weighting, 400 ms
-//! blocks, absolute gate −70 LUFS and relative gate −10 LU; the `ebur128` crate), in LUFS. Its
+//! blocks, relative gate −10 LU; the `ebur128` crate; the absolute gate, see below), in LUFS. Its
 //! brightness is the RMS frequency `f_rms = (1/2π) √(Σ ẋ² / Σ x²)` of the same span (the square
 //! root of the power spectrum's second moment), with ẋ the central difference.
 //!
@@ -10,9 +10,15 @@
 //! [`VELOCITIES`] and the fortissimo chords [`CHORDS`], prints one JSON summary line and, with
 //! `--write`, writes `docs/report/loudness.csv` and `docs/report/loudness.png`. With `--voice` it
 //! rewrites the voicing table (`dsp/src/instrument/voicing.rs`) so that every key at each of the
-//! table's velocities meets its [`target`]: the output is linear in the voicing gain, so one pass
-//! puts each key on target (the table adds what each key misses; a second pass corrects what the
-//! loudness gate's nonlinearity left).
+//! table's velocities meets its [`target`]: the output is linear in the voicing gain and the
+//! measure does not depend on the signal's scale, so one pass puts each key on target (the table
+//! adds what each key misses), and a second, after a rebuild, finds each within rounding.
+//!
+//! Each signal is metered scaled to an RMS of −20 dBFS and the scale taken off again
+//! ([`integrated_lufs`]), so that the absolute gate at −70 LUFS never acts: the measure is the
+//! relative-gated loudness, the same for a note at any level. A meter on the plugin's output,
+//! whose absolute gate drops a soft note's quietest blocks, reads a fast-decaying soft note up to
+//! about 3 LU louder than this (a tone decaying 60 dB/s, measured here at −63 LUFS).
 
 use std::path::{Path, PathBuf};
 
@@ -214,7 +220,7 @@ pub fn run(args: &LoudnessArgs, stdout: &mut dyn std::io::Write) -> Result<(), S
     if args.write {
         let dir = args.root.join("docs/report");
         write_csv(&dir.join("loudness.csv"), &rows)?;
-        plot(&dir.join("loudness.png"), &rows)?;
+        crate::examples::draw_atomically(&dir.join("loudness.png"), |path| plot(path, &rows))?;
     }
     if args.voice {
         let path = args.root.join("dsp/src/instrument/voicing.rs");
@@ -224,6 +230,11 @@ pub fn run(args: &LoudnessArgs, stdout: &mut dyn std::io::Write) -> Result<(), S
                 let measured = measure(key, velocity, &settings).lufs;
                 table[usize::from(key)][column] += (target(velocity) - measured) as f32;
             }
+        }
+        if let Some((key, gains)) = table.iter().enumerate().find(|(_, gains)| gains.iter().any(|g| !g.is_finite())) {
+            return Err(format!(
+                "key {key}: no finite voicing gain ({gains:?}): a key measured silent; voicing.rs is left as it was"
+            ));
         }
         // Keys beyond the piano's take their nearest piano key's voicing.
         let (lo, hi) = (usize::from(*KEYS.start()), usize::from(*KEYS.end()));

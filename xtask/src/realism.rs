@@ -394,22 +394,23 @@ pub fn level_near(x: &[f64], from: usize, frequency: f64) -> f64 {
 
 /// Write the pictures, the sound examples and `docs/report/realism.md`.
 pub fn run(args: &RealismArgs, out: &mut dyn Write) -> Result<(), String> {
+    use crate::examples::draw_atomically;
     let dir = args.root.join("docs/report/realism");
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let envelopes = envelopes(&dir.join("envelopes.png"))?;
-    let shifted = una_corda(&dir.join("una-corda.png"))?;
-    let half = half_pedal(&dir.join("half-pedal.png"))?;
-    let contacts = contacts(&dir.join("contact.png"))?;
-    inharmonicity(&dir.join("inharmonicity.png"))?;
-    lengths(&dir.join("lengths.png"))?;
-    let decays = decays(&dir.join("decay.png"))?;
+    let envelopes = draw_atomically(&dir.join("envelopes.png"), envelopes)?;
+    let shifted = draw_atomically(&dir.join("una-corda.png"), una_corda)?;
+    let half = draw_atomically(&dir.join("half-pedal.png"), half_pedal)?;
+    let contacts = draw_atomically(&dir.join("contact.png"), contacts)?;
+    draw_atomically(&dir.join("inharmonicity.png"), inharmonicity)?;
+    draw_atomically(&dir.join("lengths.png"), lengths)?;
+    let decays = draw_atomically(&dir.join("decay.png"), decays)?;
     let t60 = MEASURED_T60.map(|m| (m, fundamental_t60(m.0, false), fundamental_t60(m.0, true)));
-    let sympathy = sympathetic(&dir.join("sympathetic.png"))?;
+    let sympathy = draw_atomically(&dir.join("sympathetic.png"), sympathetic)?;
     let undamped = undamped_ring();
     let held = held_ring(0.0);
-    let guitars = acoustic(&dir.join("acoustic.png"))?;
+    let guitars = draw_atomically(&dir.join("acoustic.png"), acoustic)?;
     let stereo = stereo_guitar(&guitars);
-    guitar_body(&dir.join("guitar-body.png"))?;
+    draw_atomically(&dir.join("guitar-body.png"), guitar_body)?;
     // The fortissimo scale peaking at −1 dBFS: the dynamics stay audible.
     let scales = [("pp", 40u8), ("mf", 80), ("ff", 120)].map(|(name, velocity)| (name, scale(velocity)));
     write_at_one_gain(&dir, "scale", &scales)?;
