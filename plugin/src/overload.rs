@@ -216,8 +216,8 @@ mod tests {
     /// sample that bears the control block's work (10.85 samples' worth of time) and one of 63
     /// at a load of 0.85: a whole buffer's load is (10.85 + 0.85·63)/64 = 1.006, past the
     /// threshold, and the guard sheds within a second, as it does for the same work in whole
-    /// buffers. Counted call by call, the one-sample piece's load of 10.85 was cut to 2 and the
-    /// smoothed load settled at 0.87, shedding nothing.
+    /// buffers. Counted call by call, the one-sample piece's load of 10.85 would be cut to 2 and
+    /// the smoothed load would settle at 0.87, shedding nothing.
     #[test]
     fn a_buffer_split_at_a_parameter_change_counts_its_whole_load() {
         let sample = 1.0 / 48_000.0;

@@ -134,8 +134,10 @@ fn rms_db(x: &[f32]) -> f64 {
 /// key's stretched frequency. That is the unison's widest string at the default 2.5-cent spread
 /// (at most 1.6 cents off the key), the shift of the unison's normal modes that the bridge
 /// coupling makes (up to 2.2 cents beyond the strings' own, at C♯4 of the keys measured here),
-/// and the estimator's error (at most `fs/(16N)`, 0.004 Hz here), with a cent to spare: an
-/// octave stretch off by a fifth at C8 misses it. The loudest note stays below full scale.
+/// and the estimator's grid (half a step, `fs/(16N)` = 0.033 Hz: 0.2 cents at C4, less after its
+/// parabolic refinement; 2.1 cents at A0, whose single string has no spread), with a cent to
+/// spare: an octave stretch off by a fifth at C8 misses it. The loudest note stays below full
+/// scale.
 #[test]
 fn keys_sound_at_their_pitch() {
     for key in (21u8..=105).step_by(4).chain([108]) {

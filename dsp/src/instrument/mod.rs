@@ -789,7 +789,8 @@ impl Instrument {
                 self.caught = [0; 16];
                 self.keys_down = [0; 16];
                 self.voices.iter_mut().for_each(PianoVoice::release);
-                self.slides.iter_mut().for_each(SlideVoice::key_up);
+                let kept = self.kept_channels();
+                self.slides.iter_mut().for_each(|v| release_slide(v, &kept));
             }
             Event::AllSoundOff => {
                 self.sustain = [0.0; 16];
@@ -857,6 +858,7 @@ impl Instrument {
         }
         // Following keys as a note struck now would (the setting of this sample, not the block's).
         let (follow, offset) = (self.requested.follow_key, self.voices.len());
+        let kept = self.kept_channels();
         // The keys other slide voices play, held: a voice let go returns to none of them (with
         // following keys switched on under notes that each took a voice).
         let mut playing = [0u128; 16];
@@ -879,7 +881,7 @@ impl Instrument {
                     playing[c] |= 1 << key;
                     self.notes.start(offset + j, Note { voice: None, channel: v.strike.channel, key }, self.now);
                 }
-                _ => v.key_up(),
+                _ => release_slide(v, &kept),
             }
         }
     }
@@ -1140,9 +1142,6 @@ impl Instrument {
     fn slide_on(&mut self, strike: Strike) -> Option<usize> {
         let (now, settings) = (self.now, self.note_settings());
         let channel = self.channel_state(strike.channel);
-        for v in self.slides.iter_mut().filter(|v| v.strike.channel == strike.channel) {
-            v.leave_channel();
-        }
         // Following keys, a new key while another is held on the channel glides there (legato).
         if settings.follow_key
             && let Some(i) =
@@ -1339,12 +1338,28 @@ impl Instrument {
         }
     }
 
+    /// What a slide note let go keeps of each channel: the state of an MPE zone's member
+    /// channels, which the controller hands to the next note (none for the other channels, whose
+    /// release tails follow them as they do under any synthesiser).
+    fn kept_channels(&self) -> [Option<ChannelState>; 16] {
+        std::array::from_fn(|c| self.bends.master(c as u8).map(|_| self.channel_state(c as u8)))
+    }
+
     /// What a slide voice reads from `channel`: its controllers, its pitch-bend sensitivity and
     /// the bend of its MPE zone's master channel (semitones).
     fn channel_state(&self, channel: u8) -> ChannelState {
         let range = |c: u8| self.bends.range(c).unwrap_or(self.settings.bend_range);
         let zone_bend = self.bends.master(channel).map_or(0.0, |m| self.channels[usize::from(m)].bend * range(m));
         ChannelState { bend_range: self.bends.range(channel), zone_bend, ..self.channels[usize::from(channel & 15)] }
+    }
+}
+
+/// Let go of `v`'s key, the note keeping its channel's state if `kept` holds one for it
+/// ([`Instrument::kept_channels`]).
+fn release_slide(v: &mut SlideVoice, kept: &[Option<ChannelState>; 16]) {
+    match &kept[usize::from(v.strike.channel & 15)] {
+        Some(channel) => v.key_up_keeping(channel),
+        None => v.key_up(),
     }
 }
 

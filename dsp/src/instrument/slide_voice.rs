@@ -519,11 +519,9 @@ pub struct SlideVoice {
     /// The channel's state at the latest note from silence: where its hand height came from,
     /// for the note's tuning and offsets that follow it before it renders.
     channel: ChannelState,
-    /// The channel's state as the voice read it at its latest control block.
-    channel_read: ChannelState,
-    /// Once its key is let go and another note starts on its channel, the channel's state as the
-    /// voice last read it, which the released note keeps rather than follow the new note's
-    /// controls: an MPE controller hands the channel of a note let go to the next note.
+    /// On an MPE zone's member channel, the channel's state when the key was let go, which the
+    /// released note keeps as it rings out: what the controller sends on the channel from then on
+    /// is the next note's (its zone's master bend still reaches it).
     kept_channel: Option<ChannelState>,
     /// Sample index of its latest note-on.
     pub started: u64,
@@ -643,7 +641,6 @@ impl SlideVoice {
             sounding: false,
             key_down: false,
             channel: ChannelState::default(),
-            channel_read: ChannelState::default(),
             kept_channel: None,
             started: 0,
             poly_pressure: 0.0,
@@ -844,12 +841,11 @@ impl SlideVoice {
         self.key_down = false;
     }
 
-    /// Another note started on this voice's channel: a note let go keeps the channel's controls
-    /// as it last read them from now on (a note still held goes on following them).
-    pub fn leave_channel(&mut self) {
-        if self.sounding && !self.key_down && self.kept_channel.is_none() {
-            self.kept_channel = Some(self.channel_read);
-        }
+    /// Release the key of a note on an MPE zone's member channel, whose state is `channel`
+    /// now: the note keeps it as it rings out.
+    pub fn key_up_keeping(&mut self, channel: &ChannelState) {
+        self.key_up();
+        self.kept_channel = Some(*channel);
     }
 
     /// Fade the output out over [`STEAL_TIME`] and fall silent, the string brought to rest and
@@ -1034,8 +1030,10 @@ impl SlideVoice {
         if !self.sounding {
             return;
         }
-        let channel = &self.kept_channel.unwrap_or(*channel);
-        self.channel_read = *channel;
+        let channel = &match self.kept_channel {
+            Some(kept) => ChannelState { zone_bend: channel.zone_bend, ..kept },
+            None => *channel,
+        };
         if self.guard_fade.is_fading() {
             self.trip();
             return;
