@@ -11,7 +11,7 @@
 
 use std::ops::Range;
 
-use super::modes::{Coefficients, Mode};
+use super::modes::{Coefficients, MIN_HEADROOM, Mode};
 use super::step::Stepping;
 use super::{Isa, LANES, ModalString, Tail, kernel};
 
@@ -201,9 +201,17 @@ impl ModalBank {
     }
 
     /// Append a damped oscillator of undamped angular frequency `omega0` (rad/s), decay rate
-    /// `sigma` (1/s) and modal mass `mass` (kg), at rest. Returns its index.
+    /// `sigma` (1/s) and modal mass `mass` (kg), at rest. Returns its index; none if the bank is
+    /// full, or if the oscillator rings at or above Nyquist (it would alias) or within
+    /// [`MIN_HEADROOM`] of it (its stiffness `K̂` would be infinite), as a string's modes there are
+    /// left out.
     pub fn push_oscillator(&mut self, omega0: f64, sigma: f64, mass: f64) -> Option<usize> {
-        let (p, q) = Mode::oscillator(omega0, sigma).recursion(1.0 / self.sample_rate);
+        let dt = 1.0 / self.sample_rate;
+        let mode = Mode::oscillator(omega0, sigma);
+        let (p, q) = mode.recursion(dt);
+        if !(mode.omega * dt < std::f64::consts::PI && 1.0 + 2.0 * p + q >= MIN_HEADROOM) {
+            return None;
+        }
         self.push(p, q, mass).then_some(self.modes - 1)
     }
 
@@ -569,6 +577,25 @@ mod tests {
         bank.free_steps(&vec![1.0; padded], &mut out);
         assert!(out.iter().all(|x| x.is_finite()), "the output stays finite");
         assert!(bank.energy().is_finite() && bank.energy() > 0.0, "energy {}", bank.energy());
+    }
+
+    /// An oscillator at Nyquist or above, or with no headroom left below it, is refused, and the
+    /// bank's energy stays finite; one just below, a free mass and a critically damped one are
+    /// taken.
+    #[test]
+    fn an_oscillator_at_nyquist_is_refused() {
+        let fs = 48_000.0;
+        let nyquist = std::f64::consts::PI * fs;
+        let mut bank = ModalBank::with_capacity(8, fs);
+        assert_eq!(bank.push_oscillator(nyquist, 0.0, 1.0), None, "at Nyquist");
+        assert_eq!(bank.push_oscillator(1.5 * nyquist, 0.0, 1.0), None, "above it");
+        assert_eq!(bank.push_oscillator(nyquist * (1.0 - 1e-5), 0.0, 1.0), None, "without headroom");
+        assert_eq!(bank.push_oscillator(f64::NAN, 0.0, 1.0), None, "not a number");
+        assert_eq!(bank.push_oscillator(0.9 * nyquist, 0.0, 1.0), Some(0), "just below");
+        assert_eq!(bank.push_oscillator(0.0, 0.0, 1.0), Some(1), "a free mass");
+        assert_eq!(bank.push_oscillator(1e3, 1e3, 1.0), Some(2), "critically damped");
+        bank.finish();
+        assert!(bank.energy().is_finite() && bank.energy() == 0.0, "energy {}", bank.energy());
     }
 
     /// The books close on the recursion as stored: a 10 Hz mode at 192 kHz (`ωΔt` = 3.3e-4, where

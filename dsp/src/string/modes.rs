@@ -23,7 +23,7 @@ pub(crate) struct Mode {
     /// Undamped angular frequency ω0 (rad/s).
     pub(super) omega0: f64,
     /// Damped angular frequency ω (rad/s; 0 when overdamped).
-    omega: f64,
+    pub(super) omega: f64,
     /// Decay rate σ (1/s).
     pub(super) sigma: f64,
     underdamped: bool,
@@ -66,7 +66,7 @@ impl Mode {
 /// error of a few `ε/10⁻⁶ = 2.2e-10` at most in `C` and `K̂`, near the energy balance's 1e-9
 /// only for a mode that holds the whole energy; at `ωΔt → π` the sum would round to 0 and make
 /// `K̂` infinite.
-const MIN_HEADROOM: f64 = 1e-6;
+pub(crate) const MIN_HEADROOM: f64 = 1e-6;
 
 /// Angle per step (rad) above which a mode's headroom `1 + 2P + Q` is checked: below it the
 /// headroom is at least `sin² 3 = 0.0199` for any damping (`1 + 2d cos θ + d²`, `d = e^{−σΔt}`,
