@@ -425,8 +425,10 @@ fn per_note_events_are_buffer_invariant() {
 
 /// Every note's end is reported once, with its voice id, channel and key: a released slide note
 /// when its string falls silent (its key let go after the key it glided from), a note whose voice
-/// a legato glide takes over at once, and a piano note struck again on its string at the new
-/// strike.
+/// a legato glide takes over at once, a piano note struck again on its string at the new strike,
+/// and a piano note let go by a velocity-0 note-on with its id, when its strings and the partners
+/// on its bridge fall silent (within 3 s; not at the note-on, while they still ring), and a
+/// velocity-0 note-on with an id no note has, at once.
 #[test]
 fn ended_notes_are_reported_once() {
     let mut s = slide(Settings::default());
@@ -456,6 +458,16 @@ fn ended_notes_are_reported_once() {
     p.handle(Event::AllSoundOff);
     let silenced: Vec<_> = p.drain_ended().map(|e| e.note.voice).collect();
     assert_eq!(silenced, [Some(8)]);
+
+    let mut p = Instrument::new(FS, 4, Settings::default());
+    let off = |voice| Event::NoteOnWithId { channel: 0, key: 60, velocity: 0.0, voice };
+    let _ = play(&mut p, &vec![(0, on(0, 60, 5)), (4_800, off(5)), (4_800, off(9))], 4_801, 256);
+    let at_once: Vec<_> = p.drain_ended().map(|e| (e.note.voice, e.at)).collect();
+    assert_eq!(at_once, [(Some(9), 4_800)], "only the note never played ends at its note-on");
+    assert_eq!(p.sounding(), 1, "the note let go rings under its damper");
+    let _ = play(&mut p, &vec![], 3 * 48_000, 4096);
+    let damped: Vec<_> = p.drain_ended().map(|e| e.note.voice).collect();
+    assert_eq!((damped, p.sounding()), (vec![Some(5)], 0), "the note let go ends once, when silent");
 }
 
 // Piano mode: a note's CC74 voices its hammer's felt.

@@ -310,7 +310,8 @@ pub enum Event {
         value: f32,
     },
     /// Key pressed, with the host's voice (note) id, which per-note events can address. Velocity
-    /// 0 is a note-off, and the note ends at once, never played.
+    /// 0 is a note-off: of the sounding note with that id if there is one, which ends when its
+    /// voice falls silent; otherwise the note ends at once, never played.
     NoteOnWithId {
         /// MIDI channel, 0..=15.
         channel: u8,
@@ -694,8 +695,15 @@ impl Instrument {
             }
             Event::NoteOn { channel, key, .. } | Event::NoteOff { channel, key } => self.key_up(channel, key),
             Event::NoteOnWithId { channel, key, voice, .. } => {
-                self.key_up(channel, key);
-                self.notes.end_unplayed(Note { voice: Some(voice), channel: channel & 15, key: key & 127 }, self.now);
+                if self.notes.addressed(NoteTarget::voice(voice)).next().is_some() {
+                    // The id of a note that sounds: that note's note-off. It ends, and is
+                    // reported, once its voice falls silent.
+                    self.release(NoteTarget { voice: Some(voice), channel: Some(channel), key: Some(key) });
+                } else {
+                    self.key_up(channel, key);
+                    let note = Note { voice: Some(voice), channel: channel & 15, key: key & 127 };
+                    self.notes.end_unplayed(note, self.now);
+                }
             }
             Event::Release { note } => self.release(note),
             Event::Choke { note } => {
