@@ -20,7 +20,9 @@ pub struct Monitor {
     pub mode: Mode,
     /// Its MIDI key.
     pub key: u8,
-    /// Its energy: string, exciter (hammer or slide and hand) without the contact term (J).
+    /// Its energy (J): the strings' and the exciter's (hammer, or slide and hand); a slide's
+    /// includes its contact's stored energy, a hammer's leaves it and the bridge's cross terms
+    /// out.
     pub energy: f64,
     /// The vibration it holds: its strings' energy (with the bridge's for a piano key), without
     /// the exciter (J).

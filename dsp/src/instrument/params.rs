@@ -646,13 +646,23 @@ impl ParamSpec {
     }
 
     /// The value `text` gives this parameter, in its shown unit (gain in dB, choices as their
-    /// index, switches 0 or 1), or what was expected instead. Not range-checked.
+    /// index, switches 0 or 1), or what was expected instead. Not range-checked: a finite number
+    /// beyond an `f32`, or a whole number beyond an `i32`, is read as the nearest one there is, so
+    /// that the range check refuses it as out of range rather than as no number.
     pub fn parse(&self, text: &str) -> Result<f32, String> {
         match self.kind {
-            ParamKind::Float { .. } => {
-                text.trim().parse::<f32>().ok().filter(|v| v.is_finite()).ok_or_else(|| "a finite number".into())
-            }
-            ParamKind::Int { .. } => text.trim().parse::<i32>().map(|v| v as f32).map_err(|_| "a whole number".into()),
+            ParamKind::Float { .. } => text
+                .trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .map(|v| v.clamp(-f64::from(f32::MAX), f64::from(f32::MAX)) as f32)
+                .ok_or_else(|| "a finite number".into()),
+            ParamKind::Int { .. } => text
+                .trim()
+                .parse::<i64>()
+                .map(|v| v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as f32)
+                .map_err(|_| "a whole number".into()),
             ParamKind::Bool { .. } => match text.trim() {
                 "on" | "true" | "1" => Ok(1.0),
                 "off" | "false" | "0" => Ok(0.0),
@@ -1070,8 +1080,8 @@ mod tests {
         }
     }
 
-    /// A value outside a parameter's range is refused with the range, and the value kept; the
-    /// ends of the range are accepted.
+    /// A value outside a parameter's range is refused with the range, and the value kept, beyond
+    /// an `f32` or an `i32` too (not as no number); the ends of the range are accepted.
     #[test]
     fn setting_a_value_outside_its_range_is_refused_with_the_range() {
         let mut values = ParamValues::default();
@@ -1079,6 +1089,8 @@ mod tests {
             ("gain", "100", "gain = 100 is outside the parameter's range -36..=12 dB"),
             ("segs", "0", "1..=64"),
             ("voices", "1000", "1..=128"),
+            ("hard", "1e39", "hard = 1e39 is outside the parameter's range"),
+            ("segs", "3000000000", "segs = 3000000000 is outside the parameter's range"),
         ] {
             let before = values.plain(id);
             let err = values.set(id, value).expect_err(id).to_string();
