@@ -166,7 +166,8 @@ fn a_slide_note_bent_before_its_note_on_starts_at_its_bent_pitch() {
 /// let go at 0.2 s; 9 ms later, its finger's mute not yet complete, its channel is bent back to 0,
 /// and a control block (of 64 samples) begins before key 57's note-on 0.8 ms after. The whole
 /// renders as the bent note alone plus key 57 alone (to f32 rounding, as the other pairs here),
-/// where a released note that followed its channel would swoop an octave down as it dies away. On
+/// where a released note that followed its channel would swoop an octave down as it dies away
+/// (an all-notes-off just after, which lets go of key 57, changes nothing for key 50). On
 /// a channel outside any zone the note let go follows its channel, as under any synthesiser: the
 /// same performance with a bend of +0.5 semitone there is not the sum of its notes (it differs by
 /// more than a hundred times the rounding bound).
@@ -176,7 +177,7 @@ fn a_note_let_go_keeps_its_bend_when_its_channel_plays_another_note() {
     let zone: Score = [rpn(101, 0), rpn(100, 6), rpn(6, 15)].iter().map(|&e| (0, e)).collect();
     let bend = |value: f32| Event::PitchBend { channel: 2, value };
     let first: Score = vec![(0, bend(0.25)), (0, on(2, 50, 1)), (9_600, Event::NoteOff { channel: 2, key: 50 })];
-    let second: Score = vec![(10_040, bend(0.0)), (10_080, on(2, 57, 2))];
+    let second: Score = vec![(10_040, bend(0.0)), (10_080, on(2, 57, 2)), (10_200, Event::AllNotesOff)];
     assert_eq!(Settings::default().block, 64, "a block begins at sample 10,048, between the bend and the note-on");
     let render = |zone: &Score, parts: &[&Score]| {
         let mut score = zone.clone();

@@ -842,10 +842,10 @@ impl SlideVoice {
     }
 
     /// Release the key of a note on an MPE zone's member channel, whose state is `channel`
-    /// now: the note keeps it as it rings out.
+    /// now: the note keeps it as it rings out (a note let go already keeps what it had).
     pub fn key_up_keeping(&mut self, channel: &ChannelState) {
         self.key_up();
-        self.kept_channel = Some(*channel);
+        self.kept_channel.get_or_insert(*channel);
     }
 
     /// Fade the output out over [`STEAL_TIME`] and fall silent, the string brought to rest and
