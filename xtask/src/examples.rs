@@ -197,10 +197,7 @@ pub fn run(args: &ExamplesArgs, out: &mut dyn Write) -> Result<Vec<Example>, Exa
         let [left, right] = &example.channels;
         write_atomically(&wav, |file| write_wav(file, &[left, right]))?;
         let title = format!("{} ({}): {}, mid", example.preset.name, s.category, s.midi);
-        let temp = temp_beside(&png)?;
-        spectrogram_png(temp.path(), &example.mid(), f64::from(RATE), &title)
-            .map_err(|message| ExamplesError::Io { path: png.clone(), message })?;
-        persist(temp, &png)?;
+        draw_into(&png, |path| spectrogram_png(path, &example.mid(), f64::from(RATE), &title))?;
         writeln!(
             out,
             "{}: {} and {} (render peak {:.1} dBFS, centroid {:.0} Hz, channels correlated {:.2})",
@@ -288,9 +285,14 @@ fn persist(temp: tempfile::NamedTempFile, path: &Path) -> Result<(), ExamplesErr
 /// extension), put in place once `draw` has succeeded: a failed or interrupted drawing leaves the
 /// picture that was there.
 pub(crate) fn draw_atomically<T>(path: &Path, draw: impl FnOnce(&Path) -> Result<T, String>) -> Result<T, String> {
-    let temp = temp_beside(path).map_err(|e| e.to_string())?;
-    let made = draw(temp.path())?;
-    persist(temp, path).map_err(|e| e.to_string())?;
+    draw_into(path, draw).map_err(|e| e.to_string())
+}
+
+/// [`draw_atomically`], its failure naming the picture.
+fn draw_into<T>(path: &Path, draw: impl FnOnce(&Path) -> Result<T, String>) -> Result<T, ExamplesError> {
+    let temp = temp_beside(path)?;
+    let made = draw(temp.path()).map_err(|message| ExamplesError::Io { path: path.to_owned(), message })?;
+    persist(temp, path)?;
     Ok(made)
 }
 
