@@ -202,9 +202,9 @@ impl ModalBank {
 
     /// Append a damped oscillator of undamped angular frequency `omega0` (rad/s), decay rate
     /// `sigma` (1/s) and modal mass `mass` (kg), at rest. Returns its index; none if the bank is
-    /// full, or if the oscillator rings at or above Nyquist (it would alias) or within
-    /// [`MIN_HEADROOM`] of it (its stiffness `K̂` would be infinite), as a string's modes there are
-    /// left out.
+    /// full, or if the oscillator rings at or above Nyquist (it would alias) or so near it that
+    /// `1 + 2P + Q` falls below 10⁻⁶ (its stiffness `K̂` would be infinite), as a string's modes
+    /// there are left out.
     pub fn push_oscillator(&mut self, omega0: f64, sigma: f64, mass: f64) -> Option<usize> {
         let dt = 1.0 / self.sample_rate;
         let mode = Mode::oscillator(omega0, sigma);
